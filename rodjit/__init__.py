@@ -1,0 +1,18 @@
+"""rodjit: an elastic rod bouncing on a floor (Aiki & Kosugi), simulated fast and verified.
+
+>>> import rodjit
+>>> result = rodjit.simulate(rodjit.Config().override({"time.t_end": 1.0}))
+"""
+from importlib.metadata import PackageNotFoundError, version as _version
+
+from .config import Config
+from .driver.result import Result
+from .driver.run import SimulationError
+from .driver.simulate import simulate
+
+try:
+    __version__ = _version("rodjit")
+except PackageNotFoundError:  # running from a source tree without installation
+    __version__ = "0.0.0+unknown"
+
+__all__ = ["Config", "simulate", "Result", "SimulationError", "__version__"]

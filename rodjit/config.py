@@ -1,0 +1,367 @@
+"""Validated, frozen run configuration, loadable from TOML and overridable by dotted keys.
+
+Every field is declared once in ``_FIELDS`` with its type and allowed range; bad values
+raise ``ValueError`` naming the key and the range, at the moment they enter.
+"""
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+__all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
+           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "parse_value"]
+
+INTEGRATORS = ("verlet", "semi-implicit", "energy")
+COMPRESSIONS = ("gzip", "lzf", "none")
+
+
+class _Spec:
+    """Type and range of one configuration field; ``check`` returns an error or None."""
+
+    def __init__(self, kind: str, rng: str = "", check=None, optional: bool = False,
+                 choices: tuple[str, ...] | None = None):
+        self.kind, self.rng, self.check, self.optional, self.choices = kind, rng, check, optional, choices
+
+    def coerce(self, key: str, value: Any) -> Any:
+        if value is None:
+            if self.optional:
+                return None
+            raise ValueError(f"{key} must be set ({self.describe()})")
+        if self.kind == "int":
+            if isinstance(value, bool) or not isinstance(value, int):
+                if isinstance(value, float) and value.is_integer():
+                    value = int(value)
+                else:
+                    raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
+        elif self.kind == "float":
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"{key} = {value!r} is not a number ({self.describe()})")
+            value = float(value)
+            if not math.isfinite(value):
+                raise ValueError(f"{key} = {value!r} is not finite ({self.describe()})")
+        elif self.kind == "str":
+            if not isinstance(value, str):
+                raise ValueError(f"{key} = {value!r} is not a string ({self.describe()})")
+            if self.choices is not None and value not in self.choices:
+                raise ValueError(f"{key} = {value!r} is not allowed ({self.describe()})")
+        if self.check is not None and not self.check(value):
+            raise ValueError(f"{key} = {value!r} is out of range ({self.describe()})")
+        return value
+
+    def describe(self) -> str:
+        if self.choices is not None:
+            text = "one of " + ", ".join(repr(c) for c in self.choices)
+        else:
+            text = f"{self.kind} {self.rng}".strip()
+        return text + (", or unset" if self.optional else "")
+
+
+def _pos(x):
+    return x > 0
+
+
+def _nonneg(x):
+    return x >= 0
+
+
+_FIELDS: dict[str, dict[str, _Spec]] = {
+    "rod": {
+        "N": _Spec("int", "in [1, 10000000]", lambda n: 1 <= n <= 10_000_000),
+        "kappa": _Spec("float", "> 0", _pos),
+        "gamma": _Spec("float", ">= 0", _nonneg),
+        "mu": _Spec("float", ">= 0", _nonneg),
+        "law": _Spec("str", "a registered rod law"),
+    },
+    "floor": {
+        "kappa_b": _Spec("float", "> 0", _pos),
+        "beta": _Spec("float", "> 0", _pos),
+        "law": _Spec("str", "a registered floor law"),
+    },
+    "gravity": {
+        "g": _Spec("float", "finite, signed along +u (negative pulls down)"),
+    },
+    "initial": {
+        "height": _Spec("float", "> -floor.beta"),
+        "velocity": _Spec("float", "finite"),
+        "strain": _Spec("float", "> -1", lambda e: e > -1.0),
+    },
+    "time": {
+        "t_end": _Spec("float", "> 0", _pos),
+        "integrator": _Spec("str", choices=INTEGRATORS),
+        "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1),
+        "dt_max": _Spec("float", "> 0", _pos, optional=True),
+        "dt_min": _Spec("float", "> 0", _pos),
+        "dt": _Spec("float", "> 0 (fixed step; unset for adaptive steps)", _pos, optional=True),
+        "rtol": _Spec("float", "in (0, 1)", lambda r: 0 < r < 1),
+        "atol": _Spec("float", "> 0", _pos),
+    },
+    "output": {
+        "snapshot_interval": _Spec("float", ">= 0 (0 disables snapshots)", _nonneg),
+        "diagnostics_interval": _Spec("float", ">= 0 (0 disables diagnostics)", _nonneg),
+        "compression": _Spec("str", choices=COMPRESSIONS),
+    },
+}
+
+
+def valid_keys() -> list[str]:
+    """Every configuration key, dotted (``rod.mu``, ``floor.kappa_b``, ...)."""
+    return [f"{s}.{k}" for s, fields in _FIELDS.items() for k in fields]
+
+
+def _unknown_key_error(key: str) -> ValueError:
+    keys = valid_keys()
+    close = difflib.get_close_matches(key, keys, n=1, cutoff=0.6)
+    if not close and "." in key:  # a right name in the wrong section, or a typo'd name
+        name = key.rsplit(".", 1)[1]
+        close = [k for k in keys if k.rsplit(".", 1)[1] == name][:1]
+        if not close:
+            close = difflib.get_close_matches(name, [k.rsplit(".", 1)[1] for k in keys], n=1)
+            close = [k for k in keys if close and k.endswith("." + close[0])][:1]
+    hint = f"; did you mean '{close[0]}'?" if close else ""
+    return ValueError(f"unknown configuration key '{key}'{hint} valid keys: {', '.join(keys)}")
+
+
+def _validated(section: str, obj) -> None:
+    for f in dataclasses.fields(obj):
+        spec = _FIELDS[section][f.name]
+        object.__setattr__(obj, f.name, spec.coerce(f"{section}.{f.name}", getattr(obj, f.name)))
+
+
+@dataclass(frozen=True)
+class RodConfig:
+    """The rod: ``N`` segments, elasticity κ, beam regularisation γ, viscosity μ."""
+
+    N: int = 5
+    kappa: float = 100.0
+    gamma: float = 0.0
+    mu: float = 0.0
+    law: str = "aiki-kosugi"
+
+    def __post_init__(self):
+        _validated("rod", self)
+
+
+@dataclass(frozen=True)
+class FloorConfig:
+    """The floor: stiffness κ_b and bending limit β."""
+
+    kappa_b: float = 1000.0
+    beta: float = 0.05
+    law: str = "aiki-kosugi"
+
+    def __post_init__(self):
+        _validated("floor", self)
+
+
+@dataclass(frozen=True)
+class GravityConfig:
+    """Signed acceleration along +u; −9.81 pulls down."""
+
+    g: float = -9.81
+
+    def __post_init__(self):
+        _validated("gravity", self)
+
+
+@dataclass(frozen=True)
+class InitialConfig:
+    """Initial state: bottom height, uniform velocity, uniform pre-strain."""
+
+    height: float = 1.0
+    velocity: float = 0.0
+    strain: float = 0.0
+
+    def __post_init__(self):
+        _validated("initial", self)
+
+
+@dataclass(frozen=True)
+class TimeConfig:
+    """Time span and stepping; ``dt`` set means fixed steps, unset means adaptive."""
+
+    t_end: float = 5.0
+    integrator: str = "verlet"
+    cfl: float = 0.05
+    dt_max: float | None = None
+    dt_min: float = 1e-12
+    dt: float | None = None
+    rtol: float = 1e-6
+    atol: float = 1e-9
+
+    def __post_init__(self):
+        _validated("time", self)
+        if self.dt_max is not None and self.dt_min >= self.dt_max:
+            raise ValueError(f"time.dt_min = {self.dt_min!r} is out of range (float > 0 and "
+                             f"< time.dt_max = {self.dt_max!r})")
+
+
+@dataclass(frozen=True)
+class OutputConfig:
+    """Output schedule (simulated seconds between samples) and HDF5 compression."""
+
+    snapshot_interval: float = 0.005
+    diagnostics_interval: float = 0.001
+    compression: str = "none"
+
+    def __post_init__(self):
+        _validated("output", self)
+
+
+_SECTIONS = {"rod": RodConfig, "floor": FloorConfig, "gravity": GravityConfig,
+             "initial": InitialConfig, "time": TimeConfig, "output": OutputConfig}
+
+
+@dataclass(frozen=True)
+class Config:
+    """A complete run configuration (defaults: the built-in run, the paper's first figure).
+
+    >>> cfg = Config().override({"rod.mu": 100.0})
+    >>> cfg.rod.mu
+    100.0
+    """
+
+    rod: RodConfig = field(default_factory=RodConfig)
+    floor: FloorConfig = field(default_factory=FloorConfig)
+    gravity: GravityConfig = field(default_factory=GravityConfig)
+    initial: InitialConfig = field(default_factory=InitialConfig)
+    time: TimeConfig = field(default_factory=TimeConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+
+    def __post_init__(self):
+        for name, cls in _SECTIONS.items():
+            if not isinstance(getattr(self, name), cls):
+                raise ValueError(f"{name} must be a {cls.__name__}")
+        from .model.laws import get_law  # laws register themselves on import
+        get_law("rod", self.rod.law)
+        get_law("floor", self.floor.law)
+        if not self.initial.height > -self.floor.beta:
+            raise ValueError(
+                f"initial.height = {self.initial.height!r} is out of range (float > -floor.beta "
+                f"= {-self.floor.beta!r}: the bottom must start above the floor's bending limit)")
+
+    # ---- construction -------------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "Config":
+        """Build from nested ``{"rod": {"mu": 1.0}}`` and/or dotted ``{"rod.mu": 1.0}``."""
+        return cls().override(_flatten(data))
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "Config":
+        """Load a TOML file; missing keys take their defaults, unknown keys are errors."""
+        path = Path(path)
+        try:
+            with open(path, "rb") as fh:
+                data = tomllib.load(fh)
+        except FileNotFoundError:
+            raise ValueError(f"configuration file {str(path)!r} does not exist") from None
+        except IsADirectoryError:
+            raise ValueError(f"configuration file {str(path)!r} is a directory") from None
+        except PermissionError:
+            raise ValueError(f"configuration file {str(path)!r} is not readable") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"configuration file {str(path)!r} is not valid TOML: {exc}") from None
+        except UnicodeDecodeError:
+            raise ValueError(f"configuration file {str(path)!r} is not a text file") from None
+        return cls.from_dict(data)
+
+    @classmethod
+    def from_toml_string(cls, text: str) -> "Config":
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"configuration is not valid TOML: {exc}") from None
+        return cls.from_dict(data)
+
+    def override(self, changes: Mapping[str, Any]) -> "Config":
+        """A new config with dotted keys replaced, e.g. ``{"rod.mu": 100.0}``.
+
+        Values may be strings in TOML syntax (``"1e-3"``, ``"'verlet'"``, ``"none"``).
+        """
+        sections = {name: dataclasses.asdict(getattr(self, name)) for name in _SECTIONS}
+        for key, value in changes.items():
+            if not isinstance(key, str) or "." not in key:
+                raise _unknown_key_error(str(key))
+            section, name = key.split(".", 1)
+            if section not in _FIELDS or name not in _FIELDS[section]:
+                raise _unknown_key_error(key)
+            if isinstance(value, str) and _FIELDS[section][name].kind != "str":
+                value = parse_value(key, value)
+            elif isinstance(value, str) and _FIELDS[section][name].kind == "str":
+                value = _strip_quotes(value)
+            sections[section][name] = value
+        return Config(**{name: cls(**sections[name]) for name, cls in _SECTIONS.items()})
+
+    # ---- export -------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, dict[str, Any]]:
+        return {name: dataclasses.asdict(getattr(self, name)) for name in _SECTIONS}
+
+    def flat(self) -> dict[str, Any]:
+        """``{"rod.N": 5, "rod.kappa": 100.0, ...}``"""
+        return {f"{s}.{k}": v for s, d in self.to_dict().items() for k, v in d.items()}
+
+    def to_toml(self) -> str:
+        """The full resolved configuration as TOML (unset optional keys are commented)."""
+        lines = []
+        for section, values in self.to_dict().items():
+            lines.append(f"[{section}]")
+            for key, value in values.items():
+                if value is None:
+                    lines.append(f"# {key} is unset")
+                else:
+                    lines.append(f"{key} = {_toml_value(value)}")
+            lines.append("")
+        return "\n".join(lines)
+
+    def get(self, key: str) -> Any:
+        section, name = key.split(".", 1)
+        return getattr(getattr(self, section), name)
+
+
+def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in data.items():
+        full = f"{prefix}{key}"
+        if isinstance(value, Mapping):
+            if prefix:  # sections nest one level only
+                raise _unknown_key_error(full)
+            if full not in _FIELDS:
+                raise _unknown_key_error(full + ".")
+            out.update(_flatten(value, full + "."))
+        else:
+            out[full] = value
+    return out
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)  # shortest round-trip form; finite by validation
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    raise TypeError(f"cannot write {value!r} as TOML")
+
+
+def _strip_quotes(text: str) -> str:
+    text = text.strip()
+    if len(text) >= 2 and text[0] == text[-1] and text[0] in "'\"":
+        return text[1:-1]
+    return text
+
+
+def parse_value(key: str, text: str) -> Any:
+    """Parse a command-line value in TOML syntax; ``none`` unsets an optional key."""
+    text = text.strip()
+    if text.lower() in ("none", "null", "unset"):
+        return None
+    try:
+        return tomllib.loads(f"v = {text}")["v"]
+    except tomllib.TOMLDecodeError:
+        return text  # left to the field's own check, which names the key and range

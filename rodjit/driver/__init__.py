@@ -1,0 +1,1 @@
+"""Python orchestration: runs in progress, results, the ``simulate`` entry point."""

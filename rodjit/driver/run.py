@@ -1,0 +1,296 @@
+"""A run in progress: the arrays the compiled loop works on, and the calls that advance it.
+
+``Run`` owns no output: each call drains the loop's buffers into a *sink* (in memory for
+``simulate``, an HDF5 file for the command line).  ``checkpoint``/``from_checkpoint`` save
+and restore everything the stepper needs, so a resumed run continues bit for bit.
+"""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE
+from ..model.laws import lower
+from ..model.system import build_system, check_admissible, initial_state
+from ..stepping import layout as L
+from ..stepping.events import write_bounce
+from ..stepping.loop import advance, start
+from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
+
+__all__ = ["Run", "SimulationError", "Sink"]
+
+GROWTH = 1.5      # per-step growth limit of the proposed step
+APPROACH = 1.0    # × cfl: fraction of the distance to −β the bottom may cover in one step
+NODE_STEPS_PER_CALL = 20_000_000   # ~10–100 ms of work between returns to Python
+
+
+class SimulationError(RuntimeError):
+    """The run could not continue; ``result`` holds everything up to the failure."""
+
+    def __init__(self, message: str, result=None):
+        super().__init__(message)
+        self.result = result
+
+
+class Sink:
+    """Receives drained output blocks; subclasses store them (memory, HDF5)."""
+
+    def snapshots(self, t, step, u, v):
+        pass
+
+    def diagnostics(self, rows):
+        pass
+
+    def episodes(self, rows):
+        pass
+
+    def bounces(self, rows):
+        pass
+
+
+def _capacity(n1: int) -> int:
+    return int(min(1024, max(1, 2**21 // n1)))
+
+
+class Run:
+    """One simulation: build it from a config (or a checkpoint), ``start``, then ``advance``
+    until it returns ``layout.DONE``."""
+
+    def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
+                 diag_capacity=4096, event_capacity=1024):
+        self.config = config
+        self.system, self.rod, self.floor = build_system(config)
+        self.scheme = make_scheme(config.time)
+        tc = config.time
+        self.ctrl = L.Control(
+            dt_max=float(tc.dt_max) if tc.dt_max is not None else math.inf,
+            dt_min=float(tc.dt_min),
+            dt_fixed=float(tc.dt) if tc.dt is not None else 0.0,
+            growth=GROWTH,
+            approach=APPROACH * float(tc.cfl),
+        )
+        n1 = config.rod.N + 1
+        u, v = initial_state(config, u0, v0)
+        check_admissible(u, self.rod, self.floor, "u0" if u0 is not None else "initial state")
+        self.state = np.zeros((3, n1))
+        self.state[0] = u
+        self.state[1] = v
+        self.trial = np.zeros((3, n1))
+        self.work = np.zeros((work_rows(self.scheme), n1))
+        self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
+        self.clock = np.zeros(L.CLOCK_SIZE)
+        self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
+        self.ev = np.zeros(L.EV_SIZE)
+        self.fail = np.zeros(L.FAIL_SIZE)
+        out = config.output
+        self.clock[L.T_END] = tc.t_end
+        self.clock[L.SNAP_DT] = out.snapshot_interval
+        self.clock[L.DIAG_DT] = out.diagnostics_interval
+        self._set_tolerance()
+        cap = snapshot_capacity or _capacity(n1)
+        self.snap_t = np.zeros(cap)
+        self.snap_step = np.zeros(cap, dtype=np.int64)
+        self.snap_u = np.zeros((cap, n1))
+        self.snap_v = np.zeros((cap, n1))
+        self.diag = np.zeros((diag_capacity, len(L.DIAG_COLUMNS)))
+        self.episodes = np.zeros((event_capacity, len(L.EPISODE_COLUMNS)))
+        self.bounces = np.zeros((event_capacity, len(L.BOUNCE_COLUMNS)))
+        self.max_steps = max(1, NODE_STEPS_PER_CALL // n1)
+        self.compile_time = 0.0
+        self.run_time = 0.0
+        self._warm = False
+
+    # ---- properties --------------------------------------------------------------------
+    @property
+    def t(self) -> float:
+        return float(self.clock[L.T])
+
+    @property
+    def t_end(self) -> float:
+        return float(self.clock[L.T_END])
+
+    @property
+    def steps(self) -> int:
+        return int(self.count[L.STEP])
+
+    @property
+    def rejected(self) -> int:
+        return int(self.count[L.REJECTED])
+
+    @property
+    def bounces_total(self) -> int:
+        return int(self.count[L.BOUNCES_TOTAL])
+
+    @property
+    def dissipated(self) -> float:
+        return float(self.clock[L.DISSIPATED])
+
+    @property
+    def energy0(self) -> float:
+        return float(self.clock[L.E0])
+
+    @property
+    def u(self) -> np.ndarray:
+        return self.state[0]
+
+    @property
+    def v(self) -> np.ndarray:
+        return self.state[1]
+
+    def set_t_end(self, t_end: float) -> None:
+        """Move the end of the run (e.g. to extend a resumed run)."""
+        if not (math.isfinite(t_end) and t_end > self.t):
+            raise ValueError(f"time.t_end = {t_end!r} is out of range (must be > the current "
+                             f"time {self.t!r})")
+        self.clock[L.T_END] = t_end
+        self._set_tolerance()
+
+    def _set_tolerance(self):
+        spans = [x for x in (self.clock[L.SNAP_DT], self.clock[L.DIAG_DT],
+                             self.clock[L.T_END] - self.clock[L.T]) if x > 0]
+        self.clock[L.TOL] = 1e-9 * min(spans)
+
+    # ---- stepping ----------------------------------------------------------------------
+    def _args(self):
+        return (self.scheme, self.ctrl, self.system, self.rod, self.floor)
+
+    def start(self, sink: Sink) -> None:
+        """Compile (or load from cache) the kernels, then evaluate the initial state."""
+        if self.count[L.STARTED]:
+            return
+        t0 = time.perf_counter()
+        code = start(*self._args(), self.state, self.work, self.clock, self.count, self.ev,
+                     self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.fail)
+        t1 = time.perf_counter()
+        self.compile_time += t1 - t0
+        self.warm_up()
+        if code == L.FAILED:
+            raise SimulationError(self.failure_message())
+        self._drain(sink)
+
+    def warm_up(self) -> None:
+        """Compile ``advance`` without stepping, so its compile time is measured apart."""
+        t0 = time.perf_counter()
+        self._call(0)
+        self.compile_time += time.perf_counter() - t0
+        self._warm = True
+
+    def _call(self, max_steps):
+        return advance(*self._args(), self.state, self.trial, self.work, self.sstats,
+                       self.clock, self.count, self.ev, self.snap_t, self.snap_step,
+                       self.snap_u, self.snap_v, self.diag, self.episodes, self.bounces,
+                       self.fail, max_steps)
+
+    def advance(self, sink: Sink, max_steps: int | None = None) -> int:
+        """One compiled call (up to ``max_steps`` steps), then drain into ``sink``.
+
+        Returns layout.DONE, FULL or PAUSED (call again); raises SimulationError on failure
+        after draining everything computed up to it.
+        """
+        if not self.count[L.STARTED]:
+            self.start(sink)
+        if not self._warm:
+            self.warm_up()
+        t0 = time.perf_counter()
+        code = self._call(self.max_steps if max_steps is None else max_steps)
+        self.run_time += time.perf_counter() - t0
+        self._drain(sink)
+        if code == L.FAILED:
+            raise SimulationError(self.failure_message())
+        return code
+
+    def _drain(self, sink: Sink) -> None:
+        c = self.count
+        if c[L.N_SNAP]:
+            k = c[L.N_SNAP]
+            sink.snapshots(self.snap_t[:k].copy(), self.snap_step[:k].copy(),
+                           self.snap_u[:k].copy(), self.snap_v[:k].copy())
+            c[L.N_SNAP] = 0
+        if c[L.N_DIAG]:
+            rows = self.diag[:c[L.N_DIAG]].copy()
+            if not np.all(np.isfinite(rows)):
+                raise SimulationError("a non-finite diagnostic value was computed; refusing "
+                                      "to write it")
+            sink.diagnostics(rows)
+            c[L.N_DIAG] = 0
+        if c[L.N_EP]:
+            sink.episodes(self.episodes[:c[L.N_EP]].copy())
+            c[L.N_EP] = 0
+        if c[L.N_BOUNCE]:
+            sink.bounces(self.bounces[:c[L.N_BOUNCE]].copy())
+            c[L.N_BOUNCE] = 0
+
+    def pending_bounce(self):
+        """``(row, open)`` for the bounce still collecting episodes at this time, or None.
+
+        It is *open* if its last episode has not ended (the rod is on the floor).
+        """
+        if self.ev[L.B_NEP] <= 0:
+            return None
+        row = np.zeros(len(L.BOUNCE_COLUMNS))
+        is_open = bool(self.ev[L.IN_CONTACT])
+        write_bounce(row, self.ev, is_open)
+        return row, is_open
+
+    def stats(self) -> dict:
+        n1 = self.system.n + 1
+        stats = {
+            "steps": self.steps,
+            "rejected_steps": self.rejected,
+            "wall_time": self.compile_time + self.run_time,
+            "compile_time": self.compile_time,
+            "run_time": self.run_time,
+            "node_steps_per_second": (self.steps * n1 / self.run_time) if self.run_time > 0 else 0.0,
+        }
+        for name, value in zip(SCHEME_STATS, self.sstats):
+            stats[name] = int(value)
+        return stats
+
+    # ---- failure -------------------------------------------------------------------------
+    def failure_message(self) -> str:
+        f = self.fail
+        code = int(f[L.F_CODE])
+        t = f[L.F_T]
+        if code == BAD_STRAIN:
+            why = (f"the strain of segment {int(f[L.F_INDEX])} reached {f[L.F_VALUE]:.6g}, at or "
+                   f"below the rod's compression limit {lower(self.rod):g} (rod.law = "
+                   f"{self.config.rod.law!r})")
+        elif code == BAD_FLOOR:
+            why = (f"the bottom height u_0 reached {f[L.F_VALUE]:.6g}, at or below the floor's "
+                   f"bending limit -beta = {lower(self.floor):g}")
+        elif code == NON_FINITE:
+            why = "a non-finite value appeared in the state"
+        else:
+            why = f"unknown failure code {code}"
+        if self.ctrl.dt_fixed > 0:
+            return (f"fixed step time.dt = {self.ctrl.dt_fixed:g} failed at t = {t:.9g}: {why}; "
+                    f"unset time.dt for adaptive steps or choose a smaller time.dt")
+        return (f"step size fell below time.dt_min = {self.ctrl.dt_min:g} at t = {t:.9g} "
+                f"(last trial step {f[L.F_DT]:.3g}): {why}")
+
+    # ---- checkpoint ------------------------------------------------------------------------
+    _CHECKPOINT_ARRAYS = ("state", "clock", "count", "ev", "sstats")
+
+    def checkpoint(self) -> dict[str, np.ndarray]:
+        """Copies of everything needed to continue (the output buffers are drained)."""
+        ck = {name: getattr(self, name).copy() for name in self._CHECKPOINT_ARRAYS}
+        ck["compile_time"] = np.float64(self.compile_time)
+        ck["run_time"] = np.float64(self.run_time)
+        return ck
+
+    @classmethod
+    def from_checkpoint(cls, config, ck: dict, **kwargs) -> "Run":
+        """A run that continues exactly where ``ck`` (from ``checkpoint``) left off."""
+        run = cls(config, u0=np.asarray(ck["state"])[0], v0=np.asarray(ck["state"])[1], **kwargs)
+        for name in cls._CHECKPOINT_ARRAYS:
+            src = np.asarray(ck[name])
+            dst = getattr(run, name)
+            if src.shape != dst.shape:
+                raise ValueError(f"checkpoint array {name!r} has shape {src.shape}, expected "
+                                 f"{dst.shape} for this configuration")
+            dst[...] = src
+        run.run_time = float(ck.get("run_time", 0.0))
+        run.compile_time = 0.0
+        return run

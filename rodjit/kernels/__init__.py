@@ -1,0 +1,1 @@
+"""Compiled building blocks: forces, energies, banded solves (no time stepping here)."""

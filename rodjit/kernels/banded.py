@@ -1,0 +1,71 @@
+"""O(N) banded solves used by the implicit sub-steps: symmetric tri- and pentadiagonal."""
+import numba
+
+
+@numba.njit(cache=True)
+def tridiag_factor(d, off, cp, inv):
+    """Thomas factorisation of the symmetric tridiagonal matrix (diag ``d``, constant
+    off-diagonal ``off``); fills ``cp`` (modified super-diagonal) and ``inv`` (1/pivots)."""
+    n1 = d.size
+    inv[0] = 1.0 / d[0]
+    cp[0] = off * inv[0]
+    for i in range(1, n1):
+        inv[i] = 1.0 / (d[i] - off * cp[i - 1])
+        cp[i] = off * inv[i]
+
+
+@numba.njit(cache=True)
+def tridiag_solve(off, cp, inv, rhs, x):
+    """Solve with a ``tridiag_factor`` result; ``x`` may alias ``rhs``."""
+    n1 = rhs.size
+    x[0] = rhs[0] * inv[0]
+    for i in range(1, n1):
+        x[i] = (rhs[i] - off * x[i - 1]) * inv[i]
+    for i in range(n1 - 2, -1, -1):
+        x[i] -= cp[i] * x[i + 1]
+
+
+@numba.njit(cache=True)
+def penta_factor(a0, a1, a2, l1, l2, dinv):
+    """LDLᵀ of the symmetric pentadiagonal matrix with diagonals a0 (i,i), a1 (i,i+1),
+    a2 (i,i+2).  Fills the unit-lower factor's sub-diagonals l1 (i,i-1), l2 (i,i-2) and
+    1/D.  The matrices here are SPD (mass plus a PSD operator), so no pivoting."""
+    n1 = a0.size
+    d_m2 = 0.0
+    d_m1 = 0.0
+    for i in range(n1):
+        li2 = 0.0
+        li1 = 0.0
+        if i >= 2:
+            li2 = a2[i - 2] / d_m2
+        if i >= 1:
+            prev_l1 = l1[i - 1] if i >= 2 else 0.0
+            li1 = (a1[i - 1] - li2 * d_m2 * prev_l1) / d_m1
+        di = a0[i] - li1 * li1 * d_m1 - li2 * li2 * d_m2
+        l1[i] = li1
+        l2[i] = li2
+        dinv[i] = 1.0 / di
+        d_m2 = d_m1
+        d_m1 = di
+
+
+@numba.njit(cache=True)
+def penta_solve(l1, l2, dinv, rhs, x):
+    """Solve with a ``penta_factor`` result; ``x`` may alias ``rhs``."""
+    n1 = rhs.size
+    for i in range(n1):
+        z = rhs[i]
+        if i >= 1:
+            z -= l1[i] * x[i - 1]
+        if i >= 2:
+            z -= l2[i] * x[i - 2]
+        x[i] = z
+    for i in range(n1):
+        x[i] *= dinv[i]
+    for i in range(n1 - 1, -1, -1):
+        z = x[i]
+        if i + 1 < n1:
+            z -= l1[i + 1] * x[i + 1]
+        if i + 2 < n1:
+            z -= l2[i + 2] * x[i + 2]
+        x[i] = z

@@ -1,0 +1,123 @@
+"""The stress-law interface and its compile-time dispatch.
+
+A law is a singular stress ``s(x)`` on ``x > lower(p)`` with its derivative and its
+primitive (zero at 0).  Its parameters travel as an instance of a law-specific NamedTuple,
+so the compiled kernels pick the law from the *type* of the parameters (no run-time branch,
+one compilation per law, parameter values stay run-time arguments, on-disk cache works).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from numba.extending import overload
+
+__all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower"]
+
+
+@dataclass(frozen=True)
+class Law:
+    """A registered stress law.
+
+    ``kind`` is ``"rod"`` (stress f of the strain, tension positive) or ``"floor"``
+    (upward floor stress σ_b of the bottom height).  ``params`` is the NamedTuple class of
+    its parameters and ``from_config`` builds one from the matching config section.
+    ``value``, ``deriv``, ``primitive`` take ``(x, params)``, ``lower`` takes ``(params)``;
+    all four are ``numba.njit`` functions.
+    """
+
+    name: str
+    kind: str
+    params: type
+    from_config: Callable[[Any], Any]
+    value: Callable
+    deriv: Callable
+    primitive: Callable
+    lower: Callable
+    description: str = ""
+
+
+_BY_TYPE: dict[type, Law] = {}
+_BY_NAME: dict[tuple[str, str], Law] = {}
+
+
+def register(law: Law) -> Law:
+    """Make a law available to the kernels and to ``rod.law`` / ``floor.law``."""
+    if law.kind not in ("rod", "floor"):
+        raise ValueError(f"law kind must be 'rod' or 'floor', not {law.kind!r}")
+    if law.params in _BY_TYPE and _BY_TYPE[law.params] is not law:
+        raise ValueError(f"parameter type {law.params.__name__} already belongs to another law")
+    _BY_TYPE[law.params] = law
+    _BY_NAME[(law.kind, law.name)] = law
+    return law
+
+
+def get_law(kind: str, name: str) -> Law:
+    try:
+        return _BY_NAME[(kind, name)]
+    except KeyError:
+        raise ValueError(
+            f"{kind}.law = {name!r} is not a known {kind} law; choose one of {law_names(kind)}"
+        ) from None
+
+
+def law_names(kind: str) -> list[str]:
+    return sorted(n for k, n in _BY_NAME if k == kind)
+
+
+def law_of(params) -> Law:
+    """The law whose parameters ``params`` are (plain Python side)."""
+    return _BY_TYPE[type(params)]
+
+
+def _law_for_type(numba_type) -> Law:
+    cls = getattr(numba_type, "instance_class", None)
+    if cls not in _BY_TYPE:
+        raise TypeError(f"{numba_type} is not the parameter type of a registered stress law")
+    return _BY_TYPE[cls]
+
+
+# Generic entry points.  Called from Python (or with NUMBA_DISABLE_JIT=1) they dispatch on
+# the Python type; inside compiled code the overloads below resolve at typing time.
+def value(x, p):
+    """Stress at x."""
+    return _BY_TYPE[type(p)].value(x, p)
+
+
+def deriv(x, p):
+    """Derivative of the stress at x."""
+    return _BY_TYPE[type(p)].deriv(x, p)
+
+
+def primitive(x, p):
+    """Primitive of the stress, zero at x = 0."""
+    return _BY_TYPE[type(p)].primitive(x, p)
+
+
+def lower(p):
+    """Lower end of the law's domain: admissible states have x > lower(p)."""
+    return _BY_TYPE[type(p)].lower(p)
+
+
+@overload(value, jit_options={"cache": True})
+def _value_ov(x, p):
+    impl = _law_for_type(p).value
+    return lambda x, p: impl(x, p)
+
+
+@overload(deriv, jit_options={"cache": True})
+def _deriv_ov(x, p):
+    impl = _law_for_type(p).deriv
+    return lambda x, p: impl(x, p)
+
+
+@overload(primitive, jit_options={"cache": True})
+def _primitive_ov(x, p):
+    impl = _law_for_type(p).primitive
+    return lambda x, p: impl(x, p)
+
+
+@overload(lower, jit_options={"cache": True})
+def _lower_ov(p):
+    impl = _law_for_type(p).lower
+    return lambda p: impl(p)

@@ -1,0 +1,106 @@
+"""Plain-NumPy reference of the semi-discrete system (MODEL.md §2–3): the readable spec.
+
+Deliberately independent of the compiled kernels: the Aiki–Kosugi laws are written here in
+MODEL.md's literal form (other laws fall back to their scalar functions), the forces as
+``−∂V/∂u − ∂R/∂v`` assembled with array slicing.  Slow; used by tests and by benchmarks
+that hand the same right-hand side to SciPy.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .laws import AikiKosugiFloor, AikiKosugiRod, deriv, primitive, value
+from .system import masses
+
+__all__ = ["rod_stress", "rod_energy_density", "floor_stress", "floor_energy",
+           "forces", "acceleration", "energies", "rhs"]
+
+
+def rod_stress(eps, rod):
+    eps = np.asarray(eps, dtype=float)
+    if isinstance(rod, AikiKosugiRod):
+        return rod.kappa / 2 * (eps + 0.5 - 1.0 / (2 * (1 + eps) ** 3))
+    return np.vectorize(lambda e: value(float(e), rod))(eps)
+
+
+def rod_energy_density(eps, rod):
+    eps = np.asarray(eps, dtype=float)
+    if isinstance(rod, AikiKosugiRod):
+        return rod.kappa / 2 * (eps**2 / 2 + eps / 2 + 1.0 / (4 * (1 + eps) ** 2) - 0.25)
+    return np.vectorize(lambda e: primitive(float(e), rod))(eps)
+
+
+def floor_stress(h, floor):
+    if isinstance(floor, AikiKosugiFloor):
+        kb, b = floor.kappa_b, floor.beta
+        return kb * (b**3 / (h + b) ** 3 - 1.0) if h <= 0 else 0.0
+    return value(float(h), floor)
+
+
+def floor_energy(h, floor):
+    """σ̂_b(h); the floor's potential energy is −σ̂_b(u_0)."""
+    if isinstance(floor, AikiKosugiFloor):
+        kb, b = floor.kappa_b, floor.beta
+        return kb * (-(b**3) / (2 * (h + b) ** 2) - h + b / 2) if h <= 0 else 0.0
+    return primitive(float(h), floor)
+
+
+def _curvatures(u, h):
+    k = np.zeros_like(u)
+    k[1:-1] = (u[2:] - 2 * u[1:-1] + u[:-2]) / h**2
+    return k  # k_0 = k_N = 0: the discrete u_xx = 0
+
+
+def forces(u, v, system, rod, floor):
+    """m_i u_i'' for every node (MODEL.md §2, written out)."""
+    n, h = system.n, system.h
+    m = masses(n)
+    eps = np.diff(u) / h - 1.0
+    s = rod_stress(eps, rod)
+    F = np.zeros(n + 1)
+    F[:-1] += s          # f(ε_{i+½}) pulls node i up
+    F[1:] -= s           # and node i+1 down
+    if system.gamma:
+        k = np.pad(_curvatures(u, h), 1)        # k_{-1} = k_{N+1} = 0 (absent terms)
+        F -= system.gamma * h * (k[:-2] - 2 * k[1:-1] + k[2:]) / h**2
+    if system.mu:
+        dv = np.diff(v) / h
+        F[:-1] += system.mu * dv
+        F[1:] -= system.mu * dv
+    F += m * system.g
+    F[0] += floor_stress(u[0], floor)
+    return F
+
+
+def acceleration(u, v, system, rod, floor):
+    return forces(u, v, system, rod, floor) / masses(system.n)
+
+
+def rhs(t, y, system, rod, floor):
+    """First-order form d/dt [u, v] for ODE solvers."""
+    n1 = system.n + 1
+    u, v = y[:n1], y[n1:]
+    return np.concatenate([v, acceleration(u, v, system, rod, floor)])
+
+
+def energies(u, v, system, rod, floor):
+    """The energies and observables of MODEL.md §3 (no time-integrated quantities)."""
+    n, h = system.n, system.h
+    m = masses(n)
+    eps = np.diff(u) / h - 1.0
+    k = _curvatures(u, h)
+    out = {
+        "energy_kinetic": 0.5 * np.sum(m * v**2),
+        "energy_stretch": np.sum(h * rod_energy_density(eps, rod)),
+        "energy_bend": 0.5 * system.gamma * np.sum(h * k[1:-1] ** 2),
+        "energy_floor": -floor_energy(u[0], floor),
+        "energy_gravity": -system.g * np.sum(m * u),
+    }
+    out["energy_total"] = sum(out.values())
+    out["dissipation_rate"] = system.mu * np.sum(h * (np.diff(v) / h) ** 2)  # 2R(v)
+    out["u_bottom"] = u[0]
+    out["floor_force"] = floor_stress(u[0], floor)
+    out["min_strain"] = eps.min()
+    out["cm_height"] = np.sum(m * u)
+    out["cm_velocity"] = np.sum(m * v)
+    return out

@@ -1,0 +1,85 @@
+"""The semi-discrete rod of MODEL.md §2 as plain data: grid, masses, parameters, initial state."""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+
+from .laws import get_law, law_of, lower
+
+__all__ = ["RodSystem", "build_system", "grid", "masses", "initial_state", "check_admissible"]
+
+
+class RodSystem(NamedTuple):
+    """Scalars every kernel needs; passed as one argument so a sweep compiles once."""
+
+    n: int          # segments N
+    h: float        # 1/N
+    gamma: float    # beam regularisation
+    mu: float       # viscosity
+    g: float        # signed gravity along +u
+
+
+def build_system(config):
+    """``(RodSystem, rod law params, floor law params)`` for a Config."""
+    n = config.rod.N
+    system = RodSystem(int(n), 1.0 / n, float(config.rod.gamma), float(config.rod.mu),
+                       float(config.gravity.g))
+    rod = get_law("rod", config.rod.law).from_config(config.rod)
+    floor = get_law("floor", config.floor.law).from_config(config.floor)
+    return system, rod, floor
+
+
+def grid(n: int) -> np.ndarray:
+    """Natural positions x_i = i h of the nodes."""
+    return np.arange(n + 1, dtype=np.float64) / n
+
+
+def masses(n: int) -> np.ndarray:
+    """Lumped masses: h/2 at the ends, h inside (total 1)."""
+    m = np.full(n + 1, 1.0 / n)
+    m[0] = m[-1] = 0.5 / n
+    return m
+
+
+def initial_state(config, u0=None, v0=None) -> tuple[np.ndarray, np.ndarray]:
+    """Initial heights and velocities: from the config, or the given profiles (checked)."""
+    n = config.rod.N
+    x = grid(n)
+    if u0 is None:
+        u = config.initial.height + (1.0 + config.initial.strain) * x
+    else:
+        u = _profile("u0", u0, n)
+    if v0 is None:
+        v = np.full(n + 1, float(config.initial.velocity))
+    else:
+        v = _profile("v0", v0, n)
+    return u, v
+
+
+def _profile(name: str, values, n: int) -> np.ndarray:
+    arr = np.array(values, dtype=np.float64, copy=True)
+    if arr.ndim != 1 or arr.size != n + 1:
+        raise ValueError(f"{name} must be a 1-D array of length rod.N + 1 = {n + 1}, "
+                         f"got shape {arr.shape}")
+    bad = np.flatnonzero(~np.isfinite(arr))
+    if bad.size:
+        raise ValueError(f"{name}[{bad[0]}] = {arr[bad[0]]!r} is not finite")
+    return arr
+
+
+def check_admissible(u: np.ndarray, rod, floor, name: str = "u0") -> None:
+    """Raise ValueError unless every segment strain and the bottom height are admissible."""
+    n = u.size - 1
+    eps = np.diff(u) * n - 1.0
+    lo = lower(rod)
+    bad = np.flatnonzero(~(eps > lo))
+    if bad.size:
+        i = bad[0]
+        raise ValueError(f"{name} is not admissible: strain of segment {i} is {eps[i]!r}, "
+                         f"must be > {lo!r} (the rod's compression limit; u must increase "
+                         f"along the rod)")
+    lo_b = lower(floor)
+    if not u[0] > lo_b:
+        raise ValueError(f"{name} is not admissible: bottom height u0[0] = {u[0]!r}, must be "
+                         f"> {lo_b!r} (the floor's bending limit -beta)")

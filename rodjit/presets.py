@@ -1,0 +1,39 @@
+"""Named configurations shipped in ``data/`` (installed as ``rodjit.data``)."""
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+from .config import Config
+
+__all__ = ["preset_names", "preset_path", "load_preset"]
+
+
+def _files():
+    """Preset files from the installed package data, or from data/ in a source tree."""
+    try:
+        root = resources.files("rodjit.data")
+        found = {p.name: p for p in root.iterdir() if p.name.endswith(".toml")}
+        if found:
+            return found
+    except (ModuleNotFoundError, FileNotFoundError):
+        pass
+    root = Path(__file__).resolve().parent.parent / "data"
+    return {p.name: p for p in sorted(root.glob("*.toml"))}
+
+
+def preset_names() -> list[str]:
+    """Preset names: file stems with '_' written as '-' (``paper-mu0``, ``paper-mu100``)."""
+    return sorted(name[:-5].replace("_", "-") for name in _files())
+
+
+def preset_path(name: str):
+    files = _files()
+    key = name.replace("-", "_") + ".toml"
+    if key not in files:
+        raise ValueError(f"unknown preset {name!r}; available presets: {', '.join(preset_names())}")
+    return files[key]
+
+
+def load_preset(name: str) -> Config:
+    return Config.from_toml_string(preset_path(name).read_text())

@@ -1,0 +1,1 @@
+"""Time stepping: integrator steps, step-size control, event tracking, the compiled loop."""

@@ -1,0 +1,216 @@
+"""The compiled time loop: many steps per call, Python sees the state only between calls.
+
+``advance`` steps until t_end, until an output buffer is full, or until ``max_steps``;
+steps land exactly on the output times t0 + k·Δ (integer k).  How a run is cut into calls
+never changes the steps taken, so a resumed run equals an uninterrupted one bit for bit.
+"""
+import numba
+import numpy as np
+
+from ..kernels.forces import BAD_STRAIN, OK, energies, worst_segment
+from ..model.laws import lower, value
+from . import layout as L
+from .events import crossing, open_contact, track
+from .schemes import initial, step
+
+REJECT_SHRINK = 0.25   # a rejected trial step is retried at a quarter of its size
+EVENT_MIN = 1e-3       # a contact crossing inside (EVENT_MIN, EVENT_MAX) of a step ends it
+EVENT_MAX = 0.999
+
+
+@numba.njit(cache=True)
+def _propose(ctrl, dt_suggest, dt_prev, u0, v0, floor_lo):
+    """Next step: the scheme's suggestion, capped by dt_max, by growth over the previous
+    proposal, and by the approach of the bottom to the floor's bending limit."""
+    if ctrl.dt_fixed > 0.0:
+        return ctrl.dt_fixed
+    dt = min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
+    if v0 < 0.0:
+        # σ_b switches on at u_0 = 0 with a finite stiffness: resolve the approach so the
+        # first contact step does not jump deep into the floor.
+        dt = min(dt, ctrl.approach * (u0 - floor_lo) / (-v0))
+    return dt
+
+
+@numba.njit(cache=True)
+def _next_target(clock, count):
+    target = clock[L.T_END]
+    if clock[L.SNAP_DT] > 0.0:
+        target = min(target, clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT])
+    if clock[L.DIAG_DT] > 0.0:
+        target = min(target, clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT])
+    return target
+
+
+@numba.njit(cache=True)
+def _skip_past(clock, count, kidx, dtidx, t):
+    """Advance the output index to the first grid time after t (+ tolerance)."""
+    while clock[L.T0] + count[kidx] * clock[dtidx] <= t + clock[L.TOL]:
+        count[kidx] += 1
+
+
+@numba.njit(cache=True)
+def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
+          snap_t, snap_step, snap_u, snap_v, diag):
+    """Write the snapshot and/or diagnostics row due at time t."""
+    tol = clock[L.TOL]
+    if clock[L.SNAP_DT] > 0.0 and clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT] <= t + tol:
+        j = count[L.N_SNAP]
+        snap_t[j] = t
+        snap_step[j] = step_no
+        snap_u[j, :] = cur[0]
+        snap_v[j, :] = cur[1]
+        count[L.N_SNAP] += 1
+        _skip_past(clock, count, L.K_SNAP, L.SNAP_DT, t)
+    if clock[L.DIAG_DT] > 0.0 and clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT] <= t + tol:
+        j = count[L.N_DIAG]
+        ke, st, be, fe, ge, emin, z, w = energies(cur[0], cur[1], work[1], system, rod, floor)
+        row = diag[j]
+        row[0] = t
+        row[1] = dt_prop
+        row[2] = ke
+        row[3] = st
+        row[4] = be
+        row[5] = fe
+        row[6] = ge
+        row[7] = ke + st + be + fe + ge
+        row[8] = clock[L.DISSIPATED]
+        row[9] = cur[0][0]
+        row[10] = value(cur[0][0], floor)
+        row[11] = emin
+        row[12] = z
+        row[13] = w
+        count[L.N_DIAG] += 1
+        _skip_past(clock, count, L.K_DIAG, L.DIAG_DT, t)
+
+
+@numba.njit(cache=True)
+def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
+          snap_t, snap_step, snap_u, snap_v, diag, fail):
+    """Initial acceleration, energy, first step proposal, contact state and the outputs
+    at t0.  Returns OK or a failure code (then ``fail`` says why)."""
+    u = state[0]
+    v = state[1]
+    a = state[2]
+    status, val, emin, ff, dts = initial(scheme, system, rod, floor, u, v, a, work)
+    if status != OK:
+        fail[L.F_CODE] = status
+        fail[L.F_T] = clock[L.T]
+        fail[L.F_VALUE] = val
+        fail[L.F_INDEX] = worst_segment(u, system.h) if status == BAD_STRAIN else 0
+        fail[L.F_DT] = 0.0
+        return L.FAILED
+    ke, st, be, fe, ge, emin, z, w = energies(u, v, work[1], system, rod, floor)
+    clock[L.E0] = ke + st + be + fe + ge
+    clock[L.W] = w
+    clock[L.DT] = _propose(ctrl, dts, np.inf, u[0], v[0], lower(floor))
+    if u[0] < 0.0:
+        open_contact(ev, clock[L.T], w, u[0], ff, emin)
+    _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
+          count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag)
+    count[L.STARTED] = 1
+    return OK
+
+
+@numba.njit(cache=True)
+def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock, count, ev,
+            snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail, max_steps):
+    """Step from the state in ``state`` (u, v, a rows) and leave the new state there.
+
+    Returns layout.DONE, FULL, PAUSED or FAILED.
+    """
+    cur = state
+    nxt = trial
+    swapped = False
+    t = clock[L.T]
+    dtp = clock[L.DT]
+    t_end = clock[L.T_END]
+    tol = clock[L.TOL]
+    diss = clock[L.DISSIPATED]
+    w = clock[L.W]
+    floor_lo = lower(floor)
+    refined = False
+    fixed = ctrl.dt_fixed > 0.0
+    cap_s = snap_t.size
+    cap_d = diag.shape[0]
+    cap_e = episodes.shape[0]
+    cap_b = bounces.shape[0]
+    taken = 0
+    code = L.PAUSED
+    while True:
+        if t >= t_end - tol:
+            code = L.DONE
+            break
+        if taken >= max_steps:
+            code = L.PAUSED
+            break
+        if (count[L.N_SNAP] >= cap_s or count[L.N_DIAG] >= cap_d
+                or count[L.N_EP] >= cap_e or count[L.N_BOUNCE] >= cap_b):
+            code = L.FULL
+            break
+        target = _next_target(clock, count)
+        rem = target - t
+        land = False
+        if fixed:
+            dt = dtp
+            if rem <= dtp * (1.0 + 1e-9):
+                dt = rem
+                land = True
+        elif rem <= dtp * (1.0 + 1e-6):
+            dt = rem
+            land = True
+        elif rem < 2.0 * dtp:
+            dt = 0.5 * rem   # two equal steps instead of one full and one sliver
+        else:
+            dt = dtp
+        u = cur[0]
+        v = cur[1]
+        u2 = nxt[0]
+        v2 = nxt[1]
+        status, val, emin, ff, dts, w2, dd = step(scheme, system, rod, floor, u, v, cur[2],
+                                                 u2, v2, nxt[2], work, sstats, dt)
+        if (status == OK and not fixed and not refined
+                and (u[0] < 0.0) != (u2[0] < 0.0)):
+            # σ_b has a kink at u_0 = 0 (its stiffness jumps from 0 to 3κ_b/β): a step that
+            # straddles it makes an O(dt²) energy error.  Retry once, ending on the crossing,
+            # so every step sees a smooth force.
+            sc = crossing(u[0], v[0], u2[0], v2[0], dt)
+            if EVENT_MIN < sc < EVENT_MAX and sc * dt >= ctrl.dt_min:
+                dtp = sc * dt
+                refined = True
+                continue
+        refined = False
+        if status != OK:
+            count[L.REJECTED] += 1
+            if fixed or REJECT_SHRINK * dt < ctrl.dt_min:
+                fail[L.F_CODE] = status
+                fail[L.F_T] = t
+                fail[L.F_VALUE] = val
+                fail[L.F_INDEX] = worst_segment(u2, system.h) if status == BAD_STRAIN else 0
+                fail[L.F_DT] = dt
+                code = L.FAILED
+                break
+            dtp = REJECT_SHRINK * dt
+            continue
+        t_new = target if land else t + dt
+        track(ev, count, episodes, bounces, t, t_new - t, u[0], v[0], u2[0], v2[0],
+              w, w2, ff, emin)
+        diss += dd
+        w = w2
+        t = t_new
+        cur, nxt = nxt, cur
+        swapped = not swapped
+        count[L.STEP] += 1
+        taken += 1
+        dtp = _propose(ctrl, dts, dtp, u2[0], v2[0], floor_lo)
+        if land:
+            clock[L.DISSIPATED] = diss
+            _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
+                  snap_t, snap_step, snap_u, snap_v, diag)
+    clock[L.T] = t
+    clock[L.DT] = dtp
+    clock[L.DISSIPATED] = diss
+    clock[L.W] = w
+    if swapped:
+        state[:, :] = cur
+    return code

@@ -1,0 +1,90 @@
+"""Viscous sub-steps v' = −μ M⁻¹K v (K: the discrete −∂²/∂x² of R(v) = μ/2 vᵀKv).
+
+Both conserve momentum (K annihilates constants) and return the kinetic energy they
+remove, computed as −Σ m (v₁−v₀)(v₁+v₀)/2 (no cancellation when it is small).
+"""
+import math
+
+import numba
+
+from ..kernels.banded import tridiag_factor, tridiag_solve
+from . import workspace as W
+
+
+@numba.njit(cache=True)
+def _matrix(d, c, h, n):
+    """Diagonal of M + cK into ``d``; returns its constant off-diagonal −c/h."""
+    ih = 1.0 / h
+    for i in range(n + 1):
+        if 0 < i < n:
+            d[i] = h + 2.0 * c * ih
+        else:
+            d[i] = 0.5 * h + c * ih
+    return -c * ih
+
+
+@numba.njit(cache=True)
+def _kinetic_drop(v0, v1, h, n):
+    acc = 0.0
+    for i in range(n + 1):
+        m = h if 0 < i < n else 0.5 * h
+        acc += m * (v0[i] - v1[i]) * (v0[i] + v1[i])
+    return 0.5 * acc
+
+
+@numba.njit(cache=True)
+def viscous_cn(vin, vout, tau, system, work):
+    """Crank–Nicolson over ``tau``: symmetric, second order; rings if μτλ ≫ 1, so the
+    Verlet step keeps μτ·4/h² ≤ 2·cfl.  ``vout`` may alias ``vin``."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    c = 0.5 * tau * system.mu
+    d = work[W.VD]
+    rhs = work[W.VRHS]
+    v0 = work[W.V0]
+    off = _matrix(d, c, h, n)
+    for i in range(n + 1):
+        v0[i] = vin[i]
+    # rhs = (M − cK) v0
+    for i in range(n + 1):
+        m = h if 0 < i < n else 0.5 * h
+        kv = 0.0
+        if i > 0:
+            kv += v0[i] - v0[i - 1]
+        if i < n:
+            kv += v0[i] - v0[i + 1]
+        rhs[i] = m * v0[i] - c * kv * ih
+    tridiag_factor(d, off, work[W.VCP], work[W.VINV])
+    tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)
+    return _kinetic_drop(v0, vout, h, n)
+
+
+GAMMA_SDIRK = 1.0 - 1.0 / math.sqrt(2.0)
+
+
+@numba.njit(cache=True)
+def viscous_sdirk2(vin, vout, tau, system, work):
+    """Two-stage, stiffly accurate SDIRK (γ = 1 − 1/√2) over ``tau``: second order and
+    L-stable, so stiff viscous modes are damped, never ringing, at any μτ/h².
+    ``vout`` may alias ``vin``."""
+    n = system.n
+    h = system.h
+    gs = GAMMA_SDIRK
+    c = gs * tau * system.mu
+    d = work[W.VD]
+    rhs = work[W.VRHS]
+    v0 = work[W.V0]
+    off = _matrix(d, c, h, n)
+    tridiag_factor(d, off, work[W.VCP], work[W.VINV])
+    for i in range(n + 1):
+        v0[i] = vin[i]
+        m = h if 0 < i < n else 0.5 * h
+        rhs[i] = m * v0[i]
+    tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)       # stage 1: Y1
+    r = (1.0 - gs) / gs
+    for i in range(n + 1):
+        m = h if 0 < i < n else 0.5 * h
+        rhs[i] = m * (v0[i] + r * (vout[i] - v0[i]))
+    tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)       # stage 2 = result
+    return _kinetic_drop(v0, vout, h, n)
