@@ -22,7 +22,6 @@ from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
 __all__ = ["Run", "SimulationError", "Sink"]
 
 GROWTH = 1.5      # per-step growth limit of the proposed step
-APPROACH = 1.0    # × cfl: fraction of the distance to −β the bottom may cover in one step
 NODE_STEPS_PER_CALL = 20_000_000   # ~10–100 ms of work between returns to Python
 
 
@@ -69,7 +68,6 @@ class Run:
             dt_min=float(tc.dt_min),
             dt_fixed=float(tc.dt) if tc.dt is not None else 0.0,
             growth=GROWTH,
-            approach=APPROACH * float(tc.cfl),
         )
         n1 = config.rod.N + 1
         u, v = initial_state(config, u0, v0)

@@ -56,13 +56,17 @@ def open_contact(ev, t, w, u0, ff, emin):
 
 
 @numba.njit(cache=True)
-def track(ev, count, episodes, bounces, t, dt, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb):
+def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb):
     """Update the bookkeeping for the accepted step (t, t+dt]; write finished episodes
-    and bounces into their buffers (the caller guarantees one free row in each)."""
+    and bounces into their buffers (the caller guarantees one free row in each).
+
+    Internal forces cancel in w = Σ m v, so out of contact w changes by g only: the
+    centre-of-mass velocity at a crossing follows exactly from the step end that is out
+    of contact."""
     if ev[L.IN_CONTACT] == 0.0:
         if u0b < 0.0:
             s = crossing(u0a, v0a, u0b, v0b, dt)
-            open_contact(ev, t + s * dt, wa + s * (wb - wa), u0b, ffb, eminb)
+            open_contact(ev, t + s * dt, wa + g * s * dt, u0b, ffb, eminb)
         elif ev[L.B_NEP] > 0.0:
             _update_extremes(ev, u0b, ffb, eminb)
     else:
@@ -77,7 +81,7 @@ def track(ev, count, episodes, bounces, t, dt, u0a, v0a, u0b, v0b, wa, wb, ffb, 
             count[L.EPISODES_TOTAL] += 1
             ev[L.IN_CONTACT] = 0.0
             ev[L.B_T_RELEASE] = tc
-            ev[L.B_W_RELEASE] = wa + s * (wb - wa)
+            ev[L.B_W_RELEASE] = wb - g * (1.0 - s) * dt
             ev[L.REL_MIN_U0] = ev[L.CUR_MIN_U0]
             ev[L.REL_MAX_FF] = ev[L.CUR_MAX_FF]
             ev[L.REL_MIN_EPS] = ev[L.CUR_MIN_EPS]

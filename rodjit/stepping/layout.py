@@ -77,10 +77,9 @@ BOUNCE_COLUMNS = (
 
 
 class Control(NamedTuple):
-    """Step-size control: caps, fixed step (0: adaptive), growth and approach limits."""
+    """Step-size control: caps, fixed step (0: adaptive), growth limit."""
 
     dt_max: float     # inf when unset
     dt_min: float
     dt_fixed: float   # > 0: fixed steps
     growth: float     # a proposal grows at most by this factor per step
-    approach: float   # bottom moves at most this fraction of its distance to −β per step

@@ -8,7 +8,7 @@ import numba
 import numpy as np
 
 from ..kernels.forces import BAD_STRAIN, OK, energies, worst_segment
-from ..model.laws import lower, value
+from ..model.laws import value
 from . import layout as L
 from .events import crossing, open_contact, track
 from .schemes import initial, step
@@ -19,17 +19,12 @@ EVENT_MAX = 0.999
 
 
 @numba.njit(cache=True)
-def _propose(ctrl, dt_suggest, dt_prev, u0, v0, floor_lo):
-    """Next step: the scheme's suggestion, capped by dt_max, by growth over the previous
-    proposal, and by the approach of the bottom to the floor's bending limit."""
+def _propose(ctrl, dt_suggest, dt_prev):
+    """Next step: the scheme's suggestion, capped by dt_max and by growth over the
+    previous proposal (so a step that just recovered from a rejection grows gently)."""
     if ctrl.dt_fixed > 0.0:
         return ctrl.dt_fixed
-    dt = min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
-    if v0 < 0.0:
-        # σ_b switches on at u_0 = 0 with a finite stiffness: resolve the approach so the
-        # first contact step does not jump deep into the floor.
-        dt = min(dt, ctrl.approach * (u0 - floor_lo) / (-v0))
-    return dt
+    return min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
 
 
 @numba.njit(cache=True)
@@ -103,7 +98,7 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     ke, st, be, fe, ge, emin, z, w = energies(u, v, work[1], system, rod, floor)
     clock[L.E0] = ke + st + be + fe + ge
     clock[L.W] = w
-    clock[L.DT] = _propose(ctrl, dts, np.inf, u[0], v[0], lower(floor))
+    clock[L.DT] = _propose(ctrl, dts, np.inf)
     if u[0] < 0.0:
         open_contact(ev, clock[L.T], w, u[0], ff, emin)
     _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
@@ -128,7 +123,6 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
     tol = clock[L.TOL]
     diss = clock[L.DISSIPATED]
     w = clock[L.W]
-    floor_lo = lower(floor)
     refined = False
     fixed = ctrl.dt_fixed > 0.0
     cap_s = snap_t.size
@@ -193,7 +187,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             dtp = REJECT_SHRINK * dt
             continue
         t_new = target if land else t + dt
-        track(ev, count, episodes, bounces, t, t_new - t, u[0], v[0], u2[0], v2[0],
+        track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
               w, w2, ff, emin)
         diss += dd
         w = w2
@@ -202,7 +196,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         swapped = not swapped
         count[L.STEP] += 1
         taken += 1
-        dtp = _propose(ctrl, dts, dtp, u2[0], v2[0], floor_lo)
+        dtp = _propose(ctrl, dts, dtp)
         if land:
             clock[L.DISSIPATED] = diss
             _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],

@@ -11,6 +11,7 @@ import numba
 from ..kernels.banded import penta_factor, penta_solve
 from ..kernels.forces import OK, accel, add_beam_term
 from . import workspace as W
+from .stability import explicit_dt
 from .viscous import viscous_sdirk2
 
 
@@ -19,7 +20,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     """Acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``."""
     status, val, emin, fl, om2 = accel(u, a, work[W.S], work[W.K], system, rod, floor, False)
-    return status, val, emin, fl, stable_dt(system, om2, scheme.cfl)
+    return status, val, emin, fl, explicit_dt(system, floor, om2, u[0], v[0], scheme.cfl, False)
 
 
 @numba.njit(cache=True)
@@ -94,10 +95,5 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         w += (h if 0 < i < n else 0.5 * h) * v2[i]
     if system.mu > 0.0:
         diss += viscous_sdirk2(v2, v2, hdt, system, work)
-    return OK, 0.0, emin, fl, stable_dt(system, om2, scheme.cfl), w, diss
-
-
-@numba.njit(cache=True)
-def stable_dt(system, omega2, cfl):
-    """cfl × 2/ω; ω excludes bending and viscosity, which are implicit."""
-    return cfl * 2.0 / omega2 ** 0.5
+    return OK, 0.0, emin, fl, explicit_dt(system, floor, om2, u2[0], v2[0], scheme.cfl,
+                                           False), w, diss

@@ -9,6 +9,7 @@ import numba
 
 from ..kernels.forces import OK, accel
 from . import workspace as W
+from .stability import explicit_dt
 from .viscous import viscous_cn
 
 
@@ -17,7 +18,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     """Acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``."""
     status, val, emin, fl, om2 = accel(u, a, work[W.S], work[W.K], system, rod, floor, True)
-    return status, val, emin, fl, stable_dt(system, om2, scheme.cfl)
+    return status, val, emin, fl, explicit_dt(system, floor, om2, u[0], v[0], scheme.cfl, True)
 
 
 @numba.njit(cache=True)
@@ -50,13 +51,5 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         w += (h if 0 < i < n else 0.5 * h) * v2[i]
     if system.mu > 0.0:
         diss += viscous_cn(v2, v2, hdt, system, work)  # conserves momentum: w unchanged
-    return OK, 0.0, emin, fl, stable_dt(system, om2, scheme.cfl), w, diss
-
-
-@numba.njit(cache=True)
-def stable_dt(system, omega2, cfl):
-    """cfl × the stability limit 2/ω, and the CN viscous limit h²/(2μ)."""
-    dt = cfl * 2.0 / omega2 ** 0.5
-    if system.mu > 0.0:
-        dt = min(dt, cfl * system.h * system.h / (2.0 * system.mu))
-    return dt
+    return OK, 0.0, emin, fl, explicit_dt(system, floor, om2, u2[0], v2[0], scheme.cfl,
+                                           True), w, diss
