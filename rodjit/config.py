@@ -115,13 +115,10 @@ def valid_keys() -> list[str]:
 
 def _unknown_key_error(key: str) -> ValueError:
     keys = valid_keys()
-    close = difflib.get_close_matches(key, keys, n=1, cutoff=0.6)
-    if not close and "." in key:  # a right name in the wrong section, or a typo'd name
-        name = key.rsplit(".", 1)[1]
-        close = [k for k in keys if k.rsplit(".", 1)[1] == name][:1]
-        if not close:
-            close = difflib.get_close_matches(name, [k.rsplit(".", 1)[1] for k in keys], n=1)
-            close = [k for k in keys if close and k.endswith("." + close[0])][:1]
+    name = key.rsplit(".", 1)[-1]
+    # the right name in the wrong section first, then the closest spelling
+    close = [k for k in keys if name and k.rsplit(".", 1)[1] == name][:1]
+    close = close or difflib.get_close_matches(key, keys, n=1, cutoff=0.6)
     hint = f"; did you mean '{close[0]}'?" if close else ""
     return ValueError(f"unknown configuration key '{key}'{hint} valid keys: {', '.join(keys)}")
 

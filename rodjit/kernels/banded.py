@@ -1,8 +1,8 @@
 """O(N) banded solves used by the implicit sub-steps: symmetric tri- and pentadiagonal."""
-import numba
+from .._jit import kernel
 
 
-@numba.njit(cache=True)
+@kernel
 def tridiag_factor(d, off, cp, inv):
     """Thomas factorisation of the symmetric tridiagonal matrix (diag ``d``, constant
     off-diagonal ``off``); fills ``cp`` (modified super-diagonal) and ``inv`` (1/pivots)."""
@@ -14,7 +14,7 @@ def tridiag_factor(d, off, cp, inv):
         cp[i] = off * inv[i]
 
 
-@numba.njit(cache=True)
+@kernel
 def tridiag_solve(off, cp, inv, rhs, x):
     """Solve with a ``tridiag_factor`` result; ``x`` may alias ``rhs``."""
     n1 = rhs.size
@@ -25,7 +25,7 @@ def tridiag_solve(off, cp, inv, rhs, x):
         x[i] -= cp[i] * x[i + 1]
 
 
-@numba.njit(cache=True)
+@kernel
 def penta_factor(a0, a1, a2, l1, l2, dinv):
     """LDLᵀ of the symmetric pentadiagonal matrix with diagonals a0 (i,i), a1 (i,i+1),
     a2 (i,i+2).  Fills the unit-lower factor's sub-diagonals l1 (i,i-1), l2 (i,i-2) and
@@ -49,7 +49,7 @@ def penta_factor(a0, a1, a2, l1, l2, dinv):
         d_m1 = di
 
 
-@numba.njit(cache=True)
+@kernel
 def penta_solve(l1, l2, dinv, rhs, x):
     """Solve with a ``penta_factor`` result; ``x`` may alias ``rhs``."""
     n1 = rhs.size

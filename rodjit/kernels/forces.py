@@ -4,10 +4,10 @@ Node masses are h/2 at the ends and h inside; ``inv_m`` below means 1/m_i.
 """
 import math
 
-import numba
 import numpy as np
 
 from ..model.laws import deriv, lower, primitive, value
+from .._jit import kernel
 
 # status codes of a trial state
 OK = 0
@@ -16,7 +16,7 @@ BAD_FLOOR = 2     # the bottom reached the floor law's lower bound (−β)
 NON_FINITE = 3    # a non-finite value appeared
 
 
-@numba.njit(cache=True)
+@kernel
 def curvatures(u, h, k):
     """k_i = (u_{i+1} − 2u_i + u_{i−1})/h² inside, k_0 = k_N = 0 (the discrete u_xx = 0)."""
     n = u.size - 1
@@ -27,7 +27,7 @@ def curvatures(u, h, k):
         k[i] = (u[i + 1] - 2.0 * u[i] + u[i - 1]) * ih2
 
 
-@numba.njit(cache=True)
+@kernel
 def add_beam_term(u, out, k, h, scale, by_mass):
     """out_j += scale · (k_{j−1} − 2k_j + k_{j+1}) / h, terms past the ends absent.
 
@@ -46,7 +46,7 @@ def add_beam_term(u, out, k, h, scale, by_mass):
         out[j] += fj
 
 
-@numba.njit(cache=True)
+@kernel
 def accel(u, a, s, k, system, rod, floor, beam):
     """Explicit acceleration a = M⁻¹(stretch + floor [+ bending if ``beam``]) + g.
 
@@ -92,7 +92,7 @@ def accel(u, a, s, k, system, rod, floor, beam):
     return OK, 0.0, emin, fl, omega2
 
 
-@numba.njit(cache=True)
+@kernel
 def worst_segment(u, h):
     """Index of the most compressed segment (for error messages)."""
     n = u.size - 1
@@ -106,7 +106,7 @@ def worst_segment(u, h):
     return best
 
 
-@numba.njit(cache=True)
+@kernel
 def energies(u, v, k, system, rod, floor):
     """``(kinetic, stretch, bend, floor, gravity, min_strain, cm_height, cm_velocity)``."""
     n = system.n

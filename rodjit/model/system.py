@@ -64,7 +64,7 @@ def _profile(name: str, values, n: int) -> np.ndarray:
                          f"got shape {arr.shape}")
     bad = np.flatnonzero(~np.isfinite(arr))
     if bad.size:
-        raise ValueError(f"{name}[{bad[0]}] = {arr[bad[0]]!r} is not finite")
+        raise ValueError(f"{name}[{bad[0]}] = {float(arr[bad[0]])!r} is not finite")
     return arr
 
 
@@ -76,10 +76,10 @@ def check_admissible(u: np.ndarray, rod, floor, name: str = "u0") -> None:
     bad = np.flatnonzero(~(eps > lo))
     if bad.size:
         i = bad[0]
-        raise ValueError(f"{name} is not admissible: strain of segment {i} is {eps[i]!r}, "
-                         f"must be > {lo!r} (the rod's compression limit; u must increase "
+        raise ValueError(f"{name} is not admissible: strain of segment {i} is {float(eps[i])!r}, "
+                         f"must be > {float(lo)!r} (the rod's compression limit; u must increase "
                          f"along the rod)")
     lo_b = lower(floor)
     if not u[0] > lo_b:
-        raise ValueError(f"{name} is not admissible: bottom height u0[0] = {u[0]!r}, must be "
-                         f"> {lo_b!r} (the floor's bending limit -beta)")
+        raise ValueError(f"{name} is not admissible: bottom height u0[0] = {float(u[0])!r}, must be "
+                         f"> {float(lo_b)!r} (the floor's bending limit -beta)")

@@ -1,45 +1,67 @@
 """Contact episodes and bounces (MODEL.md §3), tracked step by step inside the loop.
 
-An episode is a maximal interval with u_0 < 0; its ends are interpolated inside the step
-with the cubic Hermite interpolant of (u_0, v_0).  A bounce collects the episodes between
+An episode is a maximal interval with u_0 < 0; its ends are located inside the step from
+the side of the step that is out of contact (where the force is smooth).  A bounce collects the episodes between
 two apexes of the centre of mass (w from + to − with no contact active).
 """
-import numba
 import numpy as np
 
 from . import layout as L
+from .._jit import kernel
 
 
-@numba.njit(cache=True)
-def crossing(ua, va, ub, vb, dt):
-    """Fraction s ∈ [0, 1] of the step where the Hermite cubic of u_0 changes sign
-    (ua and ub on opposite sides of 0, or ua == 0)."""
-    if ua == 0.0:
+@kernel
+def _root(c0, c1, c2):
+    """The root in [0, 1] of c0 + c1 s + c2 s² nearest 0, given a sign change on [0, 1]."""
+    if c0 == 0.0:
         return 0.0
     lo = 0.0
     hi = 1.0
-    sa = ua < 0.0
+    neg0 = c0 < 0.0
     for _ in range(60):
         s = 0.5 * (lo + hi)
-        s2 = s * s
-        s3 = s2 * s
-        p = ((2 * s3 - 3 * s2 + 1) * ua + (s3 - 2 * s2 + s) * dt * va
-             + (-2 * s3 + 3 * s2) * ub + (s3 - s2) * dt * vb)
-        if (p < 0.0) == sa:
+        if ((c0 + s * (c1 + s * c2)) < 0.0) == neg0:
             lo = s
         else:
             hi = s
     return 0.5 * (lo + hi)
 
 
-@numba.njit(cache=True)
+@kernel
+def touchdown(ua, va, ub, dt):
+    """Fraction of the step at which u_0 reaches 0 coming from above.
+
+    Uses only the start of the step, which is out of contact: the quadratic through
+    (u_a, v_a) and u_b is the Taylor polynomial with the start's acceleration (for Verlet,
+    u_b = u_a + dt v_a + dt²/2 a_a exactly), blind to the floor force after the crossing."""
+    return _root(ua, dt * va, ub - ua - dt * va)
+
+
+@kernel
+def release(ua, ub, vb, dt):
+    """Fraction of the step at which u_0 climbs back to 0; uses only the end of the step,
+    which is out of contact (the backward Taylor quadratic from (u_b, v_b) through u_a)."""
+    # p(s) = u_b − (1−s) dt v_b + (1−s)² c with c = u_a − u_b + dt v_b, written in s
+    c = ua - ub + dt * vb
+    return _root(ub - dt * vb + c, dt * vb - 2.0 * c, c)
+
+
+@kernel
+def crossing(ua, va, ub, vb, dt):
+    """Fraction of the step where u_0 crosses 0, from whichever side is out of contact."""
+    if ua >= 0.0:
+        return touchdown(ua, va, ub, dt)
+    return release(ua, ub, vb, dt)
+
+
+@kernel
 def _update_extremes(ev, u0, ff, emin):
     ev[L.CUR_MIN_U0] = min(ev[L.CUR_MIN_U0], u0)
     ev[L.CUR_MAX_FF] = max(ev[L.CUR_MAX_FF], ff)
     ev[L.CUR_MIN_EPS] = min(ev[L.CUR_MIN_EPS], emin)
 
 
-@numba.njit(cache=True)
+@kernel
 def open_contact(ev, t, w, u0, ff, emin):
     """A contact episode starts at t (also used when the run starts in contact)."""
     ev[L.IN_CONTACT] = 1.0
@@ -52,10 +74,12 @@ def open_contact(ev, t, w, u0, ff, emin):
         ev[L.CUR_MIN_U0] = u0
         ev[L.CUR_MAX_FF] = ff
         ev[L.CUR_MIN_EPS] = emin
+    else:
+        _update_extremes(ev, u0, ff, emin)
     ev[L.B_NEP] += 1.0
 
 
-@numba.njit(cache=True)
+@kernel
 def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb):
     """Update the bookkeeping for the accepted step (t, t+dt]; write finished episodes
     and bounces into their buffers (the caller guarantees one free row in each).
@@ -65,14 +89,14 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
     of contact."""
     if ev[L.IN_CONTACT] == 0.0:
         if u0b < 0.0:
-            s = crossing(u0a, v0a, u0b, v0b, dt)
+            s = touchdown(u0a, v0a, u0b, dt)
             open_contact(ev, t + s * dt, wa + g * s * dt, u0b, ffb, eminb)
         elif ev[L.B_NEP] > 0.0:
             _update_extremes(ev, u0b, ffb, eminb)
     else:
         _update_extremes(ev, u0b, ffb, eminb)
         if u0b >= 0.0:
-            s = crossing(u0a, v0a, u0b, v0b, dt)
+            s = release(u0a, u0b, v0b, dt)
             tc = t + s * dt
             j = count[L.N_EP]
             episodes[j, 0] = ev[L.EP_START]
@@ -94,7 +118,7 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
         ev[L.B_NEP] = 0.0
 
 
-@numba.njit(cache=True)
+@kernel
 def write_bounce(row, ev, is_open):
     """One bounce record (layout.BOUNCE_COLUMNS) from the bookkeeping; an open bounce has
     no release yet, so its release fields are NaN and its extremes run to now."""

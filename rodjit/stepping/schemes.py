@@ -17,6 +17,7 @@ from typing import NamedTuple
 from numba.extending import overload
 
 from . import semi_implicit, verlet
+from .._jit import JIT_OPTIONS
 
 __all__ = ["Verlet", "SemiImplicit", "make_scheme", "register_scheme", "initial", "step",
            "SCHEME_STATS"]
@@ -75,14 +76,14 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                                        work, sstats, dt)
 
 
-@overload(initial, jit_options={"cache": True})
+@overload(initial, jit_options=JIT_OPTIONS)
 def _initial_ov(scheme, system, rod, floor, u, v, a, work):
     impl = _module_for(scheme).initial
     return lambda scheme, system, rod, floor, u, v, a, work: impl(
         scheme, system, rod, floor, u, v, a, work)
 
 
-@overload(step, jit_options={"cache": True})
+@overload(step, jit_options=JIT_OPTIONS)
 def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     impl = _module_for(scheme).step
     return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(

@@ -6,16 +6,16 @@ floor and gravity only, B is the implicit midpoint rule on the linear beam syste
 when γ = 0) and V is an L-stable SDIRK2 viscous sub-step (a tridiagonal solve).  Second
 order; stable for dt·ω ≤ 2 with ω from stretch and floor alone, whatever γ and μ.
 """
-import numba
 
 from ..kernels.banded import penta_factor, penta_solve
 from ..kernels.forces import OK, accel, add_beam_term
 from . import workspace as W
 from .stability import explicit_dt
 from .viscous import viscous_sdirk2
+from .._jit import kernel
 
 
-@numba.njit(cache=True)
+@kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``."""
@@ -23,7 +23,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     return status, val, emin, fl, explicit_dt(system, floor, om2, u[0], v[0], scheme.cfl, False)
 
 
-@numba.njit(cache=True)
+@kernel
 def _beam_matrix(a0, a1, a2, c, h, n):
     """Diagonals of M + c·B with B = h CᵀC, C the curvature rows (1, −2, 1)/h² of nodes
     1..N−1 (so γ/2 uᵀBu is the bending energy)."""
@@ -41,7 +41,7 @@ def _beam_matrix(a0, a1, a2, c, h, n):
         a2[i - 1] += w
 
 
-@numba.njit(cache=True)
+@kernel
 def _beam_midpoint(system, u, v, u2, dt, work):
     """Implicit midpoint on u' = v, M v' = −γ B u over dt: v (in place) and u2."""
     n = system.n
@@ -63,7 +63,7 @@ def _beam_midpoint(system, u, v, u2, dt, work):
         u2[i] = u[i] + 0.5 * dt * (vk[i] + v[i])
 
 
-@numba.njit(cache=True)
+@kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 

@@ -5,15 +5,15 @@ force (stretch, bending, floor, gravity), D drifts, and V is a Crank–Nicolson 
 sub-step.  Symmetric and second order; symplectic for μ = 0.  Stable for dt·ω ≤ 2 with
 ω² bounded in ``accel``; the viscous limit μ·dt·4/h² ≤ 4·cfl keeps CN from ringing.
 """
-import numba
 
 from ..kernels.forces import OK, accel
 from . import workspace as W
 from .stability import explicit_dt
 from .viscous import viscous_cn
+from .._jit import kernel
 
 
-@numba.njit(cache=True)
+@kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``."""
@@ -21,7 +21,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     return status, val, emin, fl, explicit_dt(system, floor, om2, u[0], v[0], scheme.cfl, True)
 
 
-@numba.njit(cache=True)
+@kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-import numba
 
 from .base import Law, register
+from ..._jit import kernel
 
 
 class AikiKosugiRod(NamedTuple):
@@ -26,7 +26,7 @@ class AikiKosugiFloor(NamedTuple):
     beta: float
 
 
-@numba.njit(cache=True)
+@kernel
 def rod_value(e, p):
     # κ/2 (ε + 1/2 − 1/(2q³)) with q = 1+ε, written as κ ε (2q³ + q² + q + 1) / (4q³)
     q = 1.0 + e
@@ -35,14 +35,14 @@ def rod_value(e, p):
     return p.kappa * e * (2.0 * q3 + q2 + q + 1.0) / (4.0 * q3)
 
 
-@numba.njit(cache=True)
+@kernel
 def rod_deriv(e, p):
     q = 1.0 + e
     q2 = q * q
     return 0.5 * p.kappa * (1.0 + 1.5 / (q2 * q2))
 
 
-@numba.njit(cache=True)
+@kernel
 def rod_primitive(e, p):
     # κ/2 (ε²/2 + ε/2 + 1/(4q²) − 1/4) = κ ε² (2q² + 2q + 1) / (8q²)  (≥ 0, exact near 0)
     q = 1.0 + e
@@ -50,12 +50,12 @@ def rod_primitive(e, p):
     return p.kappa * e * e * (2.0 * q2 + 2.0 * q + 1.0) / (8.0 * q2)
 
 
-@numba.njit(cache=True)
+@kernel
 def rod_lower(p):
     return -1.0
 
 
-@numba.njit(cache=True)
+@kernel
 def floor_value(h, p):
     # κ_b (r³ − 1), r = β/(h+β); r³ − 1 = (r − 1)(r² + r + 1) and r − 1 = −h/(h+β)
     if h > 0.0:
@@ -65,7 +65,7 @@ def floor_value(h, p):
     return -p.kappa_b * (h / s) * (r * r + r + 1.0)
 
 
-@numba.njit(cache=True)
+@kernel
 def floor_deriv(h, p):
     if h > 0.0:
         return 0.0
@@ -74,7 +74,7 @@ def floor_deriv(h, p):
     return -3.0 * p.kappa_b * r2 * r2 / p.beta
 
 
-@numba.njit(cache=True)
+@kernel
 def floor_primitive(h, p):
     # κ_b (−β³/(2(h+β)²) − h + β/2) = −κ_b h² (2h + 3β) / (2(h+β)²)   (≤ 0)
     if h > 0.0:
@@ -83,7 +83,7 @@ def floor_primitive(h, p):
     return -p.kappa_b * h * h * (2.0 * h + 3.0 * p.beta) / (2.0 * s * s)
 
 
-@numba.njit(cache=True)
+@kernel
 def floor_lower(p):
     return -p.beta
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from numba.extending import overload
+from ..._jit import JIT_OPTIONS, kernel
 
 __all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower"]
 
@@ -99,25 +100,25 @@ def lower(p):
     return _BY_TYPE[type(p)].lower(p)
 
 
-@overload(value, jit_options={"cache": True})
+@overload(value, jit_options=JIT_OPTIONS)
 def _value_ov(x, p):
     impl = _law_for_type(p).value
     return lambda x, p: impl(x, p)
 
 
-@overload(deriv, jit_options={"cache": True})
+@overload(deriv, jit_options=JIT_OPTIONS)
 def _deriv_ov(x, p):
     impl = _law_for_type(p).deriv
     return lambda x, p: impl(x, p)
 
 
-@overload(primitive, jit_options={"cache": True})
+@overload(primitive, jit_options=JIT_OPTIONS)
 def _primitive_ov(x, p):
     impl = _law_for_type(p).primitive
     return lambda x, p: impl(x, p)
 
 
-@overload(lower, jit_options={"cache": True})
+@overload(lower, jit_options=JIT_OPTIONS)
 def _lower_ov(p):
     impl = _law_for_type(p).lower
     return lambda p: impl(p)

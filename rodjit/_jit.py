@@ -1,0 +1,64 @@
+"""The one set of Numba options every rodjit kernel is compiled with, and a cache guard.
+
+``error_model="numpy"``: a division by zero gives inf/nan (which the admissibility checks
+reject) instead of raising inside compiled code, and keeps loops vectorisable.
+``cache=True``: compiled code is stored on disk, so later processes start warm.
+Stress laws written by users should use ``kernel`` too.
+
+Numba invalidates a cached function only when *its own* file changes, not when a function
+it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever
+any rodjit source differs from the last process that compiled them.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+from pathlib import Path
+
+import numba
+
+JIT_OPTIONS = {"cache": True, "error_model": "numpy"}
+
+kernel = numba.njit(**JIT_OPTIONS)
+
+
+def _cache_dirs(root: Path) -> list[Path]:
+    """Where Numba keeps rodjit's cache files (next to the sources, or NUMBA_CACHE_DIR)."""
+    dirs = [p for p in root.rglob("__pycache__") if p.is_dir()]
+    if numba.config.CACHE_DIR:
+        mirror = Path(numba.config.CACHE_DIR) / root.resolve().relative_to(root.resolve().anchor)
+        if mirror.is_dir():
+            dirs.append(mirror)
+    return dirs
+
+
+def _guard_cache() -> None:
+    root = Path(__file__).resolve().parent
+    digest = hashlib.sha1(numba.__version__.encode())
+    for p in sorted(root.rglob("*.py")):
+        digest.update(p.relative_to(root).as_posix().encode())
+        digest.update(p.read_bytes())
+    stamp_dir = (Path(numba.config.CACHE_DIR) / root.relative_to(root.anchor)
+                 if numba.config.CACHE_DIR else root / "__pycache__")
+    stamp = stamp_dir / "rodjit-sources.sha1"
+    try:
+        if stamp.read_text() == digest.hexdigest():
+            return
+    except OSError:
+        pass
+    for d in _cache_dirs(root):
+        for f in list(d.rglob("*.nbi")) + list(d.rglob("*.nbc")):
+            try:
+                f.unlink()
+            except OSError:
+                pass
+    try:
+        stamp_dir.mkdir(parents=True, exist_ok=True)
+        tmp = stamp.with_suffix(f".{os.getpid()}.tmp")
+        tmp.write_text(digest.hexdigest())
+        os.replace(tmp, stamp)
+    except OSError:
+        pass  # read-only install: Numba falls back to its user-wide cache
+
+
+_guard_cache()

@@ -1,0 +1,110 @@
+"""Configuration: defaults, TOML round trip, overrides, and one-line errors for bad input."""
+import math
+
+import pytest
+
+from rodjit import Config
+from rodjit.config import parse_value, valid_keys
+from rodjit.presets import load_preset, preset_names
+
+
+def test_defaults_are_the_paper_first_figure():
+    c = Config()
+    assert (c.rod.N, c.rod.kappa, c.rod.gamma, c.rod.mu) == (5, 100.0, 0.0, 0.0)
+    assert (c.floor.kappa_b, c.floor.beta, c.gravity.g) == (1000.0, 0.05, -9.81)
+    assert (c.initial.height, c.initial.velocity, c.initial.strain) == (1.0, 0.0, 0.0)
+    assert c.time.t_end == 5.0 and c.time.integrator == "verlet" and c.time.dt is None
+    assert c.output.snapshot_interval == 0.005
+
+
+def test_toml_round_trip(tmp_path):
+    c = Config().override({"rod.mu": 100.0, "time.dt_max": 1e-3, "time.integrator": "semi-implicit"})
+    p = tmp_path / "c.toml"
+    p.write_text(c.to_toml())
+    assert Config.from_toml(p) == c
+
+
+def test_override_returns_new_config_and_parses_strings():
+    c = Config()
+    d = c.override({"rod.mu": "12.5", "rod.N": "7", "time.dt": "none", "time.integrator": "'energy'"})
+    assert c.rod.mu == 0.0 and d.rod.mu == 12.5 and d.rod.N == 7 and d.time.dt is None
+    assert d.time.integrator == "energy"
+    assert Config.from_dict({"rod": {"mu": 3.0}, "floor.beta": 0.1}).floor.beta == 0.1
+
+
+def test_presets_ship_the_paper_settings():
+    assert {"paper-mu0", "paper-mu100"} <= set(preset_names())
+    a, b = load_preset("paper-mu0"), load_preset("paper-mu100")
+    assert (a.rod.N, a.rod.gamma, a.rod.mu) == (5, 0.0, 0.0)
+    assert (b.rod.N, b.rod.gamma, b.rod.mu) == (5, 0.0, 100.0)
+    with pytest.raises(ValueError, match="unknown preset 'nope'.*paper-mu0"):
+        load_preset("nope")
+
+
+@pytest.mark.parametrize("key, value, pattern", [
+    ("rod.N", 0, r"rod\.N = 0 is out of range \(int in \[1, 10000000\]\)"),
+    ("rod.N", 2.5, r"rod\.N = 2\.5 is not an integer"),
+    ("rod.kappa", 0.0, r"rod\.kappa = 0\.0 is out of range \(float > 0\)"),
+    ("rod.kappa", -1.0, r"rod\.kappa = -1\.0 is out of range"),
+    ("rod.mu", -1e-3, r"rod\.mu = -0\.001 is out of range \(float >= 0\)"),
+    ("rod.gamma", math.nan, r"rod\.gamma = nan is not finite"),
+    ("floor.beta", 0.0, r"floor\.beta = 0\.0 is out of range \(float > 0\)"),
+    ("floor.kappa_b", math.inf, r"floor\.kappa_b = inf is not finite"),
+    ("gravity.g", "abc", r"gravity\.g = 'abc' is not a number"),
+    ("gravity.g", True, r"gravity\.g = True is not a number"),
+    ("initial.strain", -1.0, r"initial\.strain = -1\.0 is out of range \(float > -1\)"),
+    ("initial.height", -0.06, r"initial\.height = -0\.06 is out of range \(float > -floor\.beta = -0\.05"),
+    ("time.cfl", 1.5, r"time\.cfl = 1\.5 is out of range \(float in \(0, 1\]\)"),
+    ("time.t_end", 0.0, r"time\.t_end = 0\.0 is out of range"),
+    ("time.integrator", "rk4", r"time\.integrator = 'rk4' is not allowed \(one of 'verlet', 'semi-implicit', 'energy'\)"),
+    ("time.dt", -1.0, r"time\.dt = -1\.0 is out of range"),
+    ("time.dt_min", 1.0, r"time\.dt_min = 1\.0 is out of range \(float > 0 and < time\.dt_max"),
+    ("output.snapshot_interval", -1.0, r"output\.snapshot_interval = -1\.0 is out of range"),
+    ("rod.law", "hooke", r"rod\.law = 'hooke' is not a known rod law; choose one of \['aiki-kosugi'\]"),
+])
+def test_bad_values_name_field_and_range(key, value, pattern):
+    over = {key: value}
+    if key == "time.dt_min":
+        over["time.dt_max"] = 0.5
+    with pytest.raises(ValueError, match=pattern) as exc:
+        Config().override(over)
+    assert "\n" not in str(exc.value)
+
+
+def test_unknown_key_suggests_close_match_and_lists_keys():
+    with pytest.raises(ValueError, match=r"unknown configuration key 'rod\.mew'; did you mean 'rod\.mu'\? valid keys: rod\.N, ") as exc:
+        Config().override({"rod.mew": 1.0})
+    assert "floor.kappa_b" in str(exc.value)
+    with pytest.raises(ValueError, match=r"did you mean 'floor\.kappa_b'"):
+        Config().override({"rod.kappa_b": 1.0})
+    with pytest.raises(ValueError, match=r"unknown configuration key 'flor\.'"):
+        Config.from_dict({"flor": {"beta": 1.0}})
+
+
+def test_toml_file_errors(tmp_path):
+    with pytest.raises(ValueError, match="does not exist"):
+        Config.from_toml(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[rod\nN = 5")
+    with pytest.raises(ValueError, match="is not valid TOML"):
+        Config.from_toml(bad)
+    unknown = tmp_path / "unknown.toml"
+    unknown.write_text("[rod]\nkapa = 5.0\n")
+    with pytest.raises(ValueError, match="did you mean 'rod.kappa'"):
+        Config.from_toml(unknown)
+
+
+def test_parse_value():
+    assert parse_value("k", "1e-3") == 1e-3
+    assert parse_value("k", "none") is None
+    assert parse_value("k", "[1, 2]") == [1, 2]
+    assert parse_value("k", "verlet") == "verlet"
+
+
+def test_valid_keys_cover_the_contract():
+    keys = set(valid_keys())
+    for k in ["rod.N", "rod.kappa", "rod.gamma", "rod.mu", "floor.kappa_b", "floor.beta",
+              "gravity.g", "initial.height", "initial.velocity", "initial.strain",
+              "time.t_end", "time.integrator", "time.cfl", "time.dt_max", "time.dt_min",
+              "time.dt", "output.snapshot_interval", "output.diagnostics_interval"]:
+        assert k in keys

@@ -1,0 +1,124 @@
+"""The Python API: simulate, Result, errors, and that a run cut into pieces is the same
+run bit for bit (the foundation of checkpoint/resume)."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit.driver.result import MemorySink
+from rodjit.driver.run import Run
+from rodjit.stepping import layout as L
+
+CASES = [
+    {"time.t_end": 3.0},
+    {"time.t_end": 2.0, "rod.mu": 5.0, "rod.gamma": 1e-3, "time.integrator": "semi-implicit",
+     "rod.N": 12, "output.diagnostics_interval": 0.0007},
+    {"time.t_end": 2.0, "rod.mu": 5.0, "rod.gamma": 1e-3, "rod.N": 12},
+]
+
+
+def one_shot(cfg):
+    return rodjit.simulate(cfg)
+
+
+def in_pieces(cfg, rng):
+    run = Run(cfg, snapshot_capacity=3, diag_capacity=5, event_capacity=1)
+    sink = MemorySink()
+    run.start(sink)
+    while run.advance(sink, max_steps=int(rng.integers(1, 40))) != L.DONE:
+        pass
+    return sink.result(run)
+
+
+@pytest.mark.parametrize("over", CASES)
+def test_a_run_cut_into_pieces_is_bitwise_the_same(over, rng):
+    cfg = rodjit.Config().override(over)
+    a, b = one_shot(cfg), in_pieces(cfg, rng)
+    assert np.array_equal(a.u_final, b.u_final) and np.array_equal(a.v_final, b.v_final)
+    assert np.array_equal(a.u, b.u) and np.array_equal(a.t, b.t)
+    for name in a.diagnostics:
+        assert np.array_equal(a.diagnostics[name], b.diagnostics[name]), name
+    for name in a.bounces:
+        assert np.array_equal(a.bounces[name], b.bounces[name], equal_nan=True), name
+    assert a.stats["steps"] == b.stats["steps"]
+
+
+def test_checkpoint_restores_bitwise(rng):
+    cfg = rodjit.Config().override({"time.t_end": 2.0, "rod.mu": 1.0})
+    full = one_shot(cfg)
+    run = Run(cfg)
+    sink = MemorySink()
+    run.start(sink)
+    for _ in range(3):
+        run.advance(sink, max_steps=500)
+    resumed = Run.from_checkpoint(cfg, run.checkpoint())
+    while resumed.advance(sink) != L.DONE:
+        pass
+    res = sink.result(resumed)
+    assert np.array_equal(res.u_final, full.u_final) and np.array_equal(res.u, full.u)
+    assert np.array_equal(res.diagnostics["energy_total"], full.diagnostics["energy_total"])
+
+
+def test_output_times_are_exact_grid_points():
+    res = rodjit.simulate(rodjit.Config().override({"time.t_end": 1.0,
+                                                    "output.snapshot_interval": 0.003,
+                                                    "output.diagnostics_interval": 0.001}))
+    k = np.arange(res.t.size)
+    assert np.array_equal(res.t, k * 0.003)
+    assert np.array_equal(res.diagnostics["t"], np.arange(1001) * 0.001)
+
+
+def test_result_contents():
+    res = rodjit.simulate(rodjit.Config().override({"time.t_end": 1.0}))
+    assert res.x.shape == (6,) and res.u.shape == (res.t.size, 6) and res.v.shape == res.u.shape
+    assert set(res.diagnostics) == set(L.DIAG_COLUMNS)
+    assert set(res.bounces) == set(L.BOUNCE_COLUMNS) | {"open"}
+    assert set(res.episodes) == {"t_start", "t_end"}
+    for key in ("steps", "rejected_steps", "wall_time", "compile_time", "run_time",
+                "node_steps_per_second"):
+        assert key in res.stats
+    assert res.stats["steps"] > 0 and res.stats["node_steps_per_second"] > 0
+    assert res.status == "completed" and res.t_final == 1.0
+    d = res.diagnostics
+    parts = sum(d[k] for k in ("energy_kinetic", "energy_stretch", "energy_bend",
+                               "energy_floor", "energy_gravity"))
+    assert np.allclose(parts, d["energy_total"], rtol=0, atol=1e-12)
+
+
+def test_initial_profiles_are_used_and_checked():
+    cfg = rodjit.Config().override({"time.t_end": 0.01})
+    x = np.linspace(0, 1, 6)
+    res = rodjit.simulate(cfg, u0=2.0 + 1.1 * x, v0=np.full(6, -1.0))
+    assert res.u[0] == pytest.approx(2.0 + 1.1 * x) and res.diagnostics["cm_velocity"][0] == pytest.approx(-1.0)
+    with pytest.raises(ValueError, match=r"u0 must be a 1-D array of length rod\.N \+ 1 = 6"):
+        rodjit.simulate(cfg, u0=np.ones(5))
+    with pytest.raises(ValueError, match=r"v0\[2\] = nan is not finite"):
+        rodjit.simulate(cfg, v0=[0, 0, np.nan, 0, 0, 0])
+    with pytest.raises(ValueError, match=r"u0 is not admissible: strain of segment 2 is -1\.0, must be > -1\.0"):
+        rodjit.simulate(cfg, u0=[1, 1.2, 1.4, 1.4, 1.6, 1.8])
+    with pytest.raises(ValueError, match=r"bottom height u0\[0\] = -0\.06, must be > -0\.05"):
+        rodjit.simulate(cfg, u0=-0.06 + x)
+    with pytest.raises(TypeError, match="rodjit.Config"):
+        rodjit.simulate({"rod.N": 5})
+
+
+def test_same_results_with_jit_disabled():
+    """The kernels are plain Python too: a short run in a process with NUMBA_DISABLE_JIT=1
+    gives the same numbers as the compiled run."""
+    over = {"time.t_end": 0.6, "rod.N": 4, "rod.mu": 1.0, "rod.gamma": 1e-3,
+            "output.snapshot_interval": 0.1, "output.diagnostics_interval": 0.05}
+    code = ("import json, rodjit; r = rodjit.simulate(rodjit.Config().override(%r)); "
+            "print(json.dumps([list(r.u_final), r.stats['steps'], list(r.bounces['t_impact'])]))"
+            % over)
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                         text=True, check=True, timeout=600)
+    u, steps, t_impact = json.loads(out.stdout)
+    res = rodjit.simulate(rodjit.Config().override(over))
+    assert steps == res.stats["steps"]
+    assert np.allclose(u, res.u_final, rtol=0, atol=1e-13)
+    assert np.allclose(t_impact, res.bounces["t_impact"], rtol=0, atol=1e-13)

@@ -1,0 +1,97 @@
+"""Episodes and bounces (MODEL.md §3): the bookkeeping fed synthetic steps, and the
+records of a real run checked against their definitions."""
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit.stepping import layout as L
+from rodjit.stepping.events import open_contact, release, touchdown, track
+
+
+class Tracker:
+    """Feeds (t, u0, v0, w) samples to the compiled ``track`` as accepted steps."""
+
+    def __init__(self, t0, u0, w0):
+        self.ev = np.zeros(L.EV_SIZE)
+        self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
+        self.episodes = np.zeros((16, 2))
+        self.bounces = np.zeros((16, len(L.BOUNCE_COLUMNS)))
+        self.prev = (t0, u0, 0.0, w0)
+        if u0 < 0:
+            open_contact(self.ev, t0, w0, u0, 0.0, 0.0)
+
+    def step(self, t, u0, w, ff=0.0, emin=0.0, g=0.0):
+        """A step along which u0 moves linearly (so crossings are at linear roots)."""
+        ta, ua, _, wa = self.prev
+        slope = (u0 - ua) / (t - ta)
+        track(self.ev, self.count, self.episodes, self.bounces, ta, t - ta, g, ua, slope, u0,
+              slope, wa, w, ff, emin)
+        self.prev = (t, u0, slope, w)
+
+    @property
+    def done(self):
+        return self.bounces[: self.count[L.N_BOUNCE]]
+
+
+def test_chattering_episodes_form_one_bounce_closed_by_the_apex():
+    tr = Tracker(0.0, 1.0, -1.0)
+    tr.step(1.0, 0.5, -2.0)                   # falling
+    tr.step(2.0, -0.5, -1.0, ff=5.0, emin=-0.3)   # contact 1 starts at t = 1.5
+    tr.step(3.0, 0.5, 0.5)                    # released at 2.5
+    tr.step(4.0, -0.5, 0.2, ff=9.0, emin=-0.4)    # chatter: contact 2 (w never turned)
+    tr.step(5.0, 0.5, 1.0)                    # released at 4.5
+    tr.step(6.0, 1.0, 0.4)                    # flying up
+    assert tr.count[L.N_EP] == 2 and tr.count[L.N_BOUNCE] == 0
+    tr.step(7.0, 1.2, -0.2)                   # apex: closes the bounce
+    (b,) = tr.done
+    t_imp, t_rel, n_ep, w_imp, w_rel, e, min_u0, max_ff, min_eps = b
+    assert (t_imp, t_rel, n_ep) == (1.5, 4.5, 2)
+    assert min_u0 == -0.5 and max_ff == 9.0 and min_eps == -0.4
+    assert e == pytest.approx(-w_rel / w_imp)
+    assert np.allclose(tr.episodes[:2], [[1.5, 2.5], [3.5, 4.5]], atol=1e-12)
+
+
+def test_an_apex_without_contact_is_not_a_bounce_and_open_contact_stays_open():
+    tr = Tracker(0.0, 1.0, 1.0)
+    tr.step(1.0, 2.0, -1.0)                   # apex in flight: nothing to close
+    assert tr.count[L.N_BOUNCE] == 0
+    tr.step(2.0, -0.1, -2.0)                  # lands and stays
+    tr.step(3.0, -0.2, 0.5)
+    tr.step(4.0, -0.1, -0.5)                  # w turns while in contact: not an apex
+    assert tr.count[L.N_BOUNCE] == 0 and tr.ev[L.IN_CONTACT] == 1.0 and tr.ev[L.B_NEP] == 1
+
+
+def test_crossing_fractions_are_exact_for_free_fall():
+    # u(t) = 1 − t²/2 (g = −1) from t = 0 over dt = 2: crosses 0 at t = √2
+    s = touchdown(1.0, 0.0, 1.0 - 2.0, 2.0)
+    assert s * 2.0 == pytest.approx(np.sqrt(2.0), rel=1e-15)
+    # and backwards: u(t) = −1 + 2t − t²/2 over [0, 1]... released where it climbs past 0
+    ua, ub, vb = -0.3, -0.3 + 1.0 - 0.5, 1.0 - 1.0
+    s = release(ua, ub, vb, 1.0)
+    assert -0.3 + s - 0.5 * s * s == pytest.approx(0.0, abs=1e-15)
+
+
+def test_records_of_a_run_match_their_definitions():
+    res = rodjit.simulate(rodjit.Config().override({"time.t_end": 8.0}))
+    ep, b = res.episodes, res.bounces
+    assert np.all(ep["t_start"] < ep["t_end"]) and np.all(ep["t_end"][:-1] < ep["t_start"][1:])
+    assert b["n_episodes"].sum() == ep["t_start"].size + int(b["open"].sum())
+    first = np.cumsum(np.concatenate([[0], b["n_episodes"][:-1]]))
+    assert np.array_equal(b["t_impact"], ep["t_start"][first])
+    done = ~b["open"]
+    last = first + b["n_episodes"] - 1
+    assert np.array_equal(b["t_release"][done], ep["t_end"][last[done]])
+    assert np.allclose(b["restitution"][done], -b["w_release"][done] / b["w_impact"][done])
+    assert np.all(b["w_impact"] < 0) and np.all(b["w_release"][done] > 0)
+    assert np.all((b["min_u0"] < 0) & (b["min_u0"] > -0.05))
+    assert np.all(b["max_floor_force"] > 0) and np.all(b["min_strain"] > -1)
+    # each gap between bounces holds an apex: w turns from + to − in the diagnostics
+    d = res.diagnostics
+    for t1, t2 in zip(b["t_release"][:-1], b["t_impact"][1:]):
+        w = d["cm_velocity"][(d["t"] > t1) & (d["t"] < t2)]
+        assert w.max() > 0 and w.min() < 0
+    # extremes agree with the diagnostics sampled inside each bounce
+    for i in np.flatnonzero(done):
+        inside = (d["t"] >= b["t_impact"][i]) & (d["t"] <= b["t_release"][i])
+        assert b["min_u0"][i] <= d["u_bottom"][inside].min() + 1e-15
+        assert b["max_floor_force"][i] >= d["floor_force"][inside].max() - 1e-9
