@@ -1,0 +1,39 @@
+"""A stress law written the way a user would add one: one small module, no kernel edits.
+
+f(ε) = κ ε/(1+ε): singular as ε ↓ −1, f'(0) = κ, primitive κ(ε − log(1+ε)).
+"""
+import math
+from typing import NamedTuple
+
+from rodjit._jit import kernel
+from rodjit.model.laws import Law, register
+
+
+class LogRod(NamedTuple):
+    kappa: float
+
+
+@kernel
+def value(e, p):
+    return p.kappa * e / (1.0 + e)
+
+
+@kernel
+def deriv(e, p):
+    q = 1.0 + e
+    return p.kappa / (q * q)
+
+
+@kernel
+def primitive(e, p):
+    return p.kappa * (e - math.log1p(e))
+
+
+@kernel
+def lower(p):
+    return -1.0
+
+
+LAW = register(Law(name="log-test", kind="rod", params=LogRod,
+                   from_config=lambda rod: LogRod(float(rod.kappa)),
+                   value=value, deriv=deriv, primitive=primitive, lower=lower))
