@@ -60,7 +60,7 @@ def test_presets_ship_the_paper_settings():
     ("time.dt", -1.0, r"time\.dt = -1\.0 is out of range"),
     ("time.dt_min", 1.0, r"time\.dt_min = 1\.0 is out of range \(float > 0 and < time\.dt_max"),
     ("output.snapshot_interval", -1.0, r"output\.snapshot_interval = -1\.0 is out of range"),
-    ("rod.law", "hooke", r"rod\.law = 'hooke' is not a known rod law; choose one of \['aiki-kosugi'\]"),
+    ("rod.law", "hooke", r"rod\.law = 'hooke' is not a known rod law; choose one of \[.*'aiki-kosugi'.*\]"),
 ])
 def test_bad_values_name_field_and_range(key, value, pattern):
     over = {key: value}
