@@ -7,7 +7,7 @@ Stress laws written by users should use ``kernel`` too.
 
 Numba invalidates a cached function only when *its own* file changes, not when a function
 it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever
-any rodjit source differs from the last process that compiled them.
+any source of the compiled layers differs from the last process that compiled them.
 """
 from __future__ import annotations
 
@@ -20,6 +20,9 @@ import numba
 JIT_OPTIONS = {"cache": True, "error_model": "numpy"}
 
 kernel = numba.njit(**JIT_OPTIONS)
+
+# the packages whose modules hold compiled code (a change anywhere here may change a kernel)
+COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")
 
 
 def _cache_dirs(root: Path) -> list[Path]:
@@ -35,7 +38,8 @@ def _cache_dirs(root: Path) -> list[Path]:
 def _guard_cache() -> None:
     root = Path(__file__).resolve().parent
     digest = hashlib.sha1(numba.__version__.encode())
-    for p in sorted(root.rglob("*.py")):
+    compiled = [root / "_jit.py"] + [p for d in COMPILED_PACKAGES for p in (root / d).rglob("*.py")]
+    for p in sorted(compiled):
         digest.update(p.relative_to(root).as_posix().encode())
         digest.update(p.read_bytes())
     stamp_dir = (Path(numba.config.CACHE_DIR) / root.relative_to(root.anchor)

@@ -11,7 +11,7 @@ import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, ClassVar, Mapping
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
            "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "parse_value"]
@@ -123,15 +123,23 @@ def _unknown_key_error(key: str) -> ValueError:
     return ValueError(f"unknown configuration key '{key}'{hint} valid keys: {', '.join(keys)}")
 
 
-def _validated(section: str, obj) -> None:
-    for f in dataclasses.fields(obj):
-        spec = _FIELDS[section][f.name]
-        object.__setattr__(obj, f.name, spec.coerce(f"{section}.{f.name}", getattr(obj, f.name)))
+class _Section:
+    """A config section: its fields are checked against ``_FIELDS[SECTION]`` on creation."""
+
+    SECTION = ""
+
+    def __post_init__(self):
+        for f in dataclasses.fields(self):
+            spec = _FIELDS[self.SECTION][f.name]
+            key = f"{self.SECTION}.{f.name}"
+            object.__setattr__(self, f.name, spec.coerce(key, getattr(self, f.name)))
 
 
 @dataclass(frozen=True)
-class RodConfig:
+class RodConfig(_Section):
     """The rod: ``N`` segments, elasticity κ, beam regularisation γ, viscosity μ."""
+
+    SECTION: ClassVar[str] = "rod"
 
     N: int = 5
     kappa: float = 100.0
@@ -139,47 +147,43 @@ class RodConfig:
     mu: float = 0.0
     law: str = "aiki-kosugi"
 
-    def __post_init__(self):
-        _validated("rod", self)
-
 
 @dataclass(frozen=True)
-class FloorConfig:
+class FloorConfig(_Section):
     """The floor: stiffness κ_b and bending limit β."""
+
+    SECTION: ClassVar[str] = "floor"
 
     kappa_b: float = 1000.0
     beta: float = 0.05
     law: str = "aiki-kosugi"
 
-    def __post_init__(self):
-        _validated("floor", self)
-
 
 @dataclass(frozen=True)
-class GravityConfig:
+class GravityConfig(_Section):
     """Signed acceleration along +u; −9.81 pulls down."""
+
+    SECTION: ClassVar[str] = "gravity"
 
     g: float = -9.81
 
-    def __post_init__(self):
-        _validated("gravity", self)
-
 
 @dataclass(frozen=True)
-class InitialConfig:
+class InitialConfig(_Section):
     """Initial state: bottom height, uniform velocity, uniform pre-strain."""
+
+    SECTION: ClassVar[str] = "initial"
 
     height: float = 1.0
     velocity: float = 0.0
     strain: float = 0.0
 
-    def __post_init__(self):
-        _validated("initial", self)
-
 
 @dataclass(frozen=True)
-class TimeConfig:
+class TimeConfig(_Section):
     """Time span and stepping; ``dt`` set means fixed steps, unset means adaptive."""
+
+    SECTION: ClassVar[str] = "time"
 
     t_end: float = 5.0
     integrator: str = "verlet"
@@ -191,22 +195,21 @@ class TimeConfig:
     atol: float = 1e-9
 
     def __post_init__(self):
-        _validated("time", self)
+        super().__post_init__()
         if self.dt_max is not None and self.dt_min >= self.dt_max:
             raise ValueError(f"time.dt_min = {self.dt_min!r} is out of range (float > 0 and "
                              f"< time.dt_max = {self.dt_max!r})")
 
 
 @dataclass(frozen=True)
-class OutputConfig:
+class OutputConfig(_Section):
     """Output schedule (simulated seconds between samples) and HDF5 compression."""
+
+    SECTION: ClassVar[str] = "output"
 
     snapshot_interval: float = 0.005
     diagnostics_interval: float = 0.001
     compression: str = "none"
-
-    def __post_init__(self):
-        _validated("output", self)
 
 
 _SECTIONS = {"rod": RodConfig, "floor": FloorConfig, "gravity": GravityConfig,
