@@ -11,6 +11,8 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 from numba.extending import overload
+
+from . import registered
 from ..._jit import JIT_OPTIONS, kernel
 
 __all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower"]
@@ -48,6 +50,11 @@ def register(law: Law) -> Law:
         raise ValueError(f"law kind must be 'rod' or 'floor', not {law.kind!r}")
     if law.params in _BY_TYPE and _BY_TYPE[law.params] is not law:
         raise ValueError(f"parameter type {law.params.__name__} already belongs to another law")
+    # name the parameter class through the `registered` namespace (see its docstring)
+    alias = f"{law.kind}_{''.join(c if c.isalnum() else '_' for c in law.name)}"
+    law.params.__module__ = registered.__name__
+    law.params.__qualname__ = alias
+    setattr(registered, alias, law.params)
     _BY_TYPE[law.params] = law
     _BY_NAME[(law.kind, law.name)] = law
     return law
