@@ -44,13 +44,13 @@ def _load_config(source: str | None):
     if source is None:
         return Config(), DEFAULT_OUTPUT
     path = Path(source)
+    if path.suffix == ".h5":
+        raise ValueError(f"{source!r} is not a configuration; to continue a run file use: "
+                         f"rodjit run --resume {source}")
     if path.is_file() or path.suffix == ".toml" or path.is_dir():
         return Config.from_toml(path), path.stem + ".h5"
     if source in presets.preset_names():
         return presets.load_preset(source), source + ".h5"
-    if path.suffix == ".h5":
-        raise ValueError(f"{source!r} is an output file; continue it with: rodjit run "
-                         f"--resume {source}")
     raise ValueError(f"{source!r} is neither a configuration file nor a preset; presets: "
                      f"{', '.join(presets.preset_names())}")
 

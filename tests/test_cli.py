@@ -82,6 +82,8 @@ def test_config_file_and_set(tmp_path, monkeypatch):
     (["nopreset"], "'nopreset' is neither a configuration file nor a preset; presets: "
                    "paper-mu0, paper-mu100"),
     (["--resume"], "--resume needs the file to continue"),
+    (["old.h5"], "'old.h5' is not a configuration; to continue a run file use: rodjit run "
+                 "--resume old.h5"),
     (["--resume", "x.h5", "--set", "rod.mu=1"], "--set cannot be used with --resume"),
     (["--resume", "absent.h5"], "'absent.h5' does not exist"),
 ])

@@ -153,6 +153,49 @@ def test_resume_errors(tmp_path, small_config, many_calls):
         rodjit.resume_file(tmp_path / "missing.h5")
 
 
+KILL_AFTER_SAVE = """
+import os, signal, sys, rodjit
+from rodjit.driver.run import Run
+from rodjit.output import hdf5
+from rodjit.stepping import layout as L
+cfg = rodjit.Config().override({"time.t_end": 1.0})
+run = Run(cfg)
+run.max_steps = 100
+writer = hdf5.create_run_file(sys.argv[1], cfg, run, command="test")
+run.start(writer)
+calls = 0
+while run.advance(writer) != L.DONE and calls < int(sys.argv[2]):
+    calls += 1
+writer.save(run)
+run.advance(writer)       # rows written after the checkpoint, as between two saves
+writer.tables["snapshots"].flush()
+writer.file.flush()
+os.kill(os.getpid(), signal.SIGKILL)
+"""
+
+
+@pytest.mark.parametrize("calls", [5, 10**6], ids=["mid-run", "after-the-end"])
+def test_killed_writer_is_recovered(tmp_path, calls):
+    """A writer killed at a known point (after a checkpoint, with later rows on disk):
+    the file opens in SWMR-read mode, and resume_file recovers it and continues bit for
+    bit, or only closes it if the checkpoint was already at the end."""
+    ref, cut = tmp_path / "ref.h5", tmp_path / "cut.h5"
+    rodjit.run_to_file(rodjit.Config().override({"time.t_end": 1.0}), ref)
+    proc = subprocess.run([sys.executable, "-c", KILL_AFTER_SAVE, str(cut), str(calls)],
+                          timeout=300)
+    assert proc.returncode == -signal.SIGKILL
+    with h5py.File(cut, "r", swmr=True) as f:
+        assert f.attrs["status"] == "running"
+        ck = hdf5.read_checkpoint(f)
+        assert f["snapshots/t"].shape[0] >= ck["lengths"]["snapshots"] > 0
+    summary = rodjit.resume_file(cut)
+    assert summary.status == "completed"
+    assert_same_files(cut, ref)
+    with h5py.File(cut, "r") as f:
+        assert "recovered at the checkpoint" in f.attrs["history"][1]
+        assert ("closed at its end" if calls > 100 else "resumed at") in f.attrs["history"][2]
+
+
 def test_memory_stays_bounded_for_a_10x_longer_run(tmp_path):
     """Peak RSS of a run streaming ~80 MB of snapshots vs one 10x shorter (same process
     setup): growth under 20 MB, so nothing accumulates in memory."""

@@ -146,12 +146,13 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         alive = hdf5.writer_alive(f) if needs_recovery else False
         pid, host = f.attrs.get("writer_pid"), f.attrs.get("writer_host")
     t = float(ck["clock"][L.T])
+    complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
     if t_end is not None:
         if not (math.isfinite(t_end) and t_end > t):
             raise ValueError(f"time.t_end = {t_end!r} is out of range (must be > the "
                              f"checkpoint time t = {t!r})")
         config = config.override({"time.t_end": t_end})
-    elif t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL]):
+    elif complete and not needs_recovery:
         raise ValueError(f"{str(path)!r} is already complete at t = {t:.9g}; give a later "
                          f"t_end to extend it")
     if alive:
@@ -166,12 +167,17 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         run.set_t_end(t_end)
     if command is None:
         command = f"rodjit.resume_file({str(path)!r})"
+    finish_only = complete and t_end is None    # killed after its last checkpoint
     with _StopFlag(handle_signals) as stop:
         if needs_recovery:
             hdf5.recover(path)
         writer = hdf5.reopen_run_file(
             path, config_toml=config.to_toml() if t_end is not None else None,
-            history=f"resumed at t = {t!r} by: {command}")
+            history=(f"closed at its end t = {t!r} by: {command}" if finish_only else
+                     f"resumed at t = {t!r} by: {command}"))
+        if finish_only:
+            writer.close(run, "completed")
+            return summarize(path)
         return _drive(run, writer, path, progress, flush_interval, stop)
 
 
