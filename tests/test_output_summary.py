@@ -24,7 +24,7 @@ def test_summary_matches_the_result(tmp_path, overrides):
                         "episodes": mem.episodes["t_start"].size, "bounces": mem.n_bounces}
     assert s.node_steps_per_second > 0 and s.run_time > 0
     label = "energy drift" if cfg.rod.mu == 0 else "energy balance error"
-    assert f"{label:<20}{s.energy_error:.3g}" in s.report()
+    assert f"{label:<22}{s.energy_error:.3g}" in s.report()
 
 
 def test_report_lists_open_bounces_and_shortens_long_tables(tmp_path):

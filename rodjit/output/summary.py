@@ -59,8 +59,8 @@ class RunSummary:
             lines.append(f"  {self.message}")
         b = self.bounces
         n = self.n_bounces
-        lines.append(f"  {n} bounce{'s' if n != 1 else ''} "
-                     f"({self.counts['episodes']} contact episodes)")
+        lines.append(f"  {n} bounce{'s' if n != 1 else ''}, "
+                     f"{self.counts['episodes']} finished contact episodes")
         if n:
             lines.append("      #   t_impact  t_release  episodes   w_impact  w_release  "
                          "restitution")
@@ -77,17 +77,17 @@ class RunSummary:
                              f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
                              f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
                              f"  {e:>11}")
-        lines.append(f"  {self.energy_label():<20}{self.energy_error:.3g}  "
+        lines.append(f"  {self.energy_label():<22}{self.energy_error:.3g}  "
                      f"(max |E + dissipated - E0| / max(|E0|, kinetic))")
-        lines.append(f"  {'smallest strain':<20}{_num(self.min_strain, '.6g')}")
+        lines.append(f"  {'smallest strain':<22}{_num(self.min_strain, '.6g')}")
         if self.min_u0 < 0:
-            lines.append(f"  {'deepest penetration':<20}{-self.min_u0:.6g}  "
+            lines.append(f"  {'deepest penetration':<22}{-self.min_u0:.6g}  "
                          f"(u_0 = {self.min_u0:.6g}; floor limit -beta = {-c.floor.beta:g})")
         else:
-            lines.append(f"  {'deepest penetration':<20}none (no contact)")
-        lines.append(f"  {'steps':<20}{self.steps} ({self.rejected_steps} rejected)")
-        lines.append(f"  {'compile time':<20}{self.compile_time:.3g} s")
-        lines.append(f"  {'run time':<20}{self.run_time:.3g} s "
+            lines.append(f"  {'deepest penetration':<22}none (no contact)")
+        lines.append(f"  {'steps':<22}{self.steps} ({self.rejected_steps} rejected)")
+        lines.append(f"  {'compile time':<22}{self.compile_time:.3g} s")
+        lines.append(f"  {'run time':<22}{self.run_time:.3g} s "
                      f"({self.node_steps_per_second:.3g} node-steps/s)")
         return "\n".join(lines)
 
