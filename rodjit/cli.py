@@ -182,6 +182,9 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         raise RunFailed(str(exc)) from None
     except ValueError as exc:       # configuration, path and file errors: nothing written
         raise UsageError(str(exc)) from None
+    except OSError as exc:          # the disk failed us during the run (full, removed, ...)
+        _close(progress)
+        raise RunFailed(f"{exc}; the file keeps its last checkpoint") from None
     _close(progress)
     if not quiet:
         click.echo(summary.report())

@@ -109,6 +109,17 @@ def test_existing_output_is_not_overwritten(tmp_path, monkeypatch):
     assert (tmp_path / "default.h5").read_bytes() == b"keep me"
 
 
+def test_resume_a_completed_run_needs_a_later_end(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert invoke("run", "--t-end", "0.5", "-q").exit_code == 0
+    r = invoke("run", "--resume", "default.h5")
+    assert r.exit_code == 2 and r.stderr.strip() == (
+        "Error: 'default.h5' is already complete at t = 0.5; give a later t_end to extend it")
+    r = invoke("run", "--resume", "-o", "default.h5", "--t-end", "0.8")
+    assert r.exit_code == 0 and "completed at t = 0.8 of 0.8" in r.stdout
+    assert rodjit.load_file(tmp_path / "default.h5").config.time.t_end == 0.8
+
+
 def test_failed_run_exits_1_and_keeps_data(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     r = invoke("run", "--set", "time.dt=1e-3", "--set", "initial.velocity=-100", "-o", "f.h5")

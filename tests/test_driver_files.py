@@ -1,6 +1,7 @@
 """run_to_file / resume_file: interruption, resume bit for bit, failure, validation, memory."""
 import os
 import signal
+import socket
 import subprocess
 import sys
 import textwrap
@@ -13,7 +14,7 @@ import rodjit
 from rodjit.output import hdf5
 from rodjit.stepping import layout as L
 
-from conftest import assert_same_files, datasets, final_state
+from conftest import assert_same_files, datasets, final_state, rodjit_cli
 
 FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0}   # fixed step through the floor
 
@@ -170,6 +171,9 @@ writer.save(run)
 run.advance(writer)       # rows written after the checkpoint, as between two saves
 writer.tables["snapshots"].flush()
 writer.file.flush()
+if sys.argv[3] == "sleep":  # a writer that is still alive
+    print("saved", flush=True)
+    signal.pause()
 os.kill(os.getpid(), signal.SIGKILL)
 """
 
@@ -181,8 +185,8 @@ def test_killed_writer_is_recovered(tmp_path, calls):
     bit, or only closes it if the checkpoint was already at the end."""
     ref, cut = tmp_path / "ref.h5", tmp_path / "cut.h5"
     rodjit.run_to_file(rodjit.Config().override({"time.t_end": 1.0}), ref)
-    proc = subprocess.run([sys.executable, "-c", KILL_AFTER_SAVE, str(cut), str(calls)],
-                          timeout=300)
+    proc = subprocess.run([sys.executable, "-c", KILL_AFTER_SAVE, str(cut), str(calls),
+                           "kill"], timeout=300)
     assert proc.returncode == -signal.SIGKILL
     with h5py.File(cut, "r", swmr=True) as f:
         assert f.attrs["status"] == "running"
@@ -194,6 +198,53 @@ def test_killed_writer_is_recovered(tmp_path, calls):
     with h5py.File(cut, "r") as f:
         assert "recovered at the checkpoint" in f.attrs["history"][1]
         assert ("closed at its end" if calls > 100 else "resumed at") in f.attrs["history"][2]
+
+
+def test_resume_refuses_a_file_whose_writer_is_alive(tmp_path):
+    cut = tmp_path / "cut.h5"
+    proc = subprocess.Popen([sys.executable, "-c", KILL_AFTER_SAVE, str(cut), "3", "sleep"],
+                            stdout=subprocess.PIPE, text=True)
+    try:
+        assert proc.stdout.readline().strip() == "saved"
+        with hdf5.open_file(cut) as f:
+            assert f.attrs["writer_pid"] == proc.pid and hdf5.writer_alive(f) is True
+        before = cut.read_bytes()
+        with pytest.raises(hdf5.FileBusy, match=f"being written by process {proc.pid}"):
+            rodjit.resume_file(cut)
+        with pytest.raises(hdf5.FileBusy, match="being written by a running rodjit process"):
+            rodjit.run_to_file(rodjit.Config(), cut, overwrite=True)
+        assert cut.read_bytes() == before
+        r = rodjit_cli("info", cut)
+        assert r.returncode == 0 and "running (the writing process is alive)" in r.stdout
+    finally:
+        proc.kill()
+        proc.wait()
+    with hdf5.open_file(cut) as f:
+        assert hdf5.writer_alive(f) is False
+    assert rodjit.resume_file(cut).status == "completed"
+
+
+def test_writer_alive_is_not_fooled_by_a_reused_pid(tmp_path, small_config):
+    if not hdf5._process_tag(os.getpid()):
+        pytest.skip("no /proc here to tell two processes with one pid apart")
+    path = tmp_path / "r.h5"
+    rodjit.run_to_file(small_config, path)
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+
+    def alive(**attrs):
+        with h5py.File(path, "r+") as f:
+            for key, value in attrs.items():
+                f.attrs[key] = value
+        with h5py.File(path, "r") as f:
+            return hdf5.writer_alive(f)
+    try:
+        assert alive(writer_pid=other.pid, writer_tag=hdf5._process_tag(other.pid)) is True
+        assert alive(writer_tag="another-boot:12345") is False   # same pid, not the writer
+        assert alive(writer_host="elsewhere.example") is None    # cannot tell
+    finally:
+        other.kill()
+        other.wait()
+    assert alive(writer_host=socket.gethostname()) is False
 
 
 def test_memory_stays_bounded_for_a_10x_longer_run(tmp_path):

@@ -163,6 +163,25 @@ def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str,
     return {c: g[c][sel] for c in TABLES[group]}
 
 
+def _process_tag(pid: int) -> str:
+    """Boot id and start time of process ``pid`` (Linux), so a reused pid is not mistaken
+    for the writer; "" where /proc does not tell."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id") as fh:
+            boot = fh.read().strip()
+        with open(f"/proc/{pid}/stat") as fh:
+            start = fh.read().rsplit(")", 1)[1].split()[19]   # field 22: start time
+        return f"{boot}:{start}"
+    except (OSError, IndexError):
+        return ""
+
+
+def _writer_attrs() -> dict:
+    pid = os.getpid()
+    return {"writer_host": socket.gethostname(), "writer_pid": pid,
+            "writer_tag": _process_tag(pid)}
+
+
 def writer_alive(f: h5py.File) -> bool | None:
     """Is the process that last wrote ``f`` still running?  None if it ran on another host."""
     if f.attrs.get("writer_host") != socket.gethostname():
@@ -175,8 +194,9 @@ def writer_alive(f: h5py.File) -> bool | None:
     except ProcessLookupError:
         return False
     except PermissionError:
-        return True
-    return True
+        pass
+    tag = str(f.attrs.get("writer_tag", ""))
+    return not tag or _process_tag(pid) in ("", tag)
 
 
 def load_file(path):
@@ -229,7 +249,7 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
     base = {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
             "rodjit_version": __version__, "created": _now(), "command": "",
             "config_toml": config.to_toml(), "status": "running", "message": "",
-            "writer_host": socket.gethostname(), "writer_pid": os.getpid()}
+            **_writer_attrs()}
     base.update(attrs)
     for key, value in base.items():
         f.attrs[key] = value
@@ -413,13 +433,23 @@ class RunWriter(Sink):
             pass
 
 
+def _open_for_writing(path, mode: str) -> h5py.File:
+    try:
+        return h5py.File(path, mode, libver="latest")
+    except OSError as exc:
+        if "lock" in str(exc):
+            raise FileBusy(f"{str(path)!r} is open in another process; close it there and "
+                           f"retry") from None
+        raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
+
+
 def _history(f: h5py.File, entry: str) -> list[str]:
     return [str(s) for s in f.attrs.get("history", [])] + [f"{_now()} {entry}"]
 
 
 def create_run_file(path, config, run, *, command: str) -> RunWriter:
     """A new run file for ``run`` (not yet started) in SWMR mode, with a first checkpoint."""
-    f = h5py.File(path, "w", libver="latest")
+    f = _open_for_writing(path, "w")
     try:
         _build_layout(f, config, run.checkpoint(),
                       {"command": command, "history": [f"{_now()} created by: {command}"]})
@@ -436,13 +466,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     """Open a closed run file to continue it: cut every table to the checkpoint's lengths
     (dropping the provisional open bounce and rows written after the last checkpoint),
     mark it running, then switch to SWMR writing."""
-    try:
-        f = h5py.File(path, "r+", libver="latest")
-    except OSError as exc:
-        if "lock" in str(exc):
-            raise FileBusy(f"{str(path)!r} is open in another process; close it there and "
-                           f"retry") from None
-        raise
+    f = _open_for_writing(path, "r+")
     try:
         lengths = read_checkpoint(f)["lengths"]
         for name, cols in TABLES.items():
@@ -455,8 +479,8 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         f.attrs["history"] = _history(f, history)
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
-        f.attrs["writer_host"] = socket.gethostname()
-        f.attrs["writer_pid"] = os.getpid()
+        for key, value in _writer_attrs().items():
+            f.attrs[key] = value
         f.swmr_mode = True
         return RunWriter(f)
     except BaseException:
