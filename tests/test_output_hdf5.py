@@ -173,3 +173,20 @@ def test_layout_names_cover_the_stepper_arrays():
     assert len(hdf5.EV_NAMES) == L.EV_SIZE and hdf5.EV_NAMES[L.IN_CONTACT] == "in_contact"
     assert len(set(hdf5.CLOCK_NAMES + hdf5.COUNT_NAMES + hdf5.EV_NAMES)) == (
         L.CLOCK_SIZE + L.COUNT_SIZE + L.EV_SIZE)
+
+
+def test_no_checkpoint_of_a_run_stopped_mid_drain(tmp_path, small_config):
+    """Rows still in the loop's buffers are not in the file: such a state is never saved."""
+    run = rodjit.driver.run.Run(small_config)
+    writer = hdf5.create_run_file(tmp_path / "r.h5", small_config, run, command="test")
+    run.start(writer)
+    run.advance(writer, max_steps=300)
+    writer.save(run)
+    slot = writer.current
+    run.count[L.N_DIAG] = 3                # as if draining had failed half way
+    writer.save(run)
+    assert writer.current == slot
+    run.count[L.N_DIAG] = 0
+    writer.close(run, "completed")
+    with h5py.File(tmp_path / "r.h5", "r") as f:
+        assert f["checkpoint/current"][()] != slot

@@ -96,11 +96,11 @@ def _is_live_run(path) -> bool:
         return False
 
 
-def run_to_file(config=None, path="rodjit.h5", *, overwrite: bool = False,
+def run_to_file(config, path, *, overwrite: bool = False,
                 command: str | None = None, progress=None, t_end: float | None = None,
                 flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True
                 ) -> RunSummary:
-    """Run ``config`` (default: the built-in run), streaming everything to the HDF5 file
+    """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
     ``t_end`` overrides ``time.t_end``; ``progress(run)`` is called between compiled calls;

@@ -368,7 +368,6 @@ class RunWriter(Sink):
         self.current = int(f["checkpoint/current"][()])
         self.compile_time_before = (float(f[f"checkpoint/slot{self.current}/compile_time"][()])
                                     if self.current in (0, 1) else 0.0)
-        self.path = f.filename
 
     # Sink interface: drained blocks of the compiled loop
     def snapshots(self, t, step, u, v):
@@ -387,13 +386,15 @@ class RunWriter(Sink):
                         else np.asarray(is_open, bool))
         self.tables["bounces"].append([cols[c] for c in TABLES["bounces"]])
 
-    def lengths(self) -> dict[str, int]:
-        return {name: t.length for name, t in self.tables.items()}
-
     def save(self, run) -> None:
-        """Write buffered rows and a checkpoint of ``run`` matching them (drained run only)."""
+        """Write buffered rows and a checkpoint of ``run`` matching them.  A run stopped in
+        the middle of a drain (an error while draining) gets no new checkpoint: the last
+        one stays valid, and a resume cuts the tables back to it."""
         for table in self.tables.values():
             table.flush()
+        if any(run.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE)):
+            self.file.flush()
+            return
         ck = run.checkpoint()
         slot = 1 if self.current == 0 else 0
         g = self.file[f"checkpoint/slot{slot}"]
