@@ -92,21 +92,16 @@ class _Progress:
 
     def __init__(self):
         self.last = 0.0
-        self.t0 = time.monotonic()
-        self.steps0 = None
         self.shown = False
 
     def __call__(self, run) -> None:
         now = time.monotonic()
-        if self.steps0 is None:
-            self.steps0 = (run.steps, now)
         if now - self.last < 0.1:
             return
         self.last = now
         frac = min(1.0, max(0.0, run.t / run.t_end)) if run.t_end > 0 else 1.0
         fill = int(round(frac * self.WIDTH))
-        dt = now - self.steps0[1]
-        rate = (run.steps - self.steps0[0]) / dt if dt > 0 else 0.0
+        rate = run.steps / run.run_time if run.run_time > 0 else 0.0   # compiled-loop rate
         line = (f"\r  t = {run.t:.4g} / {run.t_end:g} [{'#' * fill}{'.' * (self.WIDTH - fill)}] "
                 f"{100 * frac:3.0f}%  {rate:.3g} steps/s  {run.bounces_total} bounces")
         click.echo(line, err=True, nl=False)

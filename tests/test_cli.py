@@ -182,12 +182,13 @@ def test_plot_without_matplotlib(tmp_path, monkeypatch):
 
 def test_progress_bar_writes_to_stderr(capsys):
     class FakeRun:
-        t, t_end, steps, bounces_total = 2.5, 5.0, 1000, 3
+        t, t_end, steps, bounces_total, run_time = 2.5, 5.0, 1000, 3, 0.5
     bar = _Progress()
     bar(FakeRun())
     bar.close()
     err = capsys.readouterr().err
     assert "t = 2.5 / 5" in err and "50%" in err and "3 bounces" in err
+    assert "2e+03 steps/s" in err
     assert capsys.readouterr().out == ""
 
 
