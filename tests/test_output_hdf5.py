@@ -148,6 +148,13 @@ def test_table_writes_in_chunk_blocks_and_reopens(tmp_path):
         reopened.append((rows[10:], -rows[10:]))
         reopened.flush()
         assert np.array_equal(g["a"][()], rows) and np.array_equal(g["b"][()], -rows)
+        more = np.arange(100, 118, dtype=float).reshape(9, 2)
+        reopened.append((more[:1], -more[:1]))       # completes the chunk at rows 8..11
+        assert g["a"].shape[0] == 12 and reopened.fill == 0
+        reopened.append((more[1:], -more[1:]))       # two whole chunks go straight through
+        assert g["a"].shape[0] == 20 and reopened.fill == 0
+        assert np.array_equal(g["a"][()], np.vstack([rows, more]))
+        assert np.array_equal(g["b"][()], -np.vstack([rows, more]))
 
 
 def test_not_a_run_file(tmp_path):

@@ -319,8 +319,9 @@ class _Table:
         self.start = n - n % self.cap           # first row held in the buffer
         self.fill = n - self.start
         self.buf = [np.zeros((self.cap,) + d.shape[1:], d.dtype) for d in self.ds]
-        for b, d in zip(self.buf, self.ds):
-            b[:self.fill] = d[self.start:n]
+        if self.fill:
+            for b, d in zip(self.buf, self.ds):
+                b[:self.fill] = d[self.start:n]
         self.written = n                        # rows present in the datasets
 
     @property
@@ -331,6 +332,15 @@ class _Table:
         k = len(cols[0])
         i = 0
         while i < k:
+            if self.fill == 0 and k - i >= self.cap:   # whole chunks: write them directly
+                m = (k - i) // self.cap * self.cap
+                end = self.start + m
+                for d, c in zip(self.ds, cols):
+                    d.resize(end, axis=0)
+                    d[self.start:end] = c[i:i + m]
+                self.start = self.written = end
+                i += m
+                continue
             m = min(k - i, self.cap - self.fill)
             for b, c in zip(self.buf, cols):
                 b[self.fill:self.fill + m] = c[i:i + m]
