@@ -2,17 +2,21 @@
 
 >>> import rodjit
 >>> result = rodjit.simulate(rodjit.Config().override({"time.t_end": 1.0}))
+>>> summary = rodjit.run_to_file(rodjit.Config(), "run.h5", overwrite=True)  # streamed to HDF5
 """
 from importlib.metadata import PackageNotFoundError, version as _version
 
 from .config import Config
 from .driver.result import Result
 from .driver.run import SimulationError
+from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
 from .driver.simulate import simulate
+from .output.hdf5 import load_file
 
 try:
     __version__ = _version("rodjit")
 except PackageNotFoundError:  # running from a source tree without installation
     __version__ = "0.0.0+unknown"
 
-__all__ = ["Config", "simulate", "Result", "SimulationError", "__version__"]
+__all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
+           "load_file", "RunInterrupted", "OutputExists", "__version__"]

@@ -1,14 +1,37 @@
-"""Packaging: every subpackage is installed, presets ship with the package."""
+"""The install ships every subpackage, the presets, the console script and lean runtime deps."""
 import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())
 
 
-def test_every_subpackage_is_listed_in_pyproject():
-    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
-    found = {".".join(p.parent.relative_to(ROOT).parts) for p in (ROOT / "rodjit").rglob("__init__.py")}
+def test_every_subpackage_is_listed():
+    found = {".".join(p.parent.relative_to(ROOT).parts)      # namespace dirs count too
+             for p in (ROOT / "rodjit").rglob("*.py") if "__pycache__" not in p.parts}
+    listed = set(PYPROJECT["tool"]["setuptools"]["packages"])
     assert found | {"rodjit.data"} == listed
+
+
+def test_presets_are_package_data():
+    tool = PYPROJECT["tool"]["setuptools"]
+    assert tool["package-dir"]["rodjit.data"] == "data"
+    assert tool["package-data"]["rodjit.data"] == ["*.toml"]
+    assert (ROOT / "data" / "__init__.py").exists()
+    assert {p.name for p in (ROOT / "data").glob("*.toml")} >= {"paper_mu0.toml",
+                                                                "paper_mu100.toml"}
+
+
+def test_console_script_and_dependencies():
+    project = PYPROJECT["project"]
+    assert project["scripts"] == {"rodjit": "rodjit.cli:main"}
+    runtime = {d.split(">")[0].split("=")[0].strip() for d in project["dependencies"]}
+    assert runtime == {"numpy", "numba", "h5py", "click"}
+    extras = project["optional-dependencies"]
+    test = " ".join(extras["test"])
+    for name in ("xarray", "h5netcdf", "psutil", "rodjit[plot]"):
+        assert name in test
+    assert any(d.startswith("matplotlib") for d in extras["plot"])
 
 
 def test_ci_runs_exactly_the_readme_test_command():

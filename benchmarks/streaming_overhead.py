@@ -1,0 +1,119 @@
+"""Streaming overhead: a run writing snapshots every 1e-3 simulated seconds to HDF5 against
+the same run with no output at all (target: under 10% extra wall time).
+
+Both are measured here, in this process, after a warm-up that loads the compiled kernels;
+each figure is the best of ``--repeat`` runs taken in turns.  The breakdown separates the extra steps
+taken to land exactly on the output times from the cost of writing the file.
+
+    python benchmarks/streaming_overhead.py [--N 200] [--t-end 5] [--repeat 7]
+"""
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import rodjit
+from rodjit.driver.run import Run, Sink
+from rodjit.stepping import layout as L
+
+
+def run_bare(config) -> tuple[float, float, int]:
+    """Wall time, CPU time and steps of the compiled loop alone, output discarded."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    run = Run(config)
+    sink = Sink()
+    run.start(sink)
+    while run.advance(sink) != L.DONE:
+        pass
+    return time.perf_counter() - t0, time.process_time() - c0, run.steps
+
+
+def run_file(config, path) -> tuple[float, float, int]:
+    """The same for ``run_to_file`` into a new file (replacing a file costs the filesystem
+    its own time, which is not the streaming's)."""
+    path.unlink(missing_ok=True)
+    t0, c0 = time.perf_counter(), time.process_time()
+    s = rodjit.run_to_file(config, path)
+    return time.perf_counter() - t0, time.process_time() - c0, s.steps
+
+
+class WriterClock:
+    """Wall time spent inside the HDF5 writer (creating, appending, checkpointing, closing,
+    summarising): the cost of streaming itself, free of the loop's load-dependent noise."""
+
+    def __init__(self):
+        import rodjit.driver.files as files
+        from rodjit.output import hdf5
+
+        self.total = 0.0
+        for owner, name in ((files.hdf5, "create_run_file"), (files, "summarize"),
+                            (hdf5.RunWriter, "snapshots"), (hdf5.RunWriter, "diagnostics"),
+                            (hdf5.RunWriter, "episodes"), (hdf5.RunWriter, "bounces"),
+                            (hdf5.RunWriter, "save"), (hdf5.RunWriter, "close")):
+            setattr(owner, name, self._timed(getattr(owner, name)))
+
+    def _timed(self, fn):
+        def wrapper(*args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self.total += time.perf_counter() - t0
+        return wrapper
+
+
+def best_interleaved(fns, repeat):
+    """Best (wall, cpu, steps) of each function, the functions taking turns so that a change
+    in the machine's load hits all of them alike."""
+    results = [[] for _ in fns]
+    for _ in range(repeat):
+        for fn, res in zip(fns, results):
+            res.append(fn())
+    return [(min(r[0] for r in res), min(r[1] for r in res), res[0][2]) for res in results]
+
+
+def _writer_time(clock, config, path) -> float:
+    before = clock.total
+    run_file(config, path)
+    return clock.total - before
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--N", type=int, default=200)
+    ap.add_argument("--t-end", type=float, default=5.0)
+    ap.add_argument("--repeat", type=int, default=7)
+    args = ap.parse_args()
+    base = rodjit.Config().override({"rod.N": args.N, "time.t_end": args.t_end,
+                                     "output.diagnostics_interval": 0.0})
+    none = base.override({"output.snapshot_interval": 0.0})
+    snaps = base.override({"output.snapshot_interval": 1e-3})
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "bench.h5"
+        run_file(snaps, path)                       # warm-up: kernels from the cache
+        (t_none, c_none, s_none), (t_land, c_land, s_land), (t_file, c_file, s_file) = \
+            best_interleaved([lambda: run_bare(none), lambda: run_bare(snaps),
+                              lambda: run_file(snaps, path)], args.repeat)
+        size = path.stat().st_size / 2**20
+        clock = WriterClock()
+        writer = min(_writer_time(clock, snaps, path) for _ in range(args.repeat))
+    n_snap = int(round(args.t_end / 1e-3)) + 1
+    print(f"N = {args.N}, t_end = {args.t_end:g}, {n_snap} snapshots of {args.N + 1} nodes "
+          f"({size:.1f} MiB file); best of {args.repeat}; wall and CPU time")
+    rows = (("no output (compiled loop only)", t_none, c_none, s_none),
+            ("snapshots every 1e-3, discarded", t_land, c_land, s_land),
+            ("snapshots every 1e-3, streamed to HDF5", t_file, c_file, s_file))
+    for label, t, c, n in rows:
+        print(f"  {label:<40}{t:8.3f} s {c:8.3f} s  {n:9d} steps")
+    print(f"time inside the HDF5 writer: {writer:.3f} s = {100 * writer / t_none:.1f}% of the "
+          f"no-output run (close still counts the final summary, read back from the file)")
+    for name, a, b, c in (("wall", t_none, t_land, t_file), ("CPU", c_none, c_land, c_file)):
+        print(f"streaming overhead ({name}): {100 * (c / a - 1):+.1f}% (target < +10%), of "
+              f"which landing on output times {100 * (b / a - 1):+.1f}% and writing the file "
+              f"{100 * (c - b) / a:+.1f}%")
+
+
+if __name__ == "__main__":
+    main()

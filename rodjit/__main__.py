@@ -1,0 +1,4 @@
+"""``python -m rodjit`` runs the command line."""
+from .cli import main
+
+main(prog_name="rodjit")

@@ -1,0 +1,1 @@
+"""Writing runs to files: the streaming HDF5 layout, its reader and checkpoints."""

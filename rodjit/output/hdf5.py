@@ -1,0 +1,535 @@
+"""The run file: one self-describing HDF5 file per run, written while the run goes on.
+
+Layout (the public contract; README "HDF5 layout"): root attributes, ``/grid/x``, the
+tables ``/snapshots``, ``/diagnostics``, ``/episodes``, ``/bounces`` (one dataset per
+column, growing along axis 0, with dimension scales so xarray sees coordinates) and
+``/checkpoint`` (two slots written alternately; ``/checkpoint/current`` names the valid one).
+
+The writer works in SWMR mode: other processes may read the file while it grows
+(``h5py.File(path, "r", swmr=True)``), and a writer killed at any moment leaves a file
+whose valid checkpoint matches the first ``lengths`` rows of every table.
+"""
+from __future__ import annotations
+
+import datetime
+import os
+import socket
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..driver.run import Sink
+from ..stepping import layout as L
+from ..stepping.schemes import SCHEME_STATS
+
+__all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "RunWriter", "NotARunFile",
+           "FileBusy", "open_file", "check_run_file", "read_config", "read_checkpoint",
+           "read_table", "load_file", "create_run_file", "reopen_run_file", "recover",
+           "writer_alive", "CLOCK_NAMES", "COUNT_NAMES", "EV_NAMES"]
+
+KIND = "run"            # root attribute rodjit_kind: what this file holds
+FORMAT_VERSION = 1
+STATUSES = ("running", "completed", "interrupted", "failed")
+
+SNAPSHOT_CHUNK_BYTES = 256 * 1024   # one chunk of u (or v) holds this many bytes of snapshots
+COLUMN_CHUNK_ROWS = 8192            # diagnostics: rows per chunk
+EVENT_CHUNK_ROWS = 1024             # episodes, bounces: rows per chunk
+
+# group -> columns (in file order); the first column is the group's dimension scale
+TABLES = {
+    "snapshots": ("t", "step", "u", "v"),
+    "diagnostics": L.DIAG_COLUMNS,
+    "episodes": L.EPISODE_COLUMNS,
+    "bounces": ("t_impact",) + tuple(c for c in L.BOUNCE_COLUMNS if c != "t_impact") + ("open",),
+}
+_INT_COLUMNS = {"step", "n_episodes"}
+_BOOL_COLUMNS = {"open"}
+
+_DESCRIPTIONS = {
+    "snapshots/t": "simulated time of each snapshot (t0 + k * output.snapshot_interval)",
+    "snapshots/step": "accepted steps taken before the snapshot",
+    "snapshots/u": "height u_i of every node (rows: times, columns: nodes at x)",
+    "snapshots/v": "velocity v_i of every node",
+    "snapshots/x": "natural position x_i = i/N of each node",
+    "grid/x": "natural position x_i = i/N of each node",
+    "episodes/t_start": "start of a contact episode (u_0 < 0)",
+    "episodes/t_end": "end of the episode",
+    "bounces/open": "true if the bounce's last episode had not ended when the run stopped",
+}
+
+
+def _names(size: int, mapping: dict[int, str]) -> tuple[str, ...]:
+    """Names for the entries of a layout array, checked complete at import."""
+    if sorted(mapping) != list(range(size)):
+        raise RuntimeError(f"layout names out of date: indices {sorted(mapping)} vs size {size}")
+    return tuple(mapping[i] for i in range(size))
+
+
+CLOCK_NAMES = _names(L.CLOCK_SIZE, {
+    L.T: "t", L.DT: "dt", L.T_END: "t_end", L.DISSIPATED: "dissipated", L.E0: "energy0",
+    L.SNAP_DT: "snapshot_interval", L.DIAG_DT: "diagnostics_interval", L.T0: "t0",
+    L.W: "cm_velocity", L.TOL: "time_tolerance"})
+COUNT_NAMES = _names(L.COUNT_SIZE, {
+    L.STEP: "step", L.REJECTED: "rejected", L.K_SNAP: "next_snapshot_index",
+    L.K_DIAG: "next_diagnostics_index", L.N_SNAP: "buffered_snapshots",
+    L.N_DIAG: "buffered_diagnostics", L.N_EP: "buffered_episodes",
+    L.N_BOUNCE: "buffered_bounces", L.EPISODES_TOTAL: "episodes_total",
+    L.BOUNCES_TOTAL: "bounces_total", L.STARTED: "started"})
+EV_NAMES = _names(L.EV_SIZE, {
+    L.IN_CONTACT: "in_contact", L.EP_START: "episode_start",
+    L.B_NEP: "bounce_episodes", L.B_T_IMPACT: "bounce_t_impact",
+    L.B_W_IMPACT: "bounce_w_impact", L.B_T_RELEASE: "bounce_t_release",
+    L.B_W_RELEASE: "bounce_w_release", L.CUR_MIN_U0: "min_u0_since_impact",
+    L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
+    L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
+    L.REL_MIN_EPS: "min_strain_at_release"})
+_CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")
+_CK_SCALARS = ("run_time", "compile_time")
+_CK_NAMES = {"state": ("u", "v", "a"), "clock": CLOCK_NAMES, "count": COUNT_NAMES,
+             "ev": EV_NAMES, "sstats": SCHEME_STATS or ("unused",),
+             "lengths": tuple(TABLES)}
+
+
+class NotARunFile(ValueError):
+    """The path is not a rodjit run file (missing, not HDF5, or another kind of file)."""
+
+
+class FileBusy(ValueError):
+    """Another process holds the file (a live writer, or a reader blocking a write)."""
+
+
+# ---- opening and inspecting --------------------------------------------------------------
+def open_file(path) -> h5py.File:
+    """Open a rodjit file read-only: plainly if it was closed, in SWMR-read mode if a writer
+    has it open or was killed before closing it (both leave the SWMR flags set)."""
+    path = Path(path)
+    if not path.exists():
+        raise NotARunFile(f"{str(path)!r} does not exist")
+    if path.is_dir():
+        raise NotARunFile(f"{str(path)!r} is a directory, not a rodjit file")
+    if not os.access(path, os.R_OK):
+        raise NotARunFile(f"{str(path)!r} is not readable")
+    if not h5py.is_hdf5(path):
+        raise NotARunFile(f"{str(path)!r} is not a rodjit file (not an HDF5 file)")
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        if "already open for write" not in str(exc):
+            raise NotARunFile(f"cannot open {str(path)!r}: {exc}") from None
+    return h5py.File(path, "r", swmr=True)
+
+
+def check_run_file(f: h5py.File, path=None) -> None:
+    """Raise NotARunFile unless ``f`` is a rodjit run file of a format this version reads."""
+    name = str(path if path is not None else f.filename)
+    kind = f.attrs.get("rodjit_kind")
+    if kind is None:
+        raise NotARunFile(f"{name!r} is not a rodjit file (no 'rodjit_kind' attribute)")
+    if kind != KIND:
+        raise NotARunFile(f"{name!r} is a rodjit {kind!r} file, not a run file")
+    version = int(f.attrs.get("format_version", 0))
+    if version != FORMAT_VERSION:
+        raise NotARunFile(f"{name!r} has run-file format {version}; this rodjit reads format "
+                          f"{FORMAT_VERSION}")
+
+
+def read_config(f: h5py.File):
+    from ..config import Config
+    return Config.from_toml_string(f.attrs["config_toml"])
+
+
+def read_checkpoint(f: h5py.File) -> dict:
+    """The valid checkpoint: arrays for ``Run.from_checkpoint`` plus ``lengths`` (table
+    rows it matches, ``{"snapshots": n, ...}``) and cumulative ``compile_time``."""
+    ck = f["checkpoint"]
+    slot = int(ck["current"][()])
+    if slot not in (0, 1):
+        raise NotARunFile(f"{f.filename!r} holds no valid checkpoint yet")
+    g = ck[f"slot{slot}"]
+    out = {name: g[name][()] for name in _CK_ARRAYS}
+    for name in _CK_SCALARS:
+        out[name] = float(g[name][()])
+    out["lengths"] = dict(zip(TABLES, (int(n) for n in g["lengths"][()])))
+    return out
+
+
+def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str, np.ndarray]:
+    """Columns of one table (all rows, or ``rows``); a table still being written is cut to
+    the rows present in every column."""
+    g = f[group]
+    n = min(g[c].shape[0] for c in TABLES[group])
+    sel = slice(0, n) if rows is None else slice(*rows.indices(n))
+    return {c: g[c][sel] for c in TABLES[group]}
+
+
+def _process_tag(pid: int) -> str:
+    """Boot id and start time of process ``pid`` (Linux), so a reused pid is not mistaken
+    for the writer; "" where /proc does not tell."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id") as fh:
+            boot = fh.read().strip()
+        with open(f"/proc/{pid}/stat") as fh:
+            start = fh.read().rsplit(")", 1)[1].split()[19]   # field 22: start time
+        return f"{boot}:{start}"
+    except (OSError, IndexError):
+        return ""
+
+
+def _writer_attrs() -> dict:
+    pid = os.getpid()
+    return {"writer_host": socket.gethostname(), "writer_pid": pid,
+            "writer_tag": _process_tag(pid)}
+
+
+def writer_alive(f: h5py.File) -> bool | None:
+    """Is the process that last wrote ``f`` still running?  None if it ran on another host."""
+    if f.attrs.get("writer_host") != socket.gethostname():
+        return None
+    pid = int(f.attrs.get("writer_pid", -1))
+    if pid <= 0 or pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    tag = str(f.attrs.get("writer_tag", ""))
+    return not tag or _process_tag(pid) in ("", tag)
+
+
+def load_file(path):
+    """Read a whole run file into a ``rodjit.Result`` (the same object ``simulate`` returns)."""
+    from ..driver.result import Result
+
+    with open_file(path) as f:
+        check_run_file(f, path)
+        config = read_config(f)
+        ck = read_checkpoint(f)
+        snaps = read_table(f, "snapshots")
+        n1 = config.rod.N + 1
+        steps = int(ck["count"][L.STEP])
+        stats = {"steps": steps, "rejected_steps": int(ck["count"][L.REJECTED]),
+                 "wall_time": ck["compile_time"] + ck["run_time"],
+                 "compile_time": ck["compile_time"], "run_time": ck["run_time"],
+                 "node_steps_per_second": steps * n1 / ck["run_time"] if ck["run_time"] > 0
+                 else 0.0}
+        stats.update({name: int(v) for name, v in zip(SCHEME_STATS, ck["sstats"])})
+        return Result(
+            config=config, x=f["grid/x"][()], t=snaps["t"], u=snaps["u"], v=snaps["v"],
+            diagnostics=read_table(f, "diagnostics"), episodes=read_table(f, "episodes"),
+            bounces=read_table(f, "bounces"), stats=stats,
+            status=str(f.attrs["status"]), message=str(f.attrs["message"]),
+            t_final=float(ck["clock"][L.T]), u_final=ck["state"][0].copy(),
+            v_final=ck["state"][1].copy(), energy0=float(ck["clock"][L.E0]),
+            dissipated=float(ck["clock"][L.DISSIPATED]))
+
+
+# ---- layout -------------------------------------------------------------------------------
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def _filters(compression: str) -> dict:
+    if compression == "gzip":
+        return {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+    if compression == "lzf":
+        return {"compression": "lzf", "shuffle": True}
+    return {}
+
+
+def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
+    """Create every group, dataset, dimension scale and attribute of an empty run file
+    (everything must exist before SWMR writing starts)."""
+    from .. import __version__
+
+    n1 = config.rod.N + 1
+    x = np.arange(n1, dtype=np.float64) / config.rod.N
+    base = {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
+            "rodjit_version": __version__, "created": _now(), "command": "",
+            "config_toml": config.to_toml(), "status": "running", "message": "",
+            **_writer_attrs()}
+    base.update(attrs)
+    for key, value in base.items():
+        f.attrs[key] = value
+    filters = _filters(config.output.compression)
+
+    grid = f.create_group("grid")
+    gx = grid.create_dataset("x", data=x)
+    gx.make_scale("x")
+
+    def column(group, name, row_shape, chunk_rows, dtype=np.float64):
+        ds = group.create_dataset(name, shape=(0,) + row_shape, maxshape=(None,) + row_shape,
+                                  chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
+        text = _DESCRIPTIONS.get(f"{group.name[1:]}/{name}")
+        if text:
+            ds.attrs["description"] = text
+        return ds
+
+    snap = f.create_group("snapshots")
+    rows = max(1, SNAPSHOT_CHUNK_BYTES // (8 * n1))
+    t = column(snap, "t", (), rows)
+    t.make_scale("t")
+    sx = snap.create_dataset("x", data=x)
+    sx.make_scale("x")
+    sx.attrs["description"] = _DESCRIPTIONS["snapshots/x"]
+    column(snap, "step", (), rows, np.int64).dims[0].attach_scale(t)
+    for name in ("u", "v"):
+        ds = column(snap, name, (n1,), rows)
+        ds.dims[0].attach_scale(t)
+        ds.dims[1].attach_scale(sx)
+
+    for group, chunk in (("diagnostics", COLUMN_CHUNK_ROWS), ("episodes", EVENT_CHUNK_ROWS),
+                         ("bounces", EVENT_CHUNK_ROWS)):
+        g = f.create_group(group)
+        names = TABLES[group]
+        scale = column(g, names[0], (), chunk)
+        scale.make_scale(names[0])
+        for name in names[1:]:
+            dtype = (np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
+                     else np.float64)
+            column(g, name, (), chunk, dtype).dims[0].attach_scale(scale)
+
+    ckg = f.create_group("checkpoint")
+    ckg.attrs["description"] = ("two slots written alternately; 'current' names the valid "
+                                "one; its 'lengths' are the table rows it matches")
+    ckg.create_dataset("current", data=np.int64(-1))
+    for slot in (0, 1):
+        g = ckg.create_group(f"slot{slot}")
+        for name in _CK_ARRAYS:
+            g.create_dataset(name, data=np.zeros_like(ck[name])).attrs["names"] = _CK_NAMES[name]
+        for name in _CK_SCALARS:
+            g.create_dataset(name, data=np.float64(0.0))
+        g.create_dataset("lengths", data=np.zeros(len(TABLES), np.int64)).attrs["names"] = \
+            _CK_NAMES["lengths"]
+
+
+class _Table:
+    """The datasets of one group, growing together along axis 0 in chunk-sized blocks.
+
+    Rows wait in a buffer of one chunk per column: a full buffer is written once, a partial
+    one is written (and kept) at each flush.  Memory stays at one chunk per column.
+    """
+
+    def __init__(self, group: h5py.Group, names):
+        self.ds = [group[name] for name in names]
+        n = min(d.shape[0] for d in self.ds)
+        self.cap = self.ds[0].chunks[0]
+        self.start = n - n % self.cap           # first row held in the buffer
+        self.fill = n - self.start
+        self.buf = [np.zeros((self.cap,) + d.shape[1:], d.dtype) for d in self.ds]
+        if self.fill:
+            for b, d in zip(self.buf, self.ds):
+                b[:self.fill] = d[self.start:n]
+        self.written = n                        # rows present in the datasets
+
+    @property
+    def length(self) -> int:
+        return self.start + self.fill
+
+    def append(self, cols) -> None:
+        k = len(cols[0])
+        i = 0
+        while i < k:
+            if self.fill == 0 and k - i >= self.cap:   # whole chunks: write them directly
+                m = (k - i) // self.cap * self.cap
+                end = self.start + m
+                for d, c in zip(self.ds, cols):
+                    d.resize(end, axis=0)
+                    d[self.start:end] = c[i:i + m]
+                self.start = self.written = end
+                i += m
+                continue
+            m = min(k - i, self.cap - self.fill)
+            for b, c in zip(self.buf, cols):
+                b[self.fill:self.fill + m] = c[i:i + m]
+            self.fill += m
+            i += m
+            if self.fill == self.cap:
+                self._write()
+                self.start += self.cap
+                self.fill = 0
+
+    def _write(self) -> None:
+        end = self.start + self.fill
+        for d, b in zip(self.ds, self.buf):
+            if d.shape[0] != end:
+                d.resize(end, axis=0)
+            d[self.start:end] = b[:self.fill]
+        self.written = end
+
+    def flush(self) -> None:
+        if self.written != self.length:
+            self._write()
+
+
+class RunWriter(Sink):
+    """The HDF5 sink: tables fed by ``Run.advance``, checkpoints by ``save``.
+
+    ``save`` writes the buffered rows and a checkpoint that records the table lengths, with
+    an HDF5 flush before and after flipping ``/checkpoint/current``: whatever moment the
+    process dies, the current slot is complete and matches rows present on disk.
+    """
+
+    def __init__(self, f: h5py.File):
+        self.file = f
+        self.tables = {name: _Table(f[name], cols) for name, cols in TABLES.items()}
+        self.current = int(f["checkpoint/current"][()])
+        self.compile_time_before = (float(f[f"checkpoint/slot{self.current}/compile_time"][()])
+                                    if self.current in (0, 1) else 0.0)
+
+    # Sink interface: drained blocks of the compiled loop
+    def snapshots(self, t, step, u, v):
+        self.tables["snapshots"].append((t, step, u, v))
+
+    def diagnostics(self, rows):
+        self.tables["diagnostics"].append(list(rows.T))
+
+    def episodes(self, rows):
+        self.tables["episodes"].append(list(rows.T))
+
+    def bounces(self, rows, is_open=None):
+        cols = dict(zip(L.BOUNCE_COLUMNS, rows.T))
+        cols["n_episodes"] = cols["n_episodes"].astype(np.int64)
+        cols["open"] = (np.zeros(rows.shape[0], bool) if is_open is None
+                        else np.asarray(is_open, bool))
+        self.tables["bounces"].append([cols[c] for c in TABLES["bounces"]])
+
+    def save(self, run) -> None:
+        """Write buffered rows and a checkpoint of ``run`` matching them.  A run stopped in
+        the middle of a drain (an error while draining) gets no new checkpoint: the last
+        one stays valid, and a resume cuts the tables back to it."""
+        for table in self.tables.values():
+            table.flush()
+        if any(run.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE)):
+            self.file.flush()
+            return
+        ck = run.checkpoint()
+        slot = 1 if self.current == 0 else 0
+        g = self.file[f"checkpoint/slot{slot}"]
+        for name in _CK_ARRAYS:
+            g[name][...] = ck[name]
+        g["run_time"][()] = float(ck["run_time"])
+        g["compile_time"][()] = self.compile_time_before + run.compile_time
+        g["lengths"][...] = np.array([t.length for t in self.tables.values()], np.int64)
+        self.file.flush()
+        self.file["checkpoint/current"][()] = slot
+        self.file.flush()
+        self.current = slot
+
+    def close(self, run, status: str, message: str = "") -> None:
+        """Final checkpoint, then the provisional row of the bounce still open (listed but
+        beyond the checkpoint's lengths, so a resume drops it), then status, then close."""
+        if status not in STATUSES:
+            raise ValueError(f"status {status!r} is not one of {STATUSES}")
+        if run is not None:
+            self.save(run)
+            pending = run.pending_bounce()
+            if pending is not None:
+                self.bounces(pending[0][None, :], [pending[1]])
+                self.tables["bounces"].flush()
+        self.file.attrs["status"] = status
+        self.file.attrs["message"] = message
+        self.file.close()
+
+    def abandon(self, status: str, message: str) -> None:
+        """Mark and close after an unexpected error, keeping the last saved checkpoint."""
+        try:
+            if self.file.id.valid:
+                self.file.attrs["status"] = status
+                self.file.attrs["message"] = message
+                self.file.close()
+        except Exception:  # the file may be the cause (disk full); nothing more to save
+            pass
+
+
+def _open_for_writing(path, mode: str) -> h5py.File:
+    try:
+        return h5py.File(path, mode, libver="latest")
+    except OSError as exc:
+        if "lock" in str(exc):
+            raise FileBusy(f"{str(path)!r} is open in another process; close it there and "
+                           f"retry") from None
+        raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
+
+
+def _history(f: h5py.File, entry: str) -> list[str]:
+    return [str(s) for s in f.attrs.get("history", [])] + [f"{_now()} {entry}"]
+
+
+def create_run_file(path, config, run, *, command: str) -> RunWriter:
+    """A new run file for ``run`` (not yet started) in SWMR mode, with a first checkpoint."""
+    f = _open_for_writing(path, "w")
+    try:
+        _build_layout(f, config, run.checkpoint(),
+                      {"command": command, "history": [f"{_now()} created by: {command}"]})
+        f.swmr_mode = True
+        writer = RunWriter(f)
+        writer.save(run)
+    except BaseException:
+        f.close()
+        raise
+    return writer
+
+
+def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter:
+    """Open a closed run file to continue it: cut every table to the checkpoint's lengths
+    (dropping the provisional open bounce and rows written after the last checkpoint),
+    mark it running, then switch to SWMR writing."""
+    f = _open_for_writing(path, "r+")
+    try:
+        lengths = read_checkpoint(f)["lengths"]
+        for name, cols in TABLES.items():
+            for col in cols:
+                ds = f[name][col]
+                if ds.shape[0] != lengths[name]:
+                    ds.resize(lengths[name], axis=0)
+        if config_toml is not None:
+            f.attrs["config_toml"] = config_toml
+        f.attrs["history"] = _history(f, history)
+        f.attrs["status"] = "running"
+        f.attrs["message"] = ""
+        for key, value in _writer_attrs().items():
+            f.attrs[key] = value
+        f.swmr_mode = True
+        return RunWriter(f)
+    except BaseException:
+        f.close()
+        raise
+
+
+def recover(path) -> None:
+    """Rebuild a file whose writer died without closing it (SWMR flags still set): copy the
+    rows matched by its checkpoint into a fresh file, which then replaces it."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".recovering")
+    with h5py.File(path, "r", swmr=True) as src:
+        check_run_file(src, path)
+        config = read_config(src)
+        ck = read_checkpoint(src)
+        attrs = {k: v for k, v in src.attrs.items()}
+        t = float(ck["clock"][L.T])
+        attrs["history"] = _history(src, f"recovered at the checkpoint t = {t!r} after the "
+                                         f"writer stopped without closing the file")
+        attrs["status"] = "interrupted"
+        attrs["message"] = (f"the writing process stopped without closing the file (killed?); "
+                            f"recovered at the checkpoint t = {t!r}")
+        with h5py.File(tmp, "w", libver="latest") as dst:
+            _build_layout(dst, config, ck, attrs)
+            for group, cols in TABLES.items():
+                n = ck["lengths"][group]
+                for col in cols:
+                    s, d = src[group][col], dst[group][col]
+                    d.resize(n, axis=0)
+                    step = d.chunks[0] * 16
+                    for i in range(0, n, step):
+                        d[i:min(n, i + step)] = s[i:min(n, i + step)]
+            g = dst["checkpoint/slot0"]
+            for name in _CK_ARRAYS:
+                g[name][...] = ck[name]
+            for name in _CK_SCALARS:
+                g[name][()] = ck[name]
+            g["lengths"][...] = [ck["lengths"][name] for name in TABLES]
+            dst["checkpoint/current"][()] = 0
+    os.replace(tmp, path)

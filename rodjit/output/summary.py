@@ -1,0 +1,142 @@
+"""What a run file says about its run, in a few numbers: the end-of-run report and ``info``.
+
+Everything is read back from the file (diagnostics in blocks), so the same summary serves a
+run that just finished, a resumed one, and a file someone else wrote.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..stepping import layout as L
+from . import hdf5
+
+__all__ = ["RunSummary", "summarize"]
+
+BLOCK_ROWS = 1 << 16
+
+
+@dataclass
+class RunSummary:
+    """The state and headline numbers of a run file (``rodjit info``, end of ``rodjit run``)."""
+
+    path: str
+    status: str
+    message: str
+    config: object
+    t: float
+    t_end: float
+    counts: dict
+    bounces: dict
+    energy0: float
+    energy_error: float       # max |E + dissipated - E0| / max(|E0|, max kinetic energy)
+    min_strain: float         # nan if nothing was sampled
+    min_u0: float             # lowest bottom height seen (diagnostics and bounce records)
+    steps: int
+    rejected_steps: int
+    compile_time: float
+    run_time: float
+    node_steps_per_second: float
+    attrs: dict = field(default_factory=dict)
+    writer_alive: bool | None = None
+
+    @property
+    def n_bounces(self) -> int:
+        return int(self.bounces["t_impact"].size)
+
+    def energy_label(self) -> str:
+        return "energy drift" if self.config.rod.mu == 0 else "energy balance error"
+
+    def report(self, max_bounces: int | None = 20) -> str:
+        """A short plain-text report: bounces (at most ``max_bounces`` rows, None: all),
+        energy, extremes, steps and timings."""
+        c = self.config
+        lines = [f"{self.path}: {self.status} at t = {self.t:.6g} of {self.t_end:.6g} "
+                 f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
+        if self.message:
+            lines.append(f"  {self.message}")
+        b = self.bounces
+        n = self.n_bounces
+        lines.append(f"  {n} bounce{'s' if n != 1 else ''}, "
+                     f"{self.counts['episodes']} finished contact episodes")
+        if n:
+            lines.append("      #   t_impact  t_release  episodes   w_impact  w_release  "
+                         "restitution")
+            show = list(range(n))
+            if max_bounces is not None and n > max_bounces:
+                half = max_bounces // 2
+                show = show[:half] + [-1] + show[n - half:]
+            for i in show:
+                if i < 0:
+                    lines.append("    ...")
+                    continue
+                e = "open" if b["open"][i] else _num(b["restitution"][i], ".4f")
+                lines.append(f"  {i + 1:5d} {_num(b['t_impact'][i], '10.4f')} "
+                             f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
+                             f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
+                             f"  {e:>11}")
+        lines.append(f"  {self.energy_label():<22}{self.energy_error:.3g}  "
+                     f"(max |E + dissipated - E0| / max(|E0|, kinetic))")
+        lines.append(f"  {'smallest strain':<22}{_num(self.min_strain, '.6g')}")
+        if self.min_u0 < 0:
+            lines.append(f"  {'deepest penetration':<22}{-self.min_u0:.6g}  "
+                         f"(u_0 = {self.min_u0:.6g}; floor limit -beta = {-c.floor.beta:g})")
+        else:
+            lines.append(f"  {'deepest penetration':<22}none (no contact)")
+        lines.append(f"  {'steps':<22}{self.steps} ({self.rejected_steps} rejected)")
+        lines.append(f"  {'compile time':<22}{self.compile_time:.3g} s")
+        lines.append(f"  {'run time':<22}{self.run_time:.3g} s "
+                     f"({self.node_steps_per_second:.3g} node-steps/s)")
+        return "\n".join(lines)
+
+
+def _num(value, spec: str) -> str:
+    """Format a number; NaN (no value, e.g. the release of an open bounce) prints as '-'."""
+    value = float(value)
+    if math.isnan(value):
+        width = spec.split(".")[0]
+        return "-".rjust(int(width) if width else 1)
+    return format(value, spec)
+
+
+def summarize(path) -> RunSummary:
+    """Read the summary of the run file at ``path`` (also while it is being written)."""
+    with hdf5.open_file(path) as f:
+        hdf5.check_run_file(f, path)
+        config = hdf5.read_config(f)
+        ck = hdf5.read_checkpoint(f)
+        clock, count = ck["clock"], ck["count"]
+        counts = {name: min(f[name][c].shape[0] for c in cols)
+                  for name, cols in hdf5.TABLES.items()}
+        bounces = hdf5.read_table(f, "bounces")
+        e0 = float(clock[L.E0])
+        err, kmax, smin, umin = 0.0, 0.0, math.inf, math.inf
+        g = f["diagnostics"]
+        for i in range(0, counts["diagnostics"], BLOCK_ROWS):
+            sel = slice(i, min(i + BLOCK_ROWS, counts["diagnostics"]))
+            err = max(err, float(np.max(np.abs(g["energy_total"][sel] + g["dissipated"][sel]
+                                               - e0))))
+            kmax = max(kmax, float(np.max(g["energy_kinetic"][sel])))
+            smin = min(smin, float(np.min(g["min_strain"][sel])))
+            umin = min(umin, float(np.min(g["u_bottom"][sel])))
+        if bounces["min_strain"].size:
+            smin = min(smin, float(np.nanmin(bounces["min_strain"])))
+            umin = min(umin, float(np.nanmin(bounces["min_u0"])))
+        steps = int(count[L.STEP])
+        run_time = ck["run_time"]
+        status = str(f.attrs["status"])
+        return RunSummary(
+            path=str(path), status=status, message=str(f.attrs["message"]), config=config,
+            t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
+            energy0=e0, energy_error=err / max(abs(e0), kmax, 1e-300),
+            min_strain=smin if math.isfinite(smin) else math.nan,
+            min_u0=umin if math.isfinite(umin) else math.inf,
+            steps=steps, rejected_steps=int(count[L.REJECTED]),
+            compile_time=ck["compile_time"], run_time=run_time,
+            node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,
+            attrs={k: f.attrs[k] for k in ("rodjit_version", "created", "command", "history")
+                   if k in f.attrs},
+            writer_alive=hdf5.writer_alive(f) if status == "running" else None,
+        )
