@@ -11,13 +11,13 @@ import time
 
 import numpy as np
 
-from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE
+from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
-from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
+from ..stepping.schemes import SCHEME_STATS, approach_limit, make_scheme, work_rows
 
 __all__ = ["Run", "SimulationError", "Sink"]
 
@@ -69,7 +69,7 @@ class Run:
             dt_min=float(tc.dt_min),
             dt_fixed=float(tc.dt) if tc.dt is not None else 0.0,
             growth=GROWTH,
-            approach=APPROACH * float(tc.cfl),
+            approach=APPROACH * float(tc.cfl) if approach_limit(self.scheme) else math.inf,
         )
         n1 = config.rod.N + 1
         u, v = initial_state(config, u0, v0)
@@ -262,6 +262,13 @@ class Run:
                    f"bending limit -beta = {lower(self.floor):g}")
         elif code == NON_FINITE:
             why = "a non-finite value appeared in the state"
+        elif code == NO_CONVERGENCE:
+            why = (f"the implicit step's Newton iteration did not converge (last update "
+                   f"{f[L.F_VALUE]:.3g})")
+        elif code == INACCURATE:
+            why = (f"the local error estimate is {f[L.F_VALUE]:.3g} × the tolerance "
+                   f"(time.rtol = {self.config.time.rtol:g}, time.atol = "
+                   f"{self.config.time.atol:g})")
         else:
             why = f"unknown failure code {code}"
         if self.ctrl.dt_fixed > 0:

@@ -69,3 +69,32 @@ def penta_solve(l1, l2, dinv, rhs, x):
         if i + 2 < n1:
             z -= l2[i + 2] * x[i + 2]
         x[i] = z
+
+
+@numba.njit(cache=True)
+def sym_tridiag_factor(d, e, l1, dinv):
+    """LDLᵀ of the symmetric tridiagonal matrix with diagonal ``d`` and off-diagonal ``e``
+    (e[i] is entry (i, i+1)); fills the unit-lower factor's sub-diagonal l1 (i, i−1) and
+    1/D.  For SPD matrices (the Newton Jacobians here), so no pivoting."""
+    n1 = d.size
+    l1[0] = 0.0
+    di = d[0]
+    dinv[0] = 1.0 / di
+    for i in range(1, n1):
+        li = e[i - 1] * dinv[i - 1]
+        l1[i] = li
+        di = d[i] - li * e[i - 1]
+        dinv[i] = 1.0 / di
+
+
+@numba.njit(cache=True)
+def sym_tridiag_solve(l1, dinv, rhs, x):
+    """Solve with a ``sym_tridiag_factor`` result; ``x`` may alias ``rhs``."""
+    n1 = rhs.size
+    x[0] = rhs[0]
+    for i in range(1, n1):
+        x[i] = rhs[i] - l1[i] * x[i - 1]
+    for i in range(n1):
+        x[i] *= dinv[i]
+    for i in range(n1 - 2, -1, -1):
+        x[i] -= l1[i + 1] * x[i + 1]

@@ -8,7 +8,10 @@ A scheme module provides
   ``step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)``
       -> (status, value, min_strain, floor_force, dt_suggest, w, dissipated)
 where ``step`` never modifies its inputs (a rejected trial costs nothing to undo) and
-``sstats`` is an int64 array for scheme-specific counters.
+``sstats`` is an int64 array for scheme-specific counters.  Besides the failure codes of
+``kernels.forces``, ``step`` may return INACCURATE (valid state, error estimate too large:
+the loop retries with ``dt_suggest``) and NO_CONVERGENCE (a shorter step is tried).  Optional
+module attributes: ``WORK_ROWS`` (scratch rows) and ``APPROACH_LIMIT`` (default True).
 """
 from __future__ import annotations
 
@@ -93,6 +96,16 @@ def work_rows(scheme) -> int:
     """Rows of scratch space the scheme's step needs (see ``workspace``)."""
     from .workspace import WORK_ROWS
     return getattr(_MODULES[type(scheme)], "WORK_ROWS", WORK_ROWS)
+
+
+def approach_limit(scheme) -> bool:
+    """Whether the loop limits the bottom's approach to −β per step (``Control.approach``).
+
+    Meant for explicit schemes, whose first contact step must not jump deep into the floor;
+    a scheme that stays admissible by construction and sizes its steps by an error estimate
+    sets ``APPROACH_LIMIT = False`` in its module.
+    """
+    return bool(getattr(_MODULES[type(scheme)], "APPROACH_LIMIT", True))
 
 
 def sstats_size() -> int:
