@@ -93,7 +93,7 @@ def record_steps(cfg, max_steps, max_bounces=10**9, u0=None, v0=None):
     return run, out[:k]
 
 
-@pytest.mark.parametrize("mu", [0.0, 0.01])
+@pytest.mark.parametrize("mu", [0.0, 0.005])
 def test_energy_identity_holds_at_every_step_over_100_bounces(mu):
     """E^{n+1} − E^n = −μ dt Σ h ((v̄_{i+1} − v̄_i)/h)² at every accepted step of the real
     loop (crossing refinements, landings, rejections included), and the loop's dissipation
@@ -297,9 +297,8 @@ def test_newton_failure_is_reported_and_shrinks_the_step():
     u, v, a = run.state
     out = [np.zeros_like(u) for _ in range(3)]
     ss = np.zeros(2, np.int64)
-    tight = run.scheme._replace(max_newton=1)
-    status = EN.step(tight, run.system, run.rod, run.floor, u, v, a, *out,
-                     np.zeros_like(run.work), ss, 1e-2)[0]
+    status = EN.step(run.scheme._replace(max_newton=1), run.system, run.rod, run.floor,
+                     u, v, a, *out, np.zeros_like(run.work), ss, 1e-2)[0]
     assert status == NO_CONVERGENCE and ss[1] == 1
     status = EN.step(run.scheme, run.system, run.rod, run.floor, u, v, a, *out,
                      np.zeros_like(run.work), ss, 1e-2)[0]

@@ -72,29 +72,18 @@ def penta_solve(l1, l2, dinv, rhs, x):
 
 
 @numba.njit(cache=True)
-def sym_tridiag_factor(d, e, l1, dinv):
-    """LDLᵀ of the symmetric tridiagonal matrix with diagonal ``d`` and off-diagonal ``e``
-    (e[i] is entry (i, i+1)); fills the unit-lower factor's sub-diagonal l1 (i, i−1) and
-    1/D.  For SPD matrices (the Newton Jacobians here), so no pivoting."""
+def sym_tridiag_solve(d, e, rhs, x, cp):
+    """Solve the symmetric tridiagonal system with diagonal ``d`` and off-diagonal ``e``
+    (e[i] is entry (i, i+1)) in one sweep each way (Thomas; one division per row); ``cp``
+    is scratch, ``x`` may alias ``rhs``.  For SPD matrices (the Newton Jacobians of the
+    energy step, rebuilt at every iterate), so no pivoting."""
     n1 = d.size
-    l1[0] = 0.0
-    di = d[0]
-    dinv[0] = 1.0 / di
+    inv = 1.0 / d[0]
+    cp[0] = e[0] * inv
+    x[0] = rhs[0] * inv
     for i in range(1, n1):
-        li = e[i - 1] * dinv[i - 1]
-        l1[i] = li
-        di = d[i] - li * e[i - 1]
-        dinv[i] = 1.0 / di
-
-
-@numba.njit(cache=True)
-def sym_tridiag_solve(l1, dinv, rhs, x):
-    """Solve with a ``sym_tridiag_factor`` result; ``x`` may alias ``rhs``."""
-    n1 = rhs.size
-    x[0] = rhs[0]
-    for i in range(1, n1):
-        x[i] = rhs[i] - l1[i] * x[i - 1]
-    for i in range(n1):
-        x[i] *= dinv[i]
+        inv = 1.0 / (d[i] - e[i - 1] * cp[i - 1])
+        cp[i] = e[i] * inv
+        x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * inv
     for i in range(n1 - 2, -1, -1):
-        x[i] -= l1[i + 1] * x[i + 1]
+        x[i] -= cp[i] * x[i + 1]

@@ -44,8 +44,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_factor, sym_tridiag_solve
-from ..kernels.discrete_gradient import quotient
+from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
+from ..kernels.discrete_gradient import quotient, quotient_slope
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term)
 from ..model.laws import deriv, lower, primitive, value
@@ -77,7 +77,7 @@ R = 6         # Newton residual
 J0 = 7        # Jacobian diagonals (i,i), (i,i+1), (i,i+2)
 J1 = 8
 J2 = 9
-L1 = 10       # factor
+L1 = 10       # factor (L1 also the Thomas scratch)
 L2 = 11
 DINV = 12
 DEL = 13      # Newton update
@@ -85,7 +85,9 @@ DT = 14       # line-search trial increment
 SC = 15       # magnitude of the residual's terms (rounding scale)
 UB = 16       # midpoint uⁿ + d/2 for the bending term
 D = 17        # Newton iterate d
-WORK_ROWS = 18
+Q = 18        # quotients of the last evaluation (segments; node 0's at index N)
+QP = 19       # their slopes at the last Jacobian
+WORK_ROWS = 20
 
 
 class Energy(NamedTuple):
@@ -171,23 +173,24 @@ def initial(scheme, system, rod, floor, u, v, a, work):
 
 @numba.njit(cache=True)
 def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
-    """Residual F(d) (row R), its Jacobian (rows J0–J2) and rounding scale (row SC); leaves
-    u² = uⁿ + d in ``u2``.
+    """Residual F(d) (row R) and its rounding scale (row SC); leaves u² = uⁿ + d in ``u2``
+    and the quotients in row Q (segments, then node 0's at index n) for ``_jacobian``.
 
     Returns ``(status, |F|, |scale|)`` in the norm |x|² = Σ x_i²/m_i; status is BAD_STRAIN,
     BAD_FLOOR or NON_FINITE for an iterate outside the admissible set.  The scale sums the
     magnitudes of the residual's terms, plus the stress change that the rounding of u² in a
-    strain causes (so 64 ε_mach × scale is the residual's rounding level).
+    strain causes (slopes from the last Jacobian), so 64 ε_mach × scale is the residual's
+    rounding level.
     """
     n = system.n
     h = system.h
     ih = 1.0 / h
     r = work[R]
-    j0 = work[J0]
-    j1 = work[J1]
     sc = work[SC]
     e1 = work[E1]
     p1 = work[P1]
+    qs = work[Q]
+    qps = work[QP]
     c2 = 0.5 * dt * dt
     cv = 0.5 * dt * system.mu * ih
     g = system.g
@@ -197,29 +200,25 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
         u2[i] = u[i] + d[i]
         r[i] = m * (d[i] - dt * v[i]) - c2 * m * g
         sc[i] = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
-        j0[i] = m
-        j1[i] = 0.0
     for i in range(n):
         e2 = (u2[i + 1] - u2[i]) * ih - 1.0
         if not e2 > lo:
             return (BAD_STRAIN if math.isfinite(e2) else NON_FINITE), 0.0, 0.0
-        q, qp = quotient(e1[i], p1[i], e2, rod)
-        t = c2 * q + cv * (d[i + 1] - d[i])
-        r[i + 1] += t
-        r[i] -= t
-        at = abs(c2 * q) + abs(cv * (d[i + 1] - d[i])) + c2 * qp * (abs(u2[i]) + abs(u2[i + 1])) * ih
+        q = quotient(e1[i], p1[i], e2, rod)
+        qs[i] = q
+        tq = c2 * q
+        tv = cv * (d[i + 1] - d[i])
+        r[i + 1] += tq + tv
+        r[i] -= tq + tv
+        at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
         sc[i] += at
         sc[i + 1] += at
-        c = c2 * qp * ih + cv
-        j0[i] += c
-        j0[i + 1] += c
-        j1[i] -= c
     if not u2[0] > lower(floor):
         return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
-    qb, qbp = quotient(u[0], primitive(u[0], floor), u2[0], floor)
+    qb = quotient(u[0], primitive(u[0], floor), u2[0], floor)
+    qs[n] = qb
     r[0] -= c2 * qb
     sc[0] += c2 * abs(qb)
-    j0[0] -= c2 * qbp
     if system.gamma > 0.0:
         ub = work[UB]
         for i in range(n + 1):
@@ -232,18 +231,6 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
             sc[i - 1] += t
             sc[i] += 2.0 * t
             sc[i + 1] += t
-        # Jacobian: c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²
-        j2 = work[J2]
-        for i in range(n + 1):
-            j2[i] = 0.0
-        w = 0.5 * cb * ih * ih * ih
-        for i in range(1, n):
-            j0[i - 1] += w
-            j0[i] += 4.0 * w
-            j0[i + 1] += w
-            j1[i - 1] -= 2.0 * w
-            j1[i] -= 2.0 * w
-            j2[i - 1] += w
     rn = 0.0
     sn = 0.0
     for i in range(n + 1):
@@ -256,8 +243,50 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
 
 
 @numba.njit(cache=True)
+def _jacobian(system, rod, floor, u, d, u2, dt, work):
+    """Jacobian of F at the last evaluated iterate (rows J0–J2; slopes kept in row QP):
+    M + dt²/2 (Σ_i q_i'/h (e_{i+1} − e_i)(e_{i+1} − e_i)ᵀ − q_b' e_0e_0ᵀ + γB/2) + dt μ/2 K,
+    with q' the exact slopes of the computed quotients (so also across u_0 = 0)."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    j0 = work[J0]
+    j1 = work[J1]
+    e1 = work[E1]
+    qs = work[Q]
+    qps = work[QP]
+    c2 = 0.5 * dt * dt
+    cv = 0.5 * dt * system.mu * ih
+    for i in range(n + 1):
+        j0[i] = _mass(i, n, h)
+        j1[i] = 0.0
+    for i in range(n):
+        e2 = (u2[i + 1] - u2[i]) * ih - 1.0
+        qp = quotient_slope(e1[i], e2, qs[i], rod)
+        qps[i] = qp
+        c = c2 * qp * ih + cv
+        j0[i] += c
+        j0[i + 1] += c
+        j1[i] -= c
+    j0[0] -= c2 * quotient_slope(u[0], u2[0], qs[n], floor)
+    if system.gamma > 0.0:
+        # c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²
+        j2 = work[J2]
+        for i in range(n + 1):
+            j2[i] = 0.0
+        w = 0.5 * c2 * system.gamma * ih * ih * ih
+        for i in range(1, n):
+            j0[i - 1] += w
+            j0[i] += 4.0 * w
+            j0[i + 1] += w
+            j1[i - 1] -= 2.0 * w
+            j1[i] -= 2.0 * w
+            j2[i - 1] += w
+
+
+@numba.njit(cache=True)
 def _newton_update(system, work):
-    """δ = −J⁻¹F with the banded factorisation (tridiagonal for γ = 0)."""
+    """δ = −J⁻¹F with the banded solvers (tridiagonal for γ = 0, else pentadiagonal)."""
     rhs = work[DEL]
     r = work[R]
     for i in range(rhs.size):
@@ -266,8 +295,7 @@ def _newton_update(system, work):
         penta_factor(work[J0], work[J1], work[J2], work[L1], work[L2], work[DINV])
         penta_solve(work[L1], work[L2], work[DINV], rhs, rhs)
     else:
-        sym_tridiag_factor(work[J0], work[J1], work[L1], work[DINV])
-        sym_tridiag_solve(work[L1], work[DINV], rhs, rhs)
+        sym_tridiag_solve(work[J0], work[J1], rhs, rhs, work[L1])
 
 
 @numba.njit(cache=True)
@@ -285,6 +313,9 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     d = work[D]
     dl = work[DEL]
     dtr = work[DT]
+    qps = work[QP]
+    for i in range(n1):
+        qps[i] = 0.0
     status, rn, sn = _evaluate(system, rod, floor, u, v, d, u2, dt, work)
     if status != OK:
         return status, 0.0
@@ -294,6 +325,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             return OK, 0.0
         if it == scheme.max_newton:
             break
+        _jacobian(system, rod, floor, u, d, u2, dt, work)
         _newton_update(system, work)
         sstats[0] += 1
         dmax = 0.0
@@ -347,11 +379,11 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     dp = work[DP]
     ad = work[AD]
     d = work[D]
+    jerk(system, rod, floor, u, v, a, ad, work[K])
     for i in range(n):
         e = (u[i + 1] - u[i]) * ih - 1.0
         e1[i] = e
         p1[i] = primitive(e, rod)
-    jerk(system, rod, floor, u, v, a, ad, work[K])
     # predictor (error estimate and Newton's start), pulled back into the admissible set
     hdt2 = 0.5 * dt * dt
     for i in range(n1):

@@ -5,9 +5,9 @@ steps land exactly on the output times t0 + k·Δ (integer k).  How a run is cut
 never changes the steps taken, so a resumed run equals an uninterrupted one bit for bit.
 
 A trial step that fails (non-admissible, non-finite, no convergence) is retried at
-REJECT_SHRINK of its size; one that a scheme rejects for accuracy (status INACCURATE: the
-state is valid, the error estimate too large) is retried at the scheme's ``dt_suggest``, and
-is accepted as it is under fixed steps.
+REJECT_SHRINK of its size; one that a scheme rejects for accuracy (status INACCURATE: its
+error estimate is too large) is retried at the scheme's ``dt_suggest``, and under fixed
+steps accepted as it is (a scheme then returns a valid state with INACCURATE).
 """
 import numba
 import numpy as np
