@@ -33,6 +33,8 @@ and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺�
 step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1 returns
 INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in [0.2, 5]×).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
+Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
+tiny there) and ``rtol`` that of the flight: raise atol to stop resolving every micro-contact.
 The state's ``a`` row carries the full acceleration (viscosity included) for the predictors.
 """
 from __future__ import annotations
@@ -48,7 +50,7 @@ from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
 from ..kernels.discrete_gradient import quotient, quotient_slope
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term)
-from ..model.laws import deriv, lower, primitive, value
+from ..model.laws import deriv, lower, primitive
 from .schemes import register_scheme
 
 __all__ = ["Energy", "initial", "step", "WORK_ROWS", "APPROACH_LIMIT"]
