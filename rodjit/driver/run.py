@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE
+from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
 from ..stepping import layout as L
@@ -260,6 +260,13 @@ class Run:
                    f"bending limit -beta = {lower(self.floor):g}")
         elif code == NON_FINITE:
             why = "a non-finite value appeared in the state"
+        elif code == NO_CONVERGENCE:
+            why = (f"the implicit step's Newton iteration did not converge (last update "
+                   f"{f[L.F_VALUE]:.3g})")
+        elif code == INACCURATE:
+            why = (f"the local error estimate is {f[L.F_VALUE]:.3g} × the tolerance "
+                   f"(time.rtol = {self.config.time.rtol:g}, time.atol = "
+                   f"{self.config.time.atol:g})")
         else:
             why = f"unknown failure code {code}"
         if self.ctrl.dt_fixed > 0:

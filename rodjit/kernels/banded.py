@@ -69,3 +69,21 @@ def penta_solve(l1, l2, dinv, rhs, x):
         if i + 2 < n1:
             z -= l2[i + 2] * x[i + 2]
         x[i] = z
+
+
+@kernel
+def sym_tridiag_solve(d, e, rhs, x, cp):
+    """Solve the symmetric tridiagonal system with diagonal ``d`` and off-diagonal ``e``
+    (e[i] is entry (i, i+1)) in one sweep each way (Thomas; one division per row); ``cp``
+    is scratch, ``x`` may alias ``rhs``.  For SPD matrices (the Newton Jacobians of the
+    energy step, rebuilt at every iterate), so no pivoting."""
+    n1 = d.size
+    inv = 1.0 / d[0]
+    cp[0] = e[0] * inv
+    x[0] = rhs[0] * inv
+    for i in range(1, n1):
+        inv = 1.0 / (d[i] - e[i - 1] * cp[i - 1])
+        cp[i] = e[i] * inv
+        x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * inv
+    for i in range(n1 - 2, -1, -1):
+        x[i] -= cp[i] * x[i + 1]

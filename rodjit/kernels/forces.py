@@ -14,6 +14,9 @@ OK = 0
 BAD_STRAIN = 1    # a segment strain reached the rod law's lower bound (−1)
 BAD_FLOOR = 2     # the bottom reached the floor law's lower bound (−β)
 NON_FINITE = 3    # a non-finite value appeared
+INACCURATE = 4    # a valid trial state whose error estimate exceeds the tolerance: the loop
+                  # retries with the scheme's dt_suggest (and accepts it under fixed steps)
+NO_CONVERGENCE = 5  # an implicit step's nonlinear solve did not converge: a shorter step
 
 
 @kernel

@@ -13,7 +13,8 @@ from .laws import AikiKosugiFloor, AikiKosugiRod, deriv, primitive, value
 from .system import masses
 
 __all__ = ["rod_stress", "rod_energy_density", "floor_stress", "floor_energy",
-           "forces", "acceleration", "energies", "rhs"]
+           "forces", "acceleration", "energies", "rhs", "discrete_gradient",
+           "discrete_gradient_residual"]
 
 
 def rod_stress(eps, rod):
@@ -104,3 +105,52 @@ def energies(u, v, system, rod, floor):
     out["cm_height"] = np.sum(m * u)
     out["cm_velocity"] = np.sum(m * v)
     return out
+
+
+def _quotient(P, s, a, b, small=1e-5):
+    """(P(b) − P(a))/(b − a), or the midpoint stress s((a+b)/2) when |b − a| < ``small``
+    (its error s''·(b−a)²/24 is then ≲ 1e-10 of the stress scale)."""
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    near = np.abs(b - a) < small
+    out = np.empty_like(a)
+    if near.any():
+        out[near] = s((a[near] + b[near]) / 2)
+    if not near.all():
+        out[~near] = (P(b[~near]) - P(a[~near])) / (b[~near] - a[~near])
+    return out
+
+
+def discrete_gradient(u1, u2, system, rod, floor):
+    """∇̄V(u1, u2) of the energy-conserving step (MODEL.md §2, ``time.integrator = "energy"``):
+    per segment the quotient of f̂, at node 0 that of −σ̂_b, the midpoint values of the
+    bending and gravity gradients.  (u2 − u1)·∇̄V = V(u2) − V(u1)."""
+    n, h = system.n, system.h
+    e1 = np.diff(u1) / h - 1.0
+    e2 = np.diff(u2) / h - 1.0
+    q = _quotient(lambda e: rod_energy_density(e, rod), lambda e: rod_stress(e, rod), e1, e2)
+    G = np.zeros(n + 1)
+    G[1:] += q           # ∂V/∂u_{i+1} of segment i
+    G[:-1] -= q
+    fl = np.vectorize(lambda x: floor_energy(float(x), floor))
+    fs = np.vectorize(lambda x: floor_stress(float(x), floor))
+    G[0] -= _quotient(fl, fs, [u1[0]], [u2[0]])[0]
+    if system.gamma:
+        k = np.pad(_curvatures((u1 + u2) / 2, h), 1)
+        G += system.gamma * h * (k[:-2] - 2 * k[1:-1] + k[2:]) / h**2
+    G -= masses(n) * system.g
+    return G
+
+
+def discrete_gradient_residual(u1, v1, u2, v2, dt, system, rod, floor):
+    """Residuals of the energy-conserving step: (u2 − u1 − dt v̄, M(v2 − v1) + dt ∇̄V +
+    dt μ K v̄) with v̄ = (v1 + v2)/2 and μKv̄ the gradient of the dissipation R."""
+    vb = (v1 + v2) / 2
+    visc = np.zeros_like(vb)
+    if system.mu:
+        dv = np.diff(vb) / system.h
+        visc[:-1] -= system.mu * dv
+        visc[1:] += system.mu * dv
+    r_u = u2 - u1 - dt * vb
+    r_v = masses(system.n) * (v2 - v1) + dt * discrete_gradient(u1, u2, system, rod, floor) + dt * visc
+    return r_u, r_v

@@ -3,10 +3,15 @@
 ``advance`` steps until t_end, until an output buffer is full, or until ``max_steps``;
 steps land exactly on the output times t0 + k·Δ (integer k).  How a run is cut into calls
 never changes the steps taken, so a resumed run equals an uninterrupted one bit for bit.
+
+A trial step that fails (non-admissible, non-finite, no convergence) is retried at
+REJECT_SHRINK of its size; one that a scheme rejects for accuracy (status INACCURATE: its
+error estimate is too large) is retried at the scheme's ``dt_suggest``, and under fixed
+steps accepted as it is (a scheme then returns a valid state with INACCURATE).
 """
 import numpy as np
 
-from ..kernels.forces import BAD_STRAIN, OK, energies, worst_segment
+from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, energies, worst_segment
 from ..model.laws import value
 from . import layout as L
 from .events import crossing, open_contact, track
@@ -162,6 +167,8 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         v2 = nxt[1]
         status, val, emin, ff, dts, w2, dd = step(scheme, system, rod, floor, u, v, cur[2],
                                                  u2, v2, nxt[2], work, sstats, dt)
+        if status == INACCURATE and fixed:
+            status = OK   # fixed steps: the state is valid; the error estimate is not asked
         if (status == OK and not fixed and not refined
                 and (u[0] < 0.0) != (u2[0] < 0.0)):
             # σ_b has a kink at u_0 = 0 (its stiffness jumps from 0 to 3κ_b/β): a step that
@@ -176,7 +183,8 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         refined = False
         if status != OK:
             count[L.REJECTED] += 1
-            if fixed or REJECT_SHRINK * dt < ctrl.dt_min:
+            retry = dts if status == INACCURATE else REJECT_SHRINK * dt
+            if fixed or retry < ctrl.dt_min:
                 fail[L.F_CODE] = status
                 fail[L.F_T] = t
                 fail[L.F_VALUE] = val
@@ -184,7 +192,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
                 fail[L.F_DT] = dt
                 code = L.FAILED
                 break
-            dtp = REJECT_SHRINK * dt
+            dtp = retry
             continue
         t_new = target if land else t + dt
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],

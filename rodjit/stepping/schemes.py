@@ -8,7 +8,10 @@ A scheme module provides
   ``step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)``
       -> (status, value, min_strain, floor_force, dt_suggest, w, dissipated)
 where ``step`` never modifies its inputs (a rejected trial costs nothing to undo) and
-``sstats`` is an int64 array for scheme-specific counters.
+``sstats`` is an int64 array for scheme-specific counters.  Besides the failure codes of
+``kernels.forces``, ``step`` may return INACCURATE (valid state, error estimate too large:
+the loop retries with ``dt_suggest``) and NO_CONVERGENCE (a shorter step is tried).  Optional
+module attribute: ``WORK_ROWS`` (scratch rows).
 """
 from __future__ import annotations
 

@@ -1,0 +1,443 @@
+"""Discrete-gradient step (``time.integrator = "energy"``): an exact discrete energy balance.
+
+The step from (uⁿ, vⁿ) solves, on the semi-discrete system of MODEL.md §2,
+
+    uⁿ⁺¹ − uⁿ = dt v̄,   v̄ = (vⁿ + vⁿ⁺¹)/2,
+    M(vⁿ⁺¹ − vⁿ) = −dt ∇̄V(uⁿ, uⁿ⁺¹) − dt μ K v̄,
+
+with K = DᵀD/h (R(v) = μ/2 vᵀKv) and the discrete gradient ∇̄V: per segment the quotient
+q_i = (f̂(εⁿ⁺¹) − f̂(εⁿ))/(εⁿ⁺¹ − εⁿ) (force +q_i on node i, −q_i on node i+1), at node 0
+the quotient of σ̂_b, and the exact midpoint values γB(uⁿ + uⁿ⁺¹)/2 and −g m of the quadratic
+bending and linear gravity energies.  Since (uⁿ⁺¹ − uⁿ)·∇̄V = V(uⁿ⁺¹) − V(uⁿ),
+
+    Eⁿ⁺¹ − Eⁿ = −dt μ Σ h ((v̄_{i+1} − v̄_i)/h)²                              (exactly),
+
+which is the dissipation this step reports.  The barriers f̂ → ∞, −σ̂_b → ∞ then keep every
+solution admissible, whatever dt.
+
+Solve: with the unknown increment d = uⁿ⁺¹ − uⁿ and vⁿ⁺¹ = 2d/dt − vⁿ, the step is the root of
+
+    F(d) = M(d − dt vⁿ) + dt²/2 ∇̄V(uⁿ, uⁿ + d) + dt μ/2 K d,
+
+the gradient of a strictly convex function of d (each quotient is a function of one strain,
+increasing since f' > 0 and σ_b' ≤ 0) with barriers at the admissible set's boundary: the
+root is unique and Newton's method with its symmetric banded Jacobian (tridiagonal for γ = 0,
+pentadiagonal for γ > 0; the quotients' exact derivatives, so the floor's kink at u_0 = 0 is
+differentiated consistently) converges.  Iterates are kept admissible and the residual
+decreasing by backtracking; no convergence in ``max_newton`` iterations returns
+NO_CONVERGENCE (the loop retries a shorter step).
+
+Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ (Newton's start)
+and v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
+and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
+step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1 returns
+INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in [0.2, 5]×).
+No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
+Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
+tiny there) and ``rtol`` that of the flight: raise atol to stop resolving every micro-contact.
+The state's ``a`` row carries the full acceleration (viscosity included) for the predictors.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from typing import NamedTuple
+
+import numpy as np
+
+from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
+from ..kernels.discrete_gradient import quotient, quotient_slope
+from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
+                              OK, accel, add_beam_term)
+from ..model.laws import deriv, lower, primitive
+from .schemes import register_scheme
+from .._jit import kernel
+
+__all__ = ["Energy", "initial", "step", "WORK_ROWS"]
+
+
+NEWTON_TOL = 1e-10    # converged when the update is below this × |uⁿ⁺¹ − uⁿ| (see _newton)
+MAX_NEWTON = 30
+MAX_BACKTRACK = 40
+ARMIJO = 1e-4
+SAFETY = 0.9
+FAC_MIN = 0.2
+FAC_MAX = 5.0
+EPS = 2.220446049250313e-16
+
+# rows of the scratch array ``work`` (all per-step scratch: nothing survives a step)
+S = 0         # segment stresses (accel)
+K = 1         # curvatures
+E1 = 2        # strains of uⁿ
+P1 = 3        # f̂(strains of uⁿ)
+AD = 4        # ȧⁿ, the time derivative of the acceleration
+DP = 5        # predictor increment u_p − uⁿ
+R = 6         # Newton residual
+J0 = 7        # Jacobian diagonals (i,i), (i,i+1), (i,i+2)
+J1 = 8
+J2 = 9
+L1 = 10       # factor (L1 also the Thomas scratch)
+L2 = 11
+DINV = 12
+DEL = 13      # Newton update
+DT = 14       # line-search trial increment
+SC = 15       # magnitude of the residual's terms (rounding scale)
+UB = 16       # midpoint uⁿ + d/2 for the bending term
+D = 17        # Newton iterate d
+Q = 18        # quotients of the last evaluation (segments; node 0's at index N)
+QP = 19       # their slopes at the last Jacobian
+WORK_ROWS = 20
+
+
+class Energy(NamedTuple):
+    """Parameters of the discrete-gradient step: error tolerances and the Newton solve."""
+
+    rtol: float
+    atol: float
+    newton_tol: float
+    max_newton: int
+
+
+def _build(tc):
+    return Energy(float(tc.rtol), float(tc.atol), NEWTON_TOL, MAX_NEWTON)
+
+
+@kernel
+def _mass(i, n, h):
+    return h if 0 < i < n else 0.5 * h
+
+
+@kernel
+def full_accel(system, rod, floor, u, v, a, s, k):
+    """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
+    ``accel``'s ``(status, value, min_strain, floor_force, omega2)``."""
+    res = accel(u, a, s, k, system, rod, floor, True)
+    if res[0] == OK and system.mu > 0.0:
+        n = system.n
+        h = system.h
+        c = system.mu / h
+        for i in range(n):
+            t = c * (v[i + 1] - v[i])
+            a[i] += t / _mass(i, n, h)
+            a[i + 1] -= t / _mass(i + 1, n, h)
+    return res
+
+
+@kernel
+def jerk(system, rod, floor, u, v, a, out, k):
+    """ȧ = M⁻¹(−H(u)v − μKa), the time derivative of the acceleration along the motion
+    (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself)."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    mu = system.mu
+    for i in range(n + 1):
+        out[i] = 0.0
+    for i in range(n):
+        e = (u[i + 1] - u[i]) * ih - 1.0
+        t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
+        out[i] += t
+        out[i + 1] -= t
+    out[0] += deriv(u[0], floor) * v[0]
+    if system.gamma > 0.0:
+        add_beam_term(v, out, k, h, -system.gamma, False)
+    for i in range(n + 1):
+        out[i] /= _mass(i, n, h)
+
+
+@kernel
+def _error_rate(scheme, u, ad):
+    """max_i |ȧ_i|/12 / (atol + rtol|u_i|): the predicted u error per dt³."""
+    r = 0.0
+    for i in range(u.size):
+        r = max(r, abs(ad[i]) / (12.0 * (scheme.atol + scheme.rtol * abs(u[i]))))
+    return r
+
+
+@kernel
+def initial(scheme, system, rod, floor, u, v, a, work):
+    """Full acceleration of the initial state; ``(status, value, min_strain, floor_force,
+    dt_suggest)``.  The first step: the accuracy estimate from ȧ, at most the explicit limit
+    2/ω (the controller grows it from there)."""
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K])
+    if status != OK:
+        return status, val, emin, fl, 0.0
+    jerk(system, rod, floor, u, v, a, work[AD], work[K])
+    dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
+    rate = _error_rate(scheme, u, work[AD])
+    if rate > 0.0:
+        dt = min(dt, 0.5 * rate ** (-1.0 / 3.0))
+    return OK, 0.0, emin, fl, dt
+
+
+@kernel
+def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
+    """Residual F(d) (row R) and its rounding scale (row SC); leaves u² = uⁿ + d in ``u2``
+    and the quotients in row Q (segments, then node 0's at index n) for ``_jacobian``.
+
+    Returns ``(status, |F|, |scale|)`` in the norm |x|² = Σ x_i²/m_i; status is BAD_STRAIN,
+    BAD_FLOOR or NON_FINITE for an iterate outside the admissible set.  The scale sums the
+    magnitudes of the residual's terms, plus the stress change that the rounding of u² in a
+    strain causes (slopes from the last Jacobian), so 64 ε_mach × scale is the residual's
+    rounding level.
+    """
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    r = work[R]
+    sc = work[SC]
+    e1 = work[E1]
+    p1 = work[P1]
+    qs = work[Q]
+    qps = work[QP]
+    c2 = 0.5 * dt * dt
+    cv = 0.5 * dt * system.mu * ih
+    g = system.g
+    lo = lower(rod)
+    for i in range(n + 1):
+        m = _mass(i, n, h)
+        u2[i] = u[i] + d[i]
+        r[i] = m * (d[i] - dt * v[i]) - c2 * m * g
+        sc[i] = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
+    for i in range(n):
+        e2 = (u2[i + 1] - u2[i]) * ih - 1.0
+        if not e2 > lo:
+            return (BAD_STRAIN if math.isfinite(e2) else NON_FINITE), 0.0, 0.0
+        q = quotient(e1[i], p1[i], e2, rod)
+        qs[i] = q
+        tq = c2 * q
+        tv = cv * (d[i + 1] - d[i])
+        r[i + 1] += tq + tv
+        r[i] -= tq + tv
+        at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
+        sc[i] += at
+        sc[i + 1] += at
+    if not u2[0] > lower(floor):
+        return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
+    qb = quotient(u[0], primitive(u[0], floor), u2[0], floor)
+    qs[n] = qb
+    r[0] -= c2 * qb
+    sc[0] += c2 * abs(qb)
+    if system.gamma > 0.0:
+        ub = work[UB]
+        for i in range(n + 1):
+            ub[i] = u[i] + 0.5 * d[i]
+        cb = c2 * system.gamma
+        add_beam_term(ub, r, work[K], h, cb, False)
+        kk = work[K]
+        for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
+            t = abs(cb * kk[i]) * ih
+            sc[i - 1] += t
+            sc[i] += 2.0 * t
+            sc[i + 1] += t
+    rn = 0.0
+    sn = 0.0
+    for i in range(n + 1):
+        im = 1.0 / _mass(i, n, h)
+        rn += r[i] * r[i] * im
+        sn += sc[i] * sc[i] * im
+    if not math.isfinite(rn + sn):
+        return NON_FINITE, 0.0, 0.0
+    return OK, math.sqrt(rn), math.sqrt(sn)
+
+
+@kernel
+def _jacobian(system, rod, floor, u, d, u2, dt, work):
+    """Jacobian of F at the last evaluated iterate (rows J0–J2; slopes kept in row QP):
+    M + dt²/2 (Σ_i q_i'/h (e_{i+1} − e_i)(e_{i+1} − e_i)ᵀ − q_b' e_0e_0ᵀ + γB/2) + dt μ/2 K,
+    with q' the exact slopes of the computed quotients (so also across u_0 = 0)."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    j0 = work[J0]
+    j1 = work[J1]
+    e1 = work[E1]
+    qs = work[Q]
+    qps = work[QP]
+    c2 = 0.5 * dt * dt
+    cv = 0.5 * dt * system.mu * ih
+    for i in range(n + 1):
+        j0[i] = _mass(i, n, h)
+        j1[i] = 0.0
+    for i in range(n):
+        e2 = (u2[i + 1] - u2[i]) * ih - 1.0
+        qp = quotient_slope(e1[i], e2, qs[i], rod)
+        qps[i] = qp
+        c = c2 * qp * ih + cv
+        j0[i] += c
+        j0[i + 1] += c
+        j1[i] -= c
+    j0[0] -= c2 * quotient_slope(u[0], u2[0], qs[n], floor)
+    if system.gamma > 0.0:
+        # c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²
+        j2 = work[J2]
+        for i in range(n + 1):
+            j2[i] = 0.0
+        w = 0.5 * c2 * system.gamma * ih * ih * ih
+        for i in range(1, n):
+            j0[i - 1] += w
+            j0[i] += 4.0 * w
+            j0[i + 1] += w
+            j1[i - 1] -= 2.0 * w
+            j1[i] -= 2.0 * w
+            j2[i - 1] += w
+
+
+@kernel
+def _newton_update(system, work):
+    """δ = −J⁻¹F with the banded solvers (tridiagonal for γ = 0, else pentadiagonal)."""
+    rhs = work[DEL]
+    r = work[R]
+    for i in range(rhs.size):
+        rhs[i] = -r[i]
+    if system.gamma > 0.0:
+        penta_factor(work[J0], work[J1], work[J2], work[L1], work[L2], work[DINV])
+        penta_solve(work[L1], work[L2], work[DINV], rhs, rhs)
+    else:
+        sym_tridiag_solve(work[J0], work[J1], rhs, rhs, work[L1])
+
+
+@kernel
+def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
+    """Solve F(d) = 0 from the (admissible) start value in row D; leaves d in row D and
+    uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
+    update size in ``value``.
+
+    Converged when the residual is at its rounding level (64 ε_mach × the size of its
+    terms), or when the update is at most newton_tol × |d|∞: that update is applied and
+    leaves a residual O(update²) by quadratic convergence.  Each update is backtracked
+    until the iterate is admissible and the residual drops (Armijo).
+    """
+    n1 = u.size
+    d = work[D]
+    dl = work[DEL]
+    dtr = work[DT]
+    qps = work[QP]
+    for i in range(n1):
+        qps[i] = 0.0
+    status, rn, sn = _evaluate(system, rod, floor, u, v, d, u2, dt, work)
+    if status != OK:
+        return status, 0.0
+    last = np.inf
+    for it in range(scheme.max_newton + 1):
+        if rn <= 64.0 * EPS * sn:
+            return OK, 0.0
+        if it == scheme.max_newton:
+            break
+        _jacobian(system, rod, floor, u, d, u2, dt, work)
+        _newton_update(system, work)
+        sstats[0] += 1
+        dmax = 0.0
+        dref = 0.0
+        for i in range(n1):
+            dmax = max(dmax, abs(dl[i]))
+            dref = max(dref, abs(d[i]))
+        last = dmax
+        if not math.isfinite(dmax):
+            break
+        small = dmax <= scheme.newton_tol * dref
+        alpha = 1.0
+        accepted = False
+        rt = 0.0
+        st_ = 0.0
+        for _ in range(MAX_BACKTRACK):
+            for i in range(n1):
+                dtr[i] = d[i] + alpha * dl[i]
+            status, rt, st_ = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work)
+            if status == OK and (small or rt <= (1.0 - ARMIJO * alpha) * rn
+                                 or rt <= 64.0 * EPS * st_):
+                accepted = True
+                break
+            alpha *= 0.5
+        if not accepted:
+            break
+        for i in range(n1):
+            d[i] = dtr[i]
+        rn = rt
+        sn = st_
+        if small and alpha == 1.0:
+            return OK, 0.0
+    sstats[1] += 1
+    return NO_CONVERGENCE, last
+
+
+@kernel
+def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
+    """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
+
+    Returns ``(status, value, min_strain, floor_force, dt_suggest, w, dissipated)`` with
+    status OK, INACCURATE (valid state, error estimate > 1: retry with ``dt_suggest``),
+    NO_CONVERGENCE, or a non-admissible/non-finite code.
+    """
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    n1 = n + 1
+    e1 = work[E1]
+    p1 = work[P1]
+    dp = work[DP]
+    ad = work[AD]
+    d = work[D]
+    jerk(system, rod, floor, u, v, a, ad, work[K])
+    for i in range(n):
+        e = (u[i + 1] - u[i]) * ih - 1.0
+        e1[i] = e
+        p1[i] = primitive(e, rod)
+    # predictor (error estimate and Newton's start), pulled back into the admissible set
+    hdt2 = 0.5 * dt * dt
+    for i in range(n1):
+        dp[i] = dt * v[i] + hdt2 * a[i]
+        d[i] = dp[i]
+    lo = lower(rod)
+    lo_b = lower(floor)
+    alpha = 1.0
+    for _ in range(60):
+        ok = u[0] + d[0] > lo_b
+        for i in range(n):
+            if not (((u[i + 1] + d[i + 1]) - (u[i] + d[i])) * ih - 1.0 > lo):
+                ok = False
+                break
+        if ok:
+            break
+        alpha *= 0.5
+        for i in range(n1):
+            d[i] = alpha * dp[i]
+    status, val = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+    if status != OK:
+        return status, val, 0.0, 0.0, 0.0, 0.0, 0.0
+    # vⁿ⁺¹ from the increment itself: 2(u2 − u)/dt would amplify the rounding of u2 by 1/dt
+    idt2 = 2.0 / dt
+    for i in range(n1):
+        u2[i] = u[i] + d[i]
+        v2[i] = idt2 * d[i] - v[i]
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K])
+    if status != OK:
+        return status, val, emin, fl, 0.0, 0.0, 0.0
+    # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²
+    err = 0.0
+    w = 0.0
+    for i in range(n1):
+        eu = (d[i] - dp[i]) / 3.0
+        vp = v[i] + dt * a[i] + hdt2 * ad[i]
+        ev = (v2[i] - vp) / 3.0
+        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
+        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
+        err = max(err, abs(eu) / su, abs(ev) / sv)
+        w += _mass(i, n, h) * v2[i]
+    diss = 0.0
+    if system.mu > 0.0:
+        for i in range(n):
+            dv = 0.5 * ((v[i + 1] + v2[i + 1]) - (v[i] + v2[i]))
+            diss += dv * dv
+        diss *= dt * system.mu * ih
+    if not math.isfinite(err):
+        return NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0
+    fac = FAC_MAX
+    if err > 0.0:
+        fac = min(FAC_MAX, max(FAC_MIN, SAFETY * err ** (-1.0 / 3.0)))
+    if err > 1.0:
+        return INACCURATE, err, emin, fl, dt * fac, w, diss
+    return OK, 0.0, emin, fl, dt * fac, w, diss
+
+
+register_scheme("energy", Energy, sys.modules[__name__], _build)

@@ -1,0 +1,353 @@
+"""The discrete-gradient integrator (``time.integrator = "energy"``, issue 5).
+
+Checked against: the discrete energy identity at every step of the real loop (μ = 0 and
+μ > 0, 100 bounces), the NumPy spec of the step equations, 50-digit energies, exact free
+fall, second-order convergence in dt and agreement with verlet/semi-implicit, admissibility
+and energy exactness at 100× the explicit stability limit, and bit-identical resume.
+"""
+import json
+import math
+import os
+import subprocess
+import sys
+
+import mpmath as mp
+import numba
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit.driver.result import MemorySink
+from rodjit.driver.run import Run
+from rodjit.kernels.forces import INACCURATE, NO_CONVERGENCE, OK, energies
+from rodjit.model import reference as ref
+from rodjit.model.system import masses
+from rodjit.stepping import energy as EN
+from rodjit.stepping import layout as L
+from rodjit.stepping.loop import advance
+
+QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
+
+
+def energy_config(**over):
+    return rodjit.Config().override({"time.integrator": "energy", **QUIET, **over})
+
+
+# ---- the real loop, one step at a time ------------------------------------------------------
+@numba.njit
+def _record(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock, count, ev,
+            snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail, out,
+            max_bounces):
+    """Call the compiled loop for one step at a time; per step record dt, E before/after,
+    the loop's dissipation increment, μ dt Σ h (Δv̄/h)² recomputed from the two states, the
+    rounding scale of E, u_0, the bounces so far and t.  Returns the number of steps."""
+    n = system.n
+    h = system.h
+    v_old = np.empty(n + 1)
+    k = 0
+    while k < out.shape[0]:
+        ke, st, be, fe, ge, emin, z, w = energies(state[0], state[1], work[1], system, rod,
+                                                  floor)
+        e0 = ke + st + be + fe + ge
+        mag = ke + st + be + abs(fe) + abs(ge)
+        t0 = clock[L.T]
+        d0 = clock[L.DISSIPATED]
+        v_old[:] = state[1]
+        code = advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
+                       count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces,
+                       fail, 1)
+        count[L.N_EP] = 0        # drain the event buffers (their rows are not needed)
+        count[L.N_BOUNCE] = 0
+        if code == L.FAILED:
+            return -1
+        ke, st, be, fe, ge, emin, z, w = energies(state[0], state[1], work[1], system, rod,
+                                                  floor)
+        dt = clock[L.T] - t0
+        diss = 0.0
+        for i in range(n):
+            dv = 0.5 * ((v_old[i + 1] + state[1][i + 1]) - (v_old[i] + state[1][i]))
+            diss += dv * dv
+        out[k, 0] = dt
+        out[k, 1] = e0
+        out[k, 2] = ke + st + be + fe + ge
+        out[k, 3] = clock[L.DISSIPATED] - d0
+        out[k, 4] = dt * system.mu * diss / h
+        out[k, 5] = max(mag, abs(e0))
+        out[k, 6] = state[0][0]
+        out[k, 7] = count[L.BOUNCES_TOTAL]
+        out[k, 8] = clock[L.T]
+        k += 1
+        if code == L.DONE or count[L.BOUNCES_TOTAL] >= max_bounces:
+            break
+    return k
+
+
+def record_steps(cfg, max_steps, max_bounces=10**9, u0=None, v0=None):
+    run = Run(cfg, u0=u0, v0=v0)
+    run.start(MemorySink())
+    out = np.zeros((max_steps, 9))
+    k = _record(*run._args(), run.state, run.trial, run.work, run.sstats, run.clock, run.count,
+                run.ev, run.snap_t, run.snap_step, run.snap_u, run.snap_v, run.diag,
+                run.episodes, run.bounces, run.fail, out, max_bounces)
+    assert k > 0, run.failure_message()
+    return run, out[:k]
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.005])
+def test_energy_identity_holds_at_every_step_over_100_bounces(mu):
+    """E^{n+1} − E^n = −μ dt Σ h ((v̄_{i+1} − v̄_i)/h)² at every accepted step of the real
+    loop (crossing refinements, landings, rejections included), and the loop's dissipation
+    grows by exactly that sum."""
+    cfg = energy_config(**{"rod.mu": mu, "time.rtol": 1e-4, "time.t_end": 1000.0})
+    run, rec = record_steps(cfg, 2_000_000, max_bounces=100)
+    dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
+    assert nb[-1] >= 100
+    assert (u0 < 0).sum() > 1000                       # many steps in contact
+    resid = np.abs(e1 - e0 + diss) / scale
+    assert resid.max() < 1e-12, resid.max()
+    # the loop's increments are the formula, up to the rounding of its running sum (and of
+    # dt recovered here as t_{n+1} − t_n)
+    total = np.cumsum(diss)
+    tol = (1e-14 + 4e-16 * t / dt) * diss_formula + 4e-16 * total
+    assert np.all(np.abs(diss - diss_formula) <= tol)
+    if mu > 0:
+        assert diss.sum() > 0.3 * abs(e0[0])           # a dissipative run, not a no-op
+    else:
+        assert diss.sum() == 0.0
+    assert run.sstats[0] > 0                           # Newton iterations were counted
+
+
+def test_energy_identity_with_bending_on_a_stiff_floor():
+    """The same per-step identity with γ > 0 (pentadiagonal Newton), viscosity, a finer rod
+    and a stiff floor, through 5 bounces."""
+    cfg = energy_config(**{"rod.N": 40, "rod.gamma": 1e-3, "rod.mu": 0.02, "time.rtol": 1e-5,
+                           "floor.kappa_b": 1e5, "floor.beta": 1e-3, "time.t_end": 100.0})
+    run, rec = record_steps(cfg, 2_000_000, max_bounces=5)
+    dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
+    assert nb[-1] >= 5 and (u0 < 0).sum() > 100
+    resid = np.abs(e1 - e0 + diss) / scale
+    assert resid.max() < 1e-12, resid.max()
+
+
+def test_step_solves_the_discrete_gradient_equations_of_the_numpy_spec():
+    """One step in contact, with bending and viscosity, checked against the independent
+    NumPy statement of the scheme (rodjit.model.reference.discrete_gradient_residual) and its
+    energy change against 50-digit arithmetic."""
+    cfg = energy_config(**{"rod.N": 12, "rod.gamma": 0.02, "rod.mu": 0.5, "initial.height": 0.0,
+                           "initial.velocity": -2.0, "time.t_end": 0.004, "time.dt": 2e-3})
+    run = Run(cfg)
+    run.start(MemorySink())
+    run.advance(MemorySink(), max_steps=1)             # into the floor
+    u, v, a = (x.copy() for x in run.state)
+    assert u[0] < 0
+    u2, v2, a2 = np.zeros_like(u), np.zeros_like(u), np.zeros_like(u)
+    work = np.zeros_like(run.work)
+    ss = np.zeros(2, np.int64)
+    dt = 2e-3
+    status, *_, dissipated = EN.step(run.scheme, run.system, run.rod, run.floor, u, v, a,
+                                     u2, v2, a2, work, ss, dt)
+    assert status in (OK, INACCURATE)                 # a valid state either way
+    r_u, r_v = ref.discrete_gradient_residual(u, v, u2, v2, dt, run.system, run.rod, run.floor)
+    m = masses(12)
+    assert np.abs(r_u).max() < 1e-14
+    assert np.abs(r_v).max() < 1e-9 * np.abs(m * (v2 - v)).max()
+    # the energy balance in 50 digits
+    mp.mp.dps = 50
+    E = lambda uu, vv: _energy_mp(uu, vv, run)
+    vb = [(mp.mpf(x) + mp.mpf(y)) / 2 for x, y in zip(v, v2)]
+    n, h = 12, mp.mpf(1) / 12
+    d_exact = dt * mp.mpf(0.5) * sum((vb[i + 1] - vb[i]) ** 2 for i in range(n)) / h
+    assert abs(E(u2, v2) - E(u, v) + d_exact) < 1e-13 * abs(E(u, v))
+    assert abs(dissipated - d_exact) < 1e-14 * d_exact
+
+
+def _energy_mp(u, v, run):
+    """E_h of MODEL.md §2 in 50 digits, from the literal formulas."""
+    n = len(u) - 1
+    h = mp.mpf(1) / n
+    m = [h / 2 if i in (0, n) else h for i in range(n + 1)]
+    kap, kb, be = (mp.mpf(x) for x in (run.rod.kappa, run.floor.kappa_b, run.floor.beta))
+    E = sum(mi * mp.mpf(vi) ** 2 / 2 for mi, vi in zip(m, v))
+    U = [mp.mpf(x) for x in u]
+    for i in range(n):
+        e = (U[i + 1] - U[i]) / h - 1
+        E += h * kap / 2 * (e**2 / 2 + e / 2 + 1 / (4 * (1 + e) ** 2) - mp.mpf(1) / 4)
+    for i in range(1, n):
+        k = (U[i + 1] - 2 * U[i] + U[i - 1]) / h**2
+        E += mp.mpf(run.system.gamma) / 2 * h * k**2
+    if U[0] <= 0:
+        E -= kb * (-(be**3) / (2 * (U[0] + be) ** 2) - U[0] + be / 2)
+    E -= mp.mpf(run.system.g) * sum(mi * ui for mi, ui in zip(m, U))
+    return E
+
+
+@pytest.mark.parametrize("mu, gamma", [(0.0, 0.0), (0.05, 1e-4)])
+def test_free_flight_is_exact_and_takes_long_steps(mu, gamma):
+    """No contact: w = w0 + g t and z = z0 + w0 t + g t²/2 (MODEL.md §4) to rounding, with
+    internal vibration (the free-free mode 1, u_x = 1 − Aπ sin πx vanishes at the ends); and
+    the accuracy-controlled steps grow far past the explicit stability limit 2/ω."""
+    n = 1000
+    x = np.arange(n + 1) / n
+    u0 = 50.0 + x + 0.002 * np.cos(np.pi * x)
+    v0 = np.full(n + 1, 1.5)
+    cfg = energy_config(**{"rod.N": n, "rod.gamma": gamma, "rod.mu": mu, "time.t_end": 0.5,
+                           "time.rtol": 1e-3, "output.diagnostics_interval": 0.1})
+    res = rodjit.simulate(cfg, u0=u0, v0=v0)
+    d = res.diagnostics
+    m = masses(n)
+    z0, w0, g = m @ u0, m @ v0, -9.81
+    t = d["t"]
+    np.testing.assert_allclose(d["cm_velocity"], w0 + g * t, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(d["cm_height"], z0 + w0 * t + 0.5 * g * t**2, rtol=0, atol=1e-12)
+    _, rec = record_steps(cfg, 100_000, u0=u0, v0=v0)
+    om2 = 4 * 1.25 * 100.0 * n**2 + 16 * gamma * n**4       # Gershgorin bound, as in accel
+    limit = 2 / math.sqrt(om2)
+    assert rec[:, 0].max() > 100 * limit and np.median(rec[:, 0]) > 15 * limit
+
+
+def _fixed(integrator, dt, over):
+    cfg = rodjit.Config().override({"time.integrator": integrator, "time.dt": dt, **QUIET,
+                                    **over})
+    res = rodjit.simulate(cfg)
+    return np.concatenate([res.u_final, res.v_final])
+
+
+SMOOTH = {"rod.N": 8, "rod.gamma": 0.001, "rod.mu": 0.3, "gravity.g": 0.0,
+          "initial.height": 1.0, "initial.strain": 0.3, "initial.velocity": 0.0,
+          "time.t_end": 0.4}
+CONTACT = {"rod.N": 8, "initial.height": 0.02, "initial.velocity": -1.0, "rod.mu": 0.1,
+           "floor.kappa_b": 100.0, "floor.beta": 0.2, "time.t_end": 0.25}
+
+
+@pytest.mark.parametrize("case", [SMOOTH, CONTACT], ids=["smooth", "contact"])
+def test_second_order_in_dt(case):
+    """Fixed steps dt, dt/2, dt/4, dt/8 against dt/128: error ratios ≈ 4.  The contact
+    case enters and leaves the floor inside steps (the kink of σ_b' at u_0 = 0): the order
+    stays 2."""
+    dts = [2e-3 / 2**k for k in range(4)] if case is SMOOTH else [1e-3 / 2**k for k in range(4)]
+    ref_y = _fixed("energy", dts[0] / 128, case)
+    errs = [np.abs(_fixed("energy", dt, case) - ref_y).max() for dt in dts]
+    orders = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+    assert np.all(np.abs(orders - 2.0) < 0.15), orders
+
+
+def test_agrees_with_verlet_and_semi_implicit_in_the_limit():
+    """The three integrators approach the same semi-discrete solution: their differences at
+    a common dt shrink at second order."""
+    diffs = {"verlet": [], "semi-implicit": []}
+    for dt in (1e-3, 5e-4, 2.5e-4):
+        e = _fixed("energy", dt, SMOOTH)
+        for other in diffs:
+            diffs[other].append(np.abs(_fixed(other, dt, SMOOTH) - e).max())
+    for other, d in diffs.items():
+        d = np.array(d)
+        assert d[-1] < 2e-4, (other, d)
+        assert np.all(d[:-1] / d[1:] > 3.5), (other, d)
+
+
+def test_stiff_floor_at_100x_the_explicit_limit():
+    """Fine rod, stiff floor, fixed dt = 100 × the explicit limit 2/ω (ω² the stiffness
+    bound of ``accel`` at first contact): the energy step stays admissible and conserves
+    energy through the bounce; verlet and semi-implicit fail with their clear error."""
+    n, kb, beta = 200, 1e5, 1e-3
+    om2 = 4 * 1.25 * 100.0 * n**2 + 2 * 3 * kb / beta * n
+    dt = 100 * 2 / math.sqrt(om2)
+    over = {"rod.N": n, "floor.kappa_b": kb, "floor.beta": beta, "time.t_end": 0.75,
+            "time.dt": dt}
+    cfg = energy_config(**over, **{"output.diagnostics_interval": 10 * dt})
+    res = rodjit.simulate(cfg)
+    d = res.diagnostics
+    assert res.stats["rejected_steps"] == 0            # fixed steps are never rejected
+    assert d["u_bottom"].min() < -2e-6                 # it did hit the floor
+    assert d["min_strain"].min() > -0.9 and d["u_bottom"].min() > -beta
+    assert res.n_bounces == 1 and 0.5 < res.bounces["restitution"][0] < 1.0
+    assert res.energy_error() < 1e-10
+    assert res.stats["newton_iterations"] > res.stats["steps"]
+    for explicit in ("verlet", "semi-implicit"):
+        with pytest.raises(rodjit.SimulationError, match=r"fixed step time\.dt = .* failed"):
+            rodjit.simulate(cfg.override({"time.integrator": explicit}))
+
+
+def test_adaptive_steps_shrink_in_contact_and_grow_in_flight():
+    """Accuracy-controlled steps: far above the explicit limit in the first free fall,
+    far below it in contact with a stiff floor."""
+    n = 50
+    cfg = energy_config(**{"rod.N": n, "floor.kappa_b": 1e5, "floor.beta": 1e-3,
+                           "time.t_end": 0.6, "time.rtol": 1e-4})
+    run, rec = record_steps(cfg, 500_000)
+    dt, u0 = rec[:, 0], rec[:, 6]
+    om2 = 4 * 1.25 * 100.0 * n**2
+    assert dt[:20].max() > 20 * 2 / math.sqrt(om2)
+    assert np.median(dt[u0 < 0]) < 0.01 * dt[:20].max()
+    assert run.rejected > 0
+
+
+def test_resume_is_bit_identical():
+    cfg = energy_config(**{"rod.N": 10, "rod.mu": 0.2, "time.t_end": 0.9, "time.rtol": 1e-5})
+    one = Run(cfg)
+    one.start(MemorySink())
+    while one.advance(MemorySink()) != L.DONE:
+        pass
+    first = Run(cfg)
+    first.start(MemorySink())
+    first.advance(MemorySink(), max_steps=777)
+    second = Run.from_checkpoint(cfg, first.checkpoint())
+    while second.advance(MemorySink()) != L.DONE:
+        pass
+    np.testing.assert_array_equal(second.state, one.state)
+    np.testing.assert_array_equal(second.sstats, one.sstats)
+    assert second.steps == one.steps and second.dissipated == one.dissipated
+
+
+def test_newton_failure_is_reported_and_shrinks_the_step():
+    """No convergence within max_newton returns NO_CONVERGENCE and counts a failure; the
+    loop's message for it (and for an unmet error estimate) names the cause."""
+    cfg = energy_config(**{"rod.N": 20, "initial.height": 0.0, "initial.velocity": -3.0,
+                           "floor.kappa_b": 1e6, "floor.beta": 1e-3})
+    run = Run(cfg)
+    run.start(MemorySink())
+    u, v, a = run.state
+    out = [np.zeros_like(u) for _ in range(3)]
+    ss = np.zeros(2, np.int64)
+    status = EN.step(run.scheme._replace(max_newton=1), run.system, run.rod, run.floor,
+                     u, v, a, *out, np.zeros_like(run.work), ss, 1e-2)[0]
+    assert status == NO_CONVERGENCE and ss[1] == 1
+    status = EN.step(run.scheme, run.system, run.rod, run.floor, u, v, a, *out,
+                     np.zeros_like(run.work), ss, 1e-2)[0]
+    assert status == INACCURATE                     # converged, but far too inaccurate
+    assert out[0][0] > -1e-3 and np.all(np.diff(out[0]) > 0)
+    run.fail[:] = [NO_CONVERGENCE, 0.1, 0.5, 0, 1e-3]
+    assert "Newton iteration did not converge" in run.failure_message()
+    run.fail[:] = [INACCURATE, 0.1, 7.0, 0, 1e-3]
+    assert "error estimate is 7" in run.failure_message()
+
+
+def test_unknown_integrator_still_rejected():
+    from rodjit.stepping.schemes import make_scheme
+    with pytest.raises(ValueError, match="not available"):
+        make_scheme(type("T", (), {"integrator": "nope"})())
+
+
+_NOJIT = """
+import json, sys, rodjit
+cfg = rodjit.Config().override(json.loads(sys.argv[1]))
+r = rodjit.simulate(cfg)
+print(json.dumps({"u": r.u_final.tolist(), "v": r.v_final.tolist(), "steps": r.stats["steps"],
+                  "newton": r.stats["newton_iterations"]}))
+"""
+
+
+def test_pure_python_path_matches_compiled():
+    """The same small run with NUMBA_DISABLE_JIT=1 (the kernels as plain Python)."""
+    over = {"time.integrator": "energy", "rod.N": 3, "rod.gamma": 0.01, "rod.mu": 0.5,
+            "initial.height": 0.005, "initial.velocity": -1.0, "time.t_end": 0.02,
+            "time.rtol": 1e-4, **QUIET}
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    proc = subprocess.run([sys.executable, "-c", _NOJIT, json.dumps(over)], env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    plain = json.loads(proc.stdout)
+    res = rodjit.simulate(rodjit.Config().override(over))
+    assert plain["steps"] == res.stats["steps"] and plain["newton"] > 0
+    np.testing.assert_allclose(plain["u"], res.u_final, rtol=1e-12, atol=1e-14)
+    np.testing.assert_allclose(plain["v"], res.v_final, rtol=1e-10, atol=1e-12)
