@@ -16,10 +16,19 @@ import os
 from pathlib import Path
 
 import numba
+from numba.core.cpu import CPUTargetOptions
 
 JIT_OPTIONS = {"cache": True, "error_model": "numpy"}
 
 kernel = numba.njit(**JIT_OPTIONS)
+
+# Kernels called on every step of the time loop (the step, its forces and sub-steps, the
+# event and step-size helpers) are also marked for inlining into the loop (LLVM
+# alwaysinline): a step then makes no calls and passes no arrays, which matters for short
+# rods, where the work per step is a few dozen flops (N = 5: ~3x fewer ns per step;
+# benchmarks/bench_scipy.py).  Numba without the option compiles them as plain kernels.
+_CAN_FORCE_INLINE = hasattr(CPUTargetOptions, "forceinline")
+step_kernel = (numba.njit(**JIT_OPTIONS, forceinline=True) if _CAN_FORCE_INLINE else kernel)
 
 # the packages whose modules hold compiled code (a change anywhere here may change a kernel)
 COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")

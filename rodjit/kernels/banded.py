@@ -1,5 +1,5 @@
 """O(N) banded solves used by the implicit sub-steps: symmetric tri- and pentadiagonal."""
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 
 @kernel
@@ -14,7 +14,7 @@ def tridiag_factor(d, off, cp, inv):
         cp[i] = off * inv[i]
 
 
-@kernel
+@step_kernel
 def tridiag_solve(off, cp, inv, rhs, x):
     """Solve with a ``tridiag_factor`` result; ``x`` may alias ``rhs``."""
     n1 = rhs.size

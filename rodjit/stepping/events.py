@@ -7,7 +7,7 @@ two apexes of the centre of mass (w from + to − with no contact active).
 import numpy as np
 
 from . import layout as L
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 
 @kernel
@@ -79,7 +79,7 @@ def open_contact(ev, t, w, u0, ff, emin):
     ev[L.B_NEP] += 1.0
 
 
-@kernel
+@step_kernel
 def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb):
     """Update the bookkeeping for the accepted step (t, t+dt]; write finished episodes
     and bounces into their buffers (the caller guarantees one free row in each).

@@ -11,18 +11,19 @@ steps accepted as it is (a scheme then returns a valid state with INACCURATE).
 """
 import numpy as np
 
+from ..kernels.borrow import borrow
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, energies, worst_segment
 from ..model.laws import value
 from . import layout as L
 from .events import crossing, open_contact, track
 from .schemes import initial, step
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 REJECT_SHRINK = 0.25   # a rejected trial step is retried at a quarter of its size
 EVENT_MIN = 1e-3       # a step that crosses u_0 = 0 beyond this fraction is redone to end there
 
 
-@kernel
+@step_kernel
 def _propose(ctrl, dt_suggest, dt_prev):
     """Next step: the scheme's suggestion, capped by dt_max and by growth over the
     previous proposal (so a step that just recovered from a rejection grows gently)."""
@@ -31,7 +32,7 @@ def _propose(ctrl, dt_suggest, dt_prev):
     return min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
 
 
-@kernel
+@step_kernel
 def _next_target(clock, count):
     target = clock[L.T_END]
     if clock[L.SNAP_DT] > 0.0:
@@ -118,6 +119,23 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
 
     Returns layout.DONE, FULL, PAUSED or FAILED.
     """
+    # Unowned views of the arguments: no atomic reference counting on every step (the
+    # views and calls below would cost ~30 atomic pairs per step; see kernels.borrow).
+    state = borrow(state)
+    trial = borrow(trial)
+    work = borrow(work)
+    sstats = borrow(sstats)
+    clock = borrow(clock)
+    count = borrow(count)
+    ev = borrow(ev)
+    snap_t = borrow(snap_t)
+    snap_step = borrow(snap_step)
+    snap_u = borrow(snap_u)
+    snap_v = borrow(snap_v)
+    diag = borrow(diag)
+    episodes = borrow(episodes)
+    bounces = borrow(bounces)
+    fail = borrow(fail)
     cur = state
     nxt = trial
     swapped = False

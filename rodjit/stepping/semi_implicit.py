@@ -8,11 +8,11 @@ order; stable for dt·ω ≤ 2 with ω from stretch and floor alone, whatever γ
 """
 
 from ..kernels.banded import penta_factor, penta_solve
-from ..kernels.forces import OK, accel, add_beam_term
+from ..kernels.forces import OK, accel, kick, add_beam_term
 from . import workspace as W
 from .stability import explicit_dt
 from .viscous import viscous_sdirk2
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 
 @kernel
@@ -63,7 +63,7 @@ def _beam_midpoint(system, u, v, u2, dt, work):
         u2[i] = u[i] + 0.5 * dt * (vk[i] + v[i])
 
 
-@kernel
+@step_kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
@@ -89,10 +89,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     status, val, emin, fl, om2 = accel(u2, a2, work[W.S], work[W.K], system, rod, floor, False)
     if status != OK:
         return status, val, emin, fl, 0.0, 0.0, diss
-    w = 0.0
-    for i in range(n + 1):
-        v2[i] += hdt * a2[i]
-        w += (h if 0 < i < n else 0.5 * h) * v2[i]
+    w = kick(v2, a2, hdt, h)
     if system.mu > 0.0:
         diss += viscous_sdirk2(v2, v2, hdt, system, work)
     return OK, 0.0, emin, fl, explicit_dt(system, floor, om2, u2[0], v2[0], scheme.cfl,

@@ -1,10 +1,10 @@
 """Step-size suggestion of the explicit schemes: cfl × the stability limit 2/ω."""
 
 from ..model.laws import deriv
-from .._jit import kernel
+from .._jit import step_kernel
 
 
-@kernel
+@step_kernel
 def explicit_dt(system, floor, omega2, u0, v0, cfl, viscous_limit):
     """cfl · 2/ω at the new state, with two refinements:
 

@@ -6,11 +6,11 @@ sub-step.  Symmetric and second order; symplectic for μ = 0.  Stable for dt·ω
 ω² bounded in ``accel``; the viscous limit μ·dt·4/h² ≤ 4·cfl keeps CN from ringing.
 """
 
-from ..kernels.forces import OK, accel
+from ..kernels.forces import OK, accel, kick
 from . import workspace as W
 from .stability import explicit_dt
 from .viscous import viscous_cn
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 
 @kernel
@@ -21,7 +21,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     return status, val, emin, fl, explicit_dt(system, floor, om2, u[0], v[0], scheme.cfl, True)
 
 
-@kernel
+@step_kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
@@ -45,10 +45,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     status, val, emin, fl, om2 = accel(u2, a2, work[W.S], work[W.K], system, rod, floor, True)
     if status != OK:
         return status, val, emin, fl, 0.0, 0.0, diss
-    w = 0.0
-    for i in range(n + 1):
-        v2[i] += hdt * a2[i]
-        w += (h if 0 < i < n else 0.5 * h) * v2[i]
+    w = kick(v2, a2, hdt, h)
     if system.mu > 0.0:
         diss += viscous_cn(v2, v2, hdt, system, work)  # conserves momentum: w unchanged
     return OK, 0.0, emin, fl, explicit_dt(system, floor, om2, u2[0], v2[0], scheme.cfl,

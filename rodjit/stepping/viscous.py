@@ -8,7 +8,7 @@ import math
 
 from ..kernels.banded import tridiag_factor, tridiag_solve
 from . import workspace as W
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 
 @kernel
@@ -23,7 +23,23 @@ def _matrix(d, c, h, n):
     return -c * ih
 
 
-@kernel
+@step_kernel
+def _factored(c, h, n, work):
+    """Factor M + cK into work rows VCP, VINV unless they hold that factorisation already
+    (same c: the two viscous sub-steps of a step, and every step while dt stays the same,
+    e.g. at the viscous step limit); returns the off-diagonal.  A reused factorisation is
+    the one that would be recomputed, bit for bit."""
+    memo = work[W.MEMO]
+    if memo[0] == c:
+        return -c * (1.0 / h)   # = _matrix's off-diagonal
+    d = work[W.VD]
+    off = _matrix(d, c, h, n)
+    tridiag_factor(d, off, work[W.VCP], work[W.VINV])
+    memo[0] = c
+    return off
+
+
+@step_kernel
 def _kinetic_drop(v0, v1, h, n):
     acc = 0.0
     for i in range(n + 1):
@@ -34,7 +50,7 @@ def _kinetic_drop(v0, v1, h, n):
     return max(0.5 * acc, 0.0)
 
 
-@kernel
+@step_kernel
 def viscous_cn(vin, vout, tau, system, work):
     """Crank–Nicolson over ``tau``: symmetric, second order; rings if μτλ ≫ 1, so the
     Verlet step keeps μτ·4/h² ≤ 2·cfl.  ``vout`` may alias ``vin``."""
@@ -42,10 +58,9 @@ def viscous_cn(vin, vout, tau, system, work):
     h = system.h
     ih = 1.0 / h
     c = 0.5 * tau * system.mu
-    d = work[W.VD]
     rhs = work[W.VRHS]
     v0 = work[W.V0]
-    off = _matrix(d, c, h, n)
+    off = _factored(c, h, n, work)
     for i in range(n + 1):
         v0[i] = vin[i]
     # rhs = (M − cK) v0
@@ -57,7 +72,6 @@ def viscous_cn(vin, vout, tau, system, work):
         if i < n:
             kv += v0[i] - v0[i + 1]
         rhs[i] = m * v0[i] - c * kv * ih
-    tridiag_factor(d, off, work[W.VCP], work[W.VINV])
     tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)
     return _kinetic_drop(v0, vout, h, n)
 
@@ -65,7 +79,7 @@ def viscous_cn(vin, vout, tau, system, work):
 GAMMA_SDIRK = 1.0 - 1.0 / math.sqrt(2.0)
 
 
-@kernel
+@step_kernel
 def viscous_sdirk2(vin, vout, tau, system, work):
     """Two-stage, stiffly accurate SDIRK (γ = 1 − 1/√2) over ``tau``: second order and
     L-stable, so stiff viscous modes are damped, never ringing, at any μτ/h².
@@ -74,11 +88,9 @@ def viscous_sdirk2(vin, vout, tau, system, work):
     h = system.h
     gs = GAMMA_SDIRK
     c = gs * tau * system.mu
-    d = work[W.VD]
     rhs = work[W.VRHS]
     v0 = work[W.V0]
-    off = _matrix(d, c, h, n)
-    tridiag_factor(d, off, work[W.VCP], work[W.VINV])
+    off = _factored(c, h, n, work)
     for i in range(n + 1):
         v0[i] = vin[i]
         m = h if 0 < i < n else 0.5 * h

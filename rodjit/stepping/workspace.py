@@ -2,8 +2,8 @@
 S = 0        # segment stresses
 K = 1        # curvatures
 VD = 2       # viscous sub-step: matrix diagonal
-VCP = 3      #   Thomas factor
-VINV = 4     #   1/pivots
+VCP = 3      #   Thomas factor  } kept between calls: the factorisation of M + cK for
+VINV = 4     #   1/pivots       } c = MEMO[0] (see viscous._factored); write them nowhere else
 VRHS = 5     #   right-hand side
 V0 = 6       #   copy of the incoming velocity
 BA0 = 7      # beam sub-step: diagonals of M + c B
@@ -14,4 +14,5 @@ BL2 = 11
 BDINV = 12
 BY = 13      #   u + dt/4 v
 BVK = 14     #   incoming velocity
-WORK_ROWS = 15
+MEMO = 15    # [0]: the c whose viscous factorisation VCP, VINV hold (0: none)
+WORK_ROWS = 16

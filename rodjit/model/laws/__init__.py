@@ -1,16 +1,18 @@
 """Stress laws: the rod's f and the floor's σ_b, each with derivative and primitive.
 
 Adding a law with the same singular structure is one module like ``aiki_kosugi.py``:
-a NamedTuple of parameters, four ``numba.njit`` functions and a ``register(Law(...))``
-call; import it here (or anywhere before the run) and select it with ``rod.law`` /
-``floor.law``.  No kernel changes.
+a NamedTuple of parameters, four ``numba.njit`` functions (a fifth, ``deriv_max``, is an
+optional shortcut for the stiffness bound) and a ``register(Law(...))`` call; import it
+here (or anywhere before the run) and select it with ``rod.law`` / ``floor.law``.  No
+kernel changes.
 """
-from .base import Law, deriv, get_law, law_names, law_of, lower, primitive, register, value
+from .base import (Law, deriv, get_law, law_names, law_of, lower, max_deriv, primitive, register,
+                   value)
 from . import aiki_kosugi
 from .aiki_kosugi import AikiKosugiFloor, AikiKosugiRod
 
 __all__ = [
     "Law", "register", "get_law", "law_names", "law_of",
-    "value", "deriv", "primitive", "lower",
+    "value", "deriv", "primitive", "lower", "max_deriv",
     "AikiKosugiRod", "AikiKosugiFloor", "aiki_kosugi",
 ]

@@ -43,6 +43,15 @@ def rod_deriv(e, p):
 
 
 @kernel
+def rod_deriv_max(lo, hi, p):
+    # f' = κ/2 (1 + 3/(2q⁴)) decreases in ε, so its largest value on [lo, hi] is at lo.
+    # This holds for the floating-point evaluation too (each operation in rod_deriv is
+    # monotone in its argument), so it equals the largest rod_deriv over any strains in
+    # [lo, hi] bit for bit.
+    return rod_deriv(lo, p)
+
+
+@kernel
 def rod_primitive(e, p):
     # κ/2 (ε²/2 + ε/2 + 1/(4q²) − 1/4) = κ ε² (2q² + 2q + 1) / (8q²)  (≥ 0, exact near 0)
     q = 1.0 + e
@@ -98,6 +107,7 @@ ROD = register(
         deriv=rod_deriv,
         primitive=rod_primitive,
         lower=rod_lower,
+        deriv_max=rod_deriv_max,
         description="f(ε) = κ/2 (ε + 1/2 − 1/(2(1+ε)³)), singular as ε ↓ −1",
     )
 )

@@ -15,7 +15,8 @@ from numba.extending import overload
 from . import registered
 from ..._jit import JIT_OPTIONS, kernel
 
-__all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower"]
+__all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower",
+           "max_deriv"]
 
 
 @dataclass(frozen=True)
@@ -27,6 +28,12 @@ class Law:
     its parameters and ``from_config`` builds one from the matching config section.
     ``value``, ``deriv``, ``primitive`` take ``(x, params)``, ``lower`` takes ``(params)``;
     all four are ``numba.njit`` functions.
+
+    ``deriv_max(lo, hi, params)`` (optional, compiled like the others) returns the largest
+    derivative on [lo, hi]; the kernels call it with the smallest and largest segment
+    strain to bound the stiffness, instead of evaluating ``deriv`` on every segment.  Give
+    it when the law allows it exactly (``deriv(lo)`` when the derivative decreases,
+    ``max(deriv(lo), deriv(hi))`` when it is convex); without it the kernels scan.
     """
 
     name: str
@@ -38,6 +45,7 @@ class Law:
     primitive: Callable
     lower: Callable
     description: str = ""
+    deriv_max: Callable | None = None
 
 
 _BY_TYPE: dict[type, Law] = {}
@@ -107,6 +115,18 @@ def lower(p):
     return _BY_TYPE[type(p)].lower(p)
 
 
+def max_deriv(u, ih, lo, hi, p):
+    """Largest derivative (and at least 0) over the segment strains (u_{i+1} − u_i)·ih − 1
+    of u, whose smallest and largest values are lo and hi."""
+    law = _BY_TYPE[type(p)]
+    if law.deriv_max is not None:
+        return max(0.0, law.deriv_max(lo, hi, p))
+    m = 0.0
+    for i in range(u.size - 1):
+        m = max(m, law.deriv((u[i + 1] - u[i]) * ih - 1.0, p))
+    return m
+
+
 @overload(value, jit_options=JIT_OPTIONS)
 def _value_ov(x, p):
     impl = _law_for_type(p).value
@@ -129,3 +149,20 @@ def _primitive_ov(x, p):
 def _lower_ov(p):
     impl = _law_for_type(p).lower
     return lambda p: impl(p)
+
+
+@overload(max_deriv, jit_options=JIT_OPTIONS)
+def _max_deriv_ov(u, ih, lo, hi, p):
+    law = _law_for_type(p)
+    if law.deriv_max is not None:
+        bound = law.deriv_max
+        return lambda u, ih, lo, hi, p: max(0.0, bound(lo, hi, p))
+    d = law.deriv
+
+    def scan(u, ih, lo, hi, p):
+        m = 0.0
+        for i in range(u.size - 1):
+            m = max(m, d((u[i + 1] - u[i]) * ih - 1.0, p))
+        return m
+
+    return scan
