@@ -16,6 +16,7 @@ import os
 from pathlib import Path
 
 import numba
+from numba.core import caching
 from numba.core.cpu import CPUTargetOptions
 
 JIT_OPTIONS = {"cache": True, "error_model": "numpy"}
@@ -34,13 +35,20 @@ step_kernel = (numba.njit(**JIT_OPTIONS, forceinline=True) if _CAN_FORCE_INLINE 
 COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")
 
 
+def _source_dirs(root: Path) -> list[Path]:
+    return sorted({p.parent for p in root.rglob("*.py")})
+
+
 def _cache_dirs(root: Path) -> list[Path]:
-    """Where Numba keeps rodjit's cache files (next to the sources, or NUMBA_CACHE_DIR)."""
+    """Where Numba keeps rodjit's cache files: next to the sources, or in NUMBA_CACHE_DIR
+    one directory per source directory, named by Numba as ``<name>_<sha1 of its path>``."""
     dirs = [p for p in root.rglob("__pycache__") if p.is_dir()]
     if numba.config.CACHE_DIR:
-        mirror = Path(numba.config.CACHE_DIR) / root.resolve().relative_to(root.resolve().anchor)
-        if mirror.is_dir():
-            dirs.append(mirror)
+        for d in _source_dirs(root):
+            sub = caching._CacheLocator.get_suitable_cache_subpath(str(d / "__init__.py"))
+            p = Path(numba.config.CACHE_DIR) / sub
+            if p.is_dir():
+                dirs.append(p)
     return dirs
 
 

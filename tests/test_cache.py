@@ -1,0 +1,51 @@
+"""Compiled code is cached on disk: a second process starts without compiling.
+
+The test runs fresh interpreters against its own empty NUMBA_CACHE_DIR, so it neither
+depends on nor disturbs the cache next to the sources.  (benchmarks/bench_cache.py times
+the same thing; tests/test_cache_foreign_law.py covers an index holding a foreign law.)
+"""
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+# One short run per integrator, then the cache statistics of the kernels Python calls
+# (``start`` and ``advance`` contain every other kernel of a run, inlined or linked).
+PROBE = textwrap.dedent("""
+    import json, sys
+    import rodjit
+    from rodjit.stepping import loop
+    for integ in sys.argv[1:]:
+        cfg = rodjit.Config().override({"time.integrator": integ, "time.t_end": 0.05})
+        rodjit.simulate(cfg)
+    stats = {name: {"hits": sum(f.stats.cache_hits.values()),
+                    "misses": sum(f.stats.cache_misses.values())}
+             for name, f in (("start", loop.start), ("advance", loop.advance))}
+    print(json.dumps(stats))
+""")
+
+
+def _probe(cache_dir, *args):
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    out = subprocess.run([sys.executable, "-c", PROBE, *args], env=env, capture_output=True,
+                         text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_a_second_process_loads_every_kernel_from_the_cache(tmp_path):
+    cold = _probe(tmp_path, "verlet", "semi-implicit")
+    assert all(s["misses"] == 2 and s["hits"] == 0 for s in cold.values()), cold
+    warm = _probe(tmp_path, "verlet", "semi-implicit")
+    assert all(s["misses"] == 0 and s["hits"] == 2 for s in warm.values()), warm
+    # the stale-cache guard finds these files (Numba names the directories
+    # <dir>_<sha1 of its path> inside NUMBA_CACHE_DIR)
+    code = ("import rodjit._jit as j, pathlib; root = pathlib.Path(j.__file__).resolve().parent; "
+            "print(sum(len(list(d.glob('*.nbi'))) for d in j._cache_dirs(root) "
+            f"if str(d).startswith({str(tmp_path)!r})))")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    found = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                           text=True, check=True).stdout
+    assert int(found) >= 10
