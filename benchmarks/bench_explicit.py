@@ -1,0 +1,171 @@
+"""Explicit step throughput at N = 1000 against the C speed limit (issue 2, target ≤ 1.25×).
+
+The anchor ``limit.c`` (../shared/bench/limit.c) is compiled with ``gcc -O3 -march=native``
+and run here, interleaved with rodjit, so both see the same machine load; each figure is
+the best of ``--repeat`` runs, and every ratio divides two numbers from this run.
+
+Same problem on both sides: N = 1000, κ = 100, g = −1, κ_b = 100, β = 0.05, the rod at
+rest with its bottom at 0.5, 20 000 steps of dt = 0.5 h/11.18 (≈ cfl 0.5 of the stability
+limit): it falls without touching the floor.  The C loop is a bare fused velocity-Verlet
+with a fixed step and μ = 0.  rodjit is measured through its real stepping path, ``Run`` /
+``rodjit.simulate`` → the compiled ``advance`` (event tracking, admissibility checks and
+stiffness bound every step, output landing), with outputs rare (t0 and t_end only):
+
+* ``fixed``: time.dt = the C step (like for like);
+* ``adaptive``: time.cfl = 0.5, the step from the stiffness bound every step (≈ the C step);
+* ``adaptive, default cfl``: time.cfl = 0.05, the default (same work per step);
+* context rows, not the target: the bare ``verlet.step`` in a compiled loop (no loop
+  bookkeeping), a bouncing run (contact and events), and γ = 1e-3 against ``limit`` with γ.
+
+    python benchmarks/bench_explicit.py [--repeat 7] [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+import numba
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _util  # noqa: E402
+
+import rodjit  # noqa: E402
+from rodjit.stepping import verlet  # noqa: E402
+from rodjit.stepping.schemes import Verlet  # noqa: E402
+
+try:
+    from rodjit.kernels.borrow import borrow
+except ImportError:        # older rodjit: plain arrays
+    @numba.njit
+    def borrow(a):
+        return a
+
+N = 1000
+STEPS = 20_000
+C_WAVE = 11.18                      # limit.c's wave-speed constant: dt = 0.5 h / 11.18
+TARGET = 1.25
+
+
+def base_config(steps=STEPS, gamma=0.0):
+    h = 1.0 / N
+    dt = 0.5 * h / C_WAVE
+    if gamma > 0:
+        dt = min(dt, 0.25 * h * h / gamma ** 0.5)
+    t_end = steps * dt
+    cfg = rodjit.Config().override({
+        "rod.N": N, "rod.kappa": 100.0, "rod.gamma": gamma, "floor.kappa_b": 100.0,
+        "floor.beta": 0.05, "gravity.g": -1.0, "initial.height": 0.5,
+        "time.t_end": t_end, "output.snapshot_interval": t_end,
+        "output.diagnostics_interval": 0.0})
+    return cfg, dt
+
+
+def rodjit_run(cfg):
+    """ns per node-step of the compiled stepping (compile time excluded) and the result."""
+    res = rodjit.simulate(cfg)
+    st = res.stats
+    return st["run_time"] * 1e9 / (st["steps"] * (cfg.rod.N + 1)), res
+
+
+@numba.njit   # not cached: it is compiled against whichever rodjit is imported
+def _bare_loop(scheme, system, rod, floor, state, trial, work, sstats, dt, pairs):
+    state = borrow(state)
+    trial = borrow(trial)
+    work = borrow(work)
+    sstats = borrow(sstats)
+    u, v, a = state[0], state[1], state[2]
+    u2, v2, a2 = trial[0], trial[1], trial[2]
+    bad = 0
+    for _ in range(pairs):
+        r = verlet.step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)
+        bad += r[0]
+        r = verlet.step(scheme, system, rod, floor, u2, v2, a2, u, v, a, work, sstats, dt)
+        bad += r[0]
+    return bad
+
+
+def bare_step(cfg, dt, steps):
+    """ns per node-step of verlet.step alone, called back to back in a compiled loop."""
+    from rodjit.driver.run import Run
+    import time
+    run = Run(cfg)
+    verlet.initial(run.scheme, run.system, run.rod, run.floor, run.state[0], run.state[1],
+                   run.state[2], run.work)
+    args = (Verlet(run.scheme.cfl), run.system, run.rod, run.floor, run.state.copy(),
+            run.trial.copy(), run.work, run.sstats, dt)
+    _bare_loop(*args, 1)                           # compile (or load) outside the timing
+    t0 = time.perf_counter()
+    bad = _bare_loop(*args, steps // 2)
+    elapsed = time.perf_counter() - t0
+    assert bad == 0
+    return elapsed * 1e9 / ((steps // 2) * 2 * (cfg.rod.N + 1))
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=7, help="repetitions (best is kept)")
+    ap.add_argument("--quick", action="store_true", help="fewer steps and repetitions")
+    args = ap.parse_args(argv)
+    steps = 4000 if args.quick else STEPS
+    repeat = 3 if args.quick else args.repeat
+
+    _util.header("explicit step throughput, N = 1000, vs C (limit.c)")
+    cfg, dt = base_config(steps)
+    cfg_g, dt_g = base_config(steps // 4, gamma=1e-3)
+    variants = {
+        "fixed": cfg.override({"time.dt": dt}),
+        "adaptive": cfg.override({"time.cfl": 0.5}),
+        "adaptive, default cfl": cfg.override({"time.cfl": 0.05,
+                                               "time.t_end": cfg.time.t_end / 10}),
+        "bouncing (contact, events)": cfg.override({
+            "time.cfl": 0.5, "initial.height": 0.02, "initial.velocity": -1.0,
+            "floor.kappa_b": 1000.0, "time.t_end": 4 * cfg.time.t_end}),
+        "gamma=1e-3, fixed": cfg_g.override({"time.dt": dt_g}),
+    }
+    with tempfile.TemporaryDirectory() as tmp:
+        c = _util.build_limit(Path(tmp))
+        # warm up: compile or load every kernel, check the runs
+        for name, v in variants.items():
+            _, res = rodjit_run(v.override({"time.t_end": v.time.t_end / 20}))
+        _, res = rodjit_run(variants["fixed"])
+        assert res.stats["steps"] == steps and res.u_final[0] > 0 and res.episodes["t_start"].size == 0
+        _, res = rodjit_run(variants["bouncing (contact, events)"])
+        bounce_info = {"episodes": int(res.episodes["t_start"].size), "bounces": res.n_bounces}
+        times = {k: [] for k in ["C", "C gamma=1e-3", "bare verlet.step", *variants]}
+        for _ in range(repeat):
+            times["C"].append(_util.run_limit(c["exe"], N, steps)["ns_per_node_step"])
+            times["C gamma=1e-3"].append(
+                _util.run_limit(c["exe"], N, steps // 4, 1e-3)["ns_per_node_step"])
+            for name, v in variants.items():
+                times[name].append(rodjit_run(v)[0])
+            times["bare verlet.step"].append(bare_step(variants["fixed"], dt, steps))
+    best = {k: _util.best(v) for k, v in times.items()}
+    rows = []
+    spec = [("fixed", "C", True), ("adaptive", "C", True), ("adaptive, default cfl", "C", True),
+            ("bare verlet.step", "C", False), ("bouncing (contact, events)", "C", False),
+            ("gamma=1e-3, fixed", "C gamma=1e-3", False)]
+    results = []
+    for name, ref, is_target in spec:
+        ratio = best[name] / best[ref]
+        ok = ("yes" if ratio <= TARGET else "NO") if is_target else "(context)"
+        rows.append([f"rodjit {name}", best[name], ref, best[ref], ratio,
+                     f"<= {TARGET}" if is_target else "-", ok])
+        results.append({"variant": name, "ns_per_node_step": best[name], "reference": ref,
+                        "reference_ns_per_node_step": best[ref], "ratio": ratio,
+                        "target": TARGET if is_target else None,
+                        "meets_target": (ratio <= TARGET) if is_target else None})
+    print(_util.table(rows, ["rodjit path", "ns/node-step", "vs", "C ns/node-step", "ratio",
+                             "target", "met"]))
+    print(f"   best of {repeat}; C: {c['compiler']} {c['flags']} ({c['source']})")
+    path = _util.save("explicit", {
+        "n": N, "steps": steps, "dt": dt, "repeat": repeat, "c": {k: c[k] for k in c if k != "exe"},
+        "bouncing_run": bounce_info, "results": results,
+        "all_times_ns_per_node_step": times})
+    print(f"   -> {path}")
+    return results
+
+
+if __name__ == "__main__":
+    main()
