@@ -1,14 +1,17 @@
-"""Run every benchmark of issue 2 and print a one-line verdict per target.
+"""Run the benchmarks of issue 2 (solver speed) and print a one-line verdict per target.
 
-    python benchmarks/run_all.py [--quick]
+    python benchmarks/run_all.py [--quick] [--all]
 
 Each script prints its own table and writes benchmarks/results/<name>.json; this summary
 is written to benchmarks/results/summary.json.  The scripts are independent: run one
-alone with ``python benchmarks/bench_<name>.py``.
+alone with ``python benchmarks/bench_<name>.py``.  ``--all`` then also runs the other
+benchmarks in this directory (HDF5 streaming, start-up of ``rodjit run``, accuracy against
+cost, the energy integrator; ~10 min), each as its own process with its defaults.
 """
 from __future__ import annotations
 
 import argparse
+import subprocess
 import sys
 from pathlib import Path
 
@@ -20,9 +23,15 @@ import bench_scipy  # noqa: E402
 import bench_semi_implicit  # noqa: E402
 
 
+# the other benchmarks in this directory (issues 3 and 5), run as they are
+OTHERS = ("streaming_overhead.py", "startup.py", "bench_accuracy.py", "bench_energy.py")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller runs (a smoke test)")
+    ap.add_argument("--all", action="store_true",
+                    help="also run " + ", ".join(OTHERS) + " afterwards")
     args = ap.parse_args(argv)
     q = ["--quick"] if args.quick else []
     # the cache benchmark first: it uses fresh processes and its own cache directories,
@@ -56,6 +65,11 @@ def main(argv=None):
     path = _util.save("summary", {"quick": args.quick, "rows": [
         dict(zip(["benchmark", "case", "measured", "target", "met"], r)) for r in rows]})
     print(f"   -> {path}")
+    if args.all:
+        for script in OTHERS:
+            print(f"\n== {script} ==", flush=True)
+            subprocess.run([sys.executable, str(Path(__file__).resolve().parent / script)],
+                           check=False)
 
 
 if __name__ == "__main__":
