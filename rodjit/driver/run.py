@@ -11,16 +11,17 @@ import time
 
 import numpy as np
 
-from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE
+from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
-from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
+from ..stepping.schemes import SCHEME_STATS, gap_control, make_scheme, work_rows
 
 __all__ = ["Run", "SimulationError", "Sink"]
 
+GAP_MAX = 0.5     # cap of the barrier-gap fraction (time.cfl sets it below that)
 GROWTH = 1.5      # per-step growth limit of the proposed step
 NODE_STEPS_PER_CALL = 20_000_000   # ~10–100 ms of work between returns to Python
 
@@ -68,6 +69,7 @@ class Run:
             dt_min=float(tc.dt_min),
             dt_fixed=float(tc.dt) if tc.dt is not None else 0.0,
             growth=GROWTH,
+            gap=min(float(tc.cfl), GAP_MAX) if gap_control(self.scheme) else 0.0,
         )
         n1 = config.rod.N + 1
         u, v = initial_state(config, u0, v0)
@@ -263,6 +265,10 @@ class Run:
         elif code == NO_CONVERGENCE:
             why = (f"the implicit step's Newton iteration did not converge (last update "
                    f"{f[L.F_VALUE]:.3g})")
+        elif code == TOO_CLOSE:
+            why = (f"the state approaches a barrier (smallest strain {f[L.F_VALUE]:.6g}, "
+                   f"bottom height limit -beta = {lower(self.floor):g}) faster than steps "
+                   f"can resolve")
         elif code == INACCURATE:
             why = (f"the local error estimate is {f[L.F_VALUE]:.3g} × the tolerance "
                    f"(time.rtol = {self.config.time.rtol:g}, time.atol = "

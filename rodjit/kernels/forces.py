@@ -24,6 +24,7 @@ NON_FINITE = 3    # a non-finite value appeared
 INACCURATE = 4    # a valid trial state whose error estimate exceeds the tolerance: the loop
                   # retries with the scheme's dt_suggest (and accepts it under fixed steps)
 NO_CONVERGENCE = 5  # an implicit step's nonlinear solve did not converge: a shorter step
+TOO_CLOSE = 6     # a valid step that closed too much of the gap to a barrier: a shorter step
 
 
 @kernel

@@ -69,7 +69,7 @@ def _names(size: int, mapping: dict[int, str]) -> tuple[str, ...]:
 CLOCK_NAMES = _names(L.CLOCK_SIZE, {
     L.T: "t", L.DT: "dt", L.T_END: "t_end", L.DISSIPATED: "dissipated", L.E0: "energy0",
     L.SNAP_DT: "snapshot_interval", L.DIAG_DT: "diagnostics_interval", L.T0: "t0",
-    L.W: "cm_velocity", L.TOL: "time_tolerance"})
+    L.W: "cm_velocity", L.TOL: "time_tolerance", L.EMIN: "min_strain"})
 COUNT_NAMES = _names(L.COUNT_SIZE, {
     L.STEP: "step", L.REJECTED: "rejected", L.K_SNAP: "next_snapshot_index",
     L.K_DIAG: "next_diagnostics_index", L.N_SNAP: "buffered_snapshots",

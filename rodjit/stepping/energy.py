@@ -53,7 +53,10 @@ from ..model.laws import deriv, lower, primitive
 from .schemes import register_scheme
 from .._jit import kernel
 
-__all__ = ["Energy", "initial", "step", "WORK_ROWS"]
+__all__ = ["Energy", "initial", "step", "WORK_ROWS", "GAP_CONTROL"]
+
+# admissible for any step the Newton solve accepts: no barrier-gap limit on its steps
+GAP_CONTROL = False
 
 
 NEWTON_TOL = 1e-10    # converged when the update is below this × |uⁿ⁺¹ − uⁿ| (see _newton)

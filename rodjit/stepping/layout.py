@@ -17,7 +17,8 @@ DIAG_DT = 6      # diagnostics interval (0: none)
 T0 = 7           # origin of the output grids t0 + k·Δ
 W = 8            # centre-of-mass velocity of the current state
 TOL = 9          # two output times closer than this coincide
-CLOCK_SIZE = 10
+EMIN = 10        # smallest segment strain of the current state
+CLOCK_SIZE = 11
 
 # ---- count: int64 -----------------------------------------------------------------------
 STEP = 0
@@ -77,9 +78,11 @@ BOUNCE_COLUMNS = (
 
 
 class Control(NamedTuple):
-    """Step-size control: caps, fixed step (0: adaptive), growth limit."""
+    """Step-size control: caps, fixed step (0: adaptive), growth and barrier-gap limits."""
 
     dt_max: float     # inf when unset
     dt_min: float
     dt_fixed: float   # > 0: fixed steps
     growth: float     # a proposal grows at most by this factor per step
+    gap: float        # a step closes at most this fraction of the distance to a barrier
+                      # (ε = −1, u_0 = −β); 0: off (schemes admissible by construction)

@@ -12,8 +12,8 @@ steps accepted as it is (a scheme then returns a valid state with INACCURATE).
 import numpy as np
 
 from ..kernels.borrow import borrow
-from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, energies, worst_segment
-from ..model.laws import value
+from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
+from ..model.laws import lower, value
 from . import layout as L
 from .events import crossing, open_contact, track
 from .schemes import initial, step
@@ -30,6 +30,15 @@ def _propose(ctrl, dt_suggest, dt_prev):
     if ctrl.dt_fixed > 0.0:
         return ctrl.dt_fixed
     return min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
+
+
+@step_kernel
+def _gap_limit(ctrl, dt, g_old, g_new):
+    """Largest next step that closes at most ``ctrl.gap`` of the gap ``g_new`` to a barrier,
+    at the closing rate of the last step (no limit while the gap opens)."""
+    if g_new >= g_old:
+        return np.inf
+    return ctrl.gap * g_new * dt / (g_old - g_new)
 
 
 @step_kernel
@@ -104,6 +113,7 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     clock[L.E0] = ke + st + be + fe + ge
     clock[L.W] = w
     clock[L.DT] = _propose(ctrl, dts, np.inf)
+    clock[L.EMIN] = emin
     if u[0] < 0.0:
         open_contact(ev, clock[L.T], w, u[0], ff, emin)
     _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
@@ -147,6 +157,9 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
     w = clock[L.W]
     refined = False
     fixed = ctrl.dt_fixed > 0.0
+    emin_cur = clock[L.EMIN]
+    rod_lo = lower(rod)
+    floor_lo = lower(floor)
     cap_s = snap_t.size
     cap_d = diag.shape[0]
     cap_e = episodes.shape[0]
@@ -199,6 +212,16 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
                 refined = True
                 continue
         refined = False
+        if status == OK and ctrl.gap > 0.0 and not fixed:
+            # The barriers stiffen like (gap)^-4: an explicit step sized by the stiffness at
+            # its start can close most of a gap and leave a state no step can recover from.
+            # Approach ε = −1 and u_0 = −β geometrically: reject a step that closed more
+            # than twice the allowed fraction of either gap.
+            keep = 1.0 - min(2.0 * ctrl.gap, 0.9)
+            if (emin - rod_lo < keep * (emin_cur - rod_lo)
+                    or u2[0] - floor_lo < keep * (u[0] - floor_lo)):
+                status = TOO_CLOSE
+                val = emin
         if status != OK:
             count[L.REJECTED] += 1
             retry = dts if status == INACCURATE else REJECT_SHRINK * dt
@@ -223,6 +246,10 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         count[L.STEP] += 1
         taken += 1
         dtp = _propose(ctrl, dts, dtp)
+        if ctrl.gap > 0.0 and not fixed:
+            dtp = min(dtp, _gap_limit(ctrl, dt, emin_cur - rod_lo, emin - rod_lo),
+                      _gap_limit(ctrl, dt, u[0] - floor_lo, u2[0] - floor_lo))
+        emin_cur = emin
         if land:
             clock[L.DISSIPATED] = diss
             _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
@@ -231,6 +258,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
     clock[L.DT] = dtp
     clock[L.DISSIPATED] = diss
     clock[L.W] = w
+    clock[L.EMIN] = emin_cur
     if swapped:
         state[:, :] = cur
     return code

@@ -11,7 +11,7 @@ where ``step`` never modifies its inputs (a rejected trial costs nothing to undo
 ``sstats`` is an int64 array for scheme-specific counters.  Besides the failure codes of
 ``kernels.forces``, ``step`` may return INACCURATE (valid state, error estimate too large:
 the loop retries with ``dt_suggest``) and NO_CONVERGENCE (a shorter step is tried).  Optional
-module attribute: ``WORK_ROWS`` (scratch rows).
+module attributes: ``WORK_ROWS`` (scratch rows), ``GAP_CONTROL`` (default True).
 """
 from __future__ import annotations
 
@@ -91,6 +91,13 @@ def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     impl = _module_for(scheme).step
     return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(
         scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)
+
+
+def gap_control(scheme) -> bool:
+    """Whether the loop limits how fast steps approach the barriers ε = −1 and u_0 = −β
+    (``Control.gap``).  Explicit schemes need it; a scheme that is admissible by
+    construction (``energy``) sets ``GAP_CONTROL = False`` in its module."""
+    return bool(getattr(_MODULES[type(scheme)], "GAP_CONTROL", True))
 
 
 def work_rows(scheme) -> int:
