@@ -61,19 +61,19 @@ class MemorySink(Sink):
         self._diag, self._ep, self._b = [], [], []
 
     def snapshots(self, t, step, u, v):
-        self._t.append(t)
-        self._step.append(step)
-        self._u.append(u)
-        self._v.append(v)
+        self._t.append(t.copy())
+        self._step.append(step.copy())
+        self._u.append(u.copy())
+        self._v.append(v.copy())
 
     def diagnostics(self, rows):
-        self._diag.append(rows)
+        self._diag.append(rows.copy())
 
     def episodes(self, rows):
-        self._ep.append(rows)
+        self._ep.append(rows.copy())
 
     def bounces(self, rows):
-        self._b.append(rows)
+        self._b.append(rows.copy())
 
     def result(self, run, status="completed", message="") -> Result:
         n1 = run.system.n + 1

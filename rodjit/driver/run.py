@@ -35,7 +35,10 @@ class SimulationError(RuntimeError):
 
 
 class Sink:
-    """Receives drained output blocks; subclasses store them (memory, HDF5)."""
+    """Receives drained output blocks; subclasses store them (memory, HDF5).
+
+    The arrays are views of the run's buffers, valid only during the call (the buffers are
+    refilled next): a sink that keeps data must copy it."""
 
     def snapshots(self, t, step, u, v):
         pass
@@ -205,21 +208,20 @@ class Run:
         c = self.count
         if c[L.N_SNAP]:
             k = c[L.N_SNAP]
-            sink.snapshots(self.snap_t[:k].copy(), self.snap_step[:k].copy(),
-                           self.snap_u[:k].copy(), self.snap_v[:k].copy())
+            sink.snapshots(self.snap_t[:k], self.snap_step[:k], self.snap_u[:k], self.snap_v[:k])
             c[L.N_SNAP] = 0
         if c[L.N_DIAG]:
-            rows = self.diag[:c[L.N_DIAG]].copy()
+            rows = self.diag[:c[L.N_DIAG]]
             if not np.all(np.isfinite(rows)):
                 raise SimulationError("a non-finite diagnostic value was computed; refusing "
                                       "to write it")
             sink.diagnostics(rows)
             c[L.N_DIAG] = 0
         if c[L.N_EP]:
-            sink.episodes(self.episodes[:c[L.N_EP]].copy())
+            sink.episodes(self.episodes[:c[L.N_EP]])
             c[L.N_EP] = 0
         if c[L.N_BOUNCE]:
-            sink.bounces(self.bounces[:c[L.N_BOUNCE]].copy())
+            sink.bounces(self.bounces[:c[L.N_BOUNCE]])
             c[L.N_BOUNCE] = 0
 
     def pending_bounce(self):
