@@ -5,7 +5,7 @@ from scipy.linalg import expm
 
 from rodjit.model.system import RodSystem, masses
 from rodjit.stepping import workspace as W
-from rodjit.stepping.semi_implicit import _beam_midpoint
+from rodjit.stepping.beam import beam_midpoint
 from rodjit.stepping.viscous import viscous_cn, viscous_sdirk2
 
 
@@ -75,7 +75,7 @@ def test_beam_midpoint_conserves_its_quadratic_energy_and_momentum(rng):
     energy = lambda u, v: 0.5 * v @ M @ v + 0.5 * gamma * u @ B @ u
     e0, p0 = energy(u, v), masses(n) @ v
     v1, u1 = v.copy(), np.zeros(n + 1)
-    _beam_midpoint(system, u, v1, u1, dt, work)
+    beam_midpoint(system, u, v1, u1, dt, work)
     assert energy(u1, v1) == pytest.approx(e0, rel=1e-13)
     assert masses(n) @ v1 == pytest.approx(p0, rel=1e-13, abs=1e-14)
     # it is the implicit midpoint rule: M(v1 − v0) = −dt γ B (u0 + u1)/2
