@@ -1,19 +1,29 @@
-"""A law registered by one process (a user's script) must not break the compiled-code cache
-for processes that do not have it."""
+"""Laws registered by other processes (users' scripts) must never break the compiled-code
+cache nor be mistaken for one another there."""
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+HERE = Path(__file__).parent
+RUN = ("import rodjit; r = rodjit.simulate(rodjit.Config().override("
+       "{'rod.law': %r, 'time.t_end': 0.05})); print(r.u_final.tolist())")
 
-def test_cache_index_with_a_foreign_law_still_loads(tmp_path):
-    # the law of tests/custom_law.py, importable only from tmp_path under another name
-    shutil.copy(Path(__file__).with_name("custom_law.py"), tmp_path / "throwaway_law.py")
-    run = ("import rodjit; rodjit.simulate(rodjit.Config().override("
-           "{'rod.law': %r, 'time.t_end': 0.05}))")
-    subprocess.run([sys.executable, "-c", "import throwaway_law; " + run % "log-test"],
-                   cwd=tmp_path, check=True, capture_output=True, timeout=600)
-    # a process without that module: the cache index names a law it cannot import
-    out = subprocess.run([sys.executable, "-c", run % "aiki-kosugi"], cwd="/",
-                         capture_output=True, text=True, timeout=600)
+
+def python(code, cwd):
+    out = subprocess.run([sys.executable, "-c", code], cwd=cwd, capture_output=True,
+                         text=True, timeout=600)
     assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_foreign_and_same_named_laws_in_the_cache(tmp_path):
+    # 1. "log-test" from tests/custom_law.py fills the cache
+    first = python("import custom_law; " + RUN % "log-test", HERE)
+    # 2. another module registers a law under the same name: its own compiled code is used
+    #    (not the cached code of the first, which names a module this process lacks)
+    shutil.copy(HERE / "custom_law.py", tmp_path / "throwaway_law.py")
+    second = python("import throwaway_law; " + RUN % "log-test", tmp_path)
+    assert first == second          # same formulas, so the same numbers
+    # 3. a process with neither module: the index names laws it cannot import
+    python(RUN % "aiki-kosugi", "/")

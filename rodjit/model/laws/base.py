@@ -7,6 +7,7 @@ one compilation per law, parameter values stay run-time arguments, on-disk cache
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -56,16 +57,39 @@ def register(law: Law) -> Law:
     """Make a law available to the kernels and to ``rod.law`` / ``floor.law``."""
     if law.kind not in ("rod", "floor"):
         raise ValueError(f"law kind must be 'rod' or 'floor', not {law.kind!r}")
-    if law.params in _BY_TYPE and _BY_TYPE[law.params] is not law:
-        raise ValueError(f"parameter type {law.params.__name__} already belongs to another law")
-    # name the parameter class through the `registered` namespace (see its docstring)
-    alias = f"{law.kind}_{''.join(c if c.isalnum() else '_' for c in law.name)}"
+    if law.params in _BY_TYPE:
+        if _BY_TYPE[law.params] is not law:
+            raise ValueError(f"parameter type {law.params.__name__} already belongs to "
+                             f"another law")
+        return law
+    # name the parameter class through the `registered` namespace (see its docstring), by
+    # a name that identifies the implementation: compiled code cached for one law must
+    # never be loaded for another registered under the same name elsewhere
+    alias = (f"{law.kind}_{''.join(c if c.isalnum() else '_' for c in law.name)}_"
+             f"{_fingerprint(law)}")
     law.params.__module__ = registered.__name__
     law.params.__qualname__ = alias
     setattr(registered, alias, law.params)
     _BY_TYPE[law.params] = law
     _BY_NAME[(law.kind, law.name)] = law
     return law
+
+
+def _fingerprint(law: Law) -> str:
+    """Hash of where and how the law is defined: module, names and code of its parts."""
+    h = hashlib.sha1()
+    parts = [law.params] + [getattr(f, "py_func", f) for f in
+                            (law.value, law.deriv, law.primitive, law.lower)]
+    for obj in parts:
+        h.update(f"{obj.__module__}.{obj.__qualname__}".encode())
+        code = getattr(obj, "__code__", None)
+        if code is not None:
+            h.update(code.co_code)
+            h.update(repr(code.co_consts).encode())
+            h.update(repr(code.co_names).encode())
+        else:
+            h.update(repr(getattr(obj, "_fields", ())).encode())
+    return h.hexdigest()[:12]
 
 
 def get_law(kind: str, name: str) -> Law:
