@@ -24,7 +24,8 @@ import bench_semi_implicit  # noqa: E402
 
 
 # the other benchmarks in this directory (issues 3 and 5), run as they are
-OTHERS = ("streaming_overhead.py", "startup.py", "bench_accuracy.py", "bench_energy.py")
+OTHERS = ("streaming_overhead.py", "startup.py", "bench_accuracy.py", "bench_energy.py",
+          "bench_sweep.py")
 
 
 def main(argv=None):

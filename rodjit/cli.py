@@ -1,10 +1,11 @@
 """The ``rodjit`` command: a thin layer over ``run_to_file``, ``resume_file``, the summary
 and the plots.
 
-``info`` and ``plot`` dispatch on a file's ``rodjit_kind`` root attribute through the
-``INFO`` and ``PLOT`` tables, so another kind of file (a sweep) plugs in with one entry.
-Exit codes: 0 done, 1 the run failed, 2 usage or configuration error (nothing written),
-130/143 interrupted by SIGINT/SIGTERM (checkpoint written).
+``info`` and ``plot`` dispatch on a file's ``rodjit_kind`` root attribute (``run`` or
+``sweep``): ``INFO`` maps each kind to its report, ``plot`` checks that the figure asked for
+belongs to the file's kind.  Exit codes: 0 done, 1 the run failed (or a sweep point did),
+2 usage or configuration error (nothing written), 130/143 interrupted by SIGINT/SIGTERM
+(checkpoint written).
 """
 from __future__ import annotations
 
@@ -190,6 +191,148 @@ def _close(progress) -> None:
         progress.close()
 
 
+# ---- rodjit sweep -------------------------------------------------------------------------
+class _SweepProgress:
+    """A one-line progress bar on stderr: points done / total, failures, time left."""
+
+    WIDTH = 24
+
+    def __init__(self):
+        self.last = 0.0
+        self.shown = False
+
+    def __call__(self, p) -> None:
+        now = time.monotonic()
+        if now - self.last < 0.1 and p.done < p.total:
+            return
+        self.last = now
+        frac = p.done / p.total if p.total else 1.0
+        fill = int(round(frac * self.WIDTH))
+        eta = "-" if p.eta != p.eta else _duration(p.eta)
+        line = (f"\r  {p.done}/{p.total} points [{'#' * fill}{'.' * (self.WIDTH - fill)}] "
+                f"{100 * frac:3.0f}%  {p.failed} failed  {_duration(p.elapsed)} elapsed, "
+                f"{eta} left ")
+        click.echo(line, err=True, nl=False)
+        self.shown = True
+
+    def close(self) -> None:
+        if self.shown:
+            click.echo("\r" + " " * 100 + "\r", err=True, nl=False)
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(round(seconds))
+    h, rem = divmod(seconds, 3600)
+    m, s = divmod(rem, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+
+
+def _sweep_command(config, output, grids, sets, jobs, scheduler, save_runs, resume, overwrite,
+                   quiet) -> str:
+    words = ["rodjit", "sweep"]
+    if config:
+        words.append(config)
+    for item in grids:
+        words += ["--grid", item]
+    for item in sets:
+        words += ["--set", item]
+    for flag, value in (("-o", output), ("--jobs", jobs), ("--scheduler", scheduler),
+                        ("--save-runs", save_runs)):
+        if value is not None:
+            words += [flag, str(value)]
+    words += [flag for flag, on in (("--resume", resume), ("--overwrite", overwrite),
+                                    ("--quiet", quiet)) if on]
+    return shlex.join(words)
+
+
+@main.command("sweep")
+@click.argument("config", required=False, metavar="[CONFIG.toml | PRESET]")
+@click.option("--grid", "grids", multiple=True, metavar="KEY=VALUES",
+              help="A swept key and its values: a list (rod.mu=0,1,10,100), "
+                   "linspace(a,b,n) or logspace(a,b,n) (10^a to 10^b); repeat for more "
+                   "keys (the grid is their Cartesian product).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Sweep file to write [default: PRESET_sweep.h5, CONFIG_sweep.h5 or "
+                   "sweep.h5].")
+@click.option("-j", "--jobs", type=int, help="Worker processes [default: every core].")
+@click.option("--scheduler", metavar="local|tcp://HOST:PORT",
+              help="Run the points on Dask: 'local' starts a LocalCluster of --jobs workers, "
+                   "tcp://HOST:PORT uses an existing cluster [default: a local process pool; "
+                   "also 'inline': this process].")
+@click.option("--save-runs", type=click.Path(file_okay=False),
+              help="Also write one full run file per point into this directory.")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="Override a key of the base configuration (repeatable).")
+@click.option("--resume", is_flag=True, help="Run only the points of the sweep file that are "
+                                             "missing or failed.")
+@click.option("--overwrite", is_flag=True, help="Replace an existing sweep file (and run "
+                                                "files in --save-runs).")
+@click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
+                  quiet):
+    """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
+    core (or a Dask cluster), into one sweep file with a summary row per point.
+
+    Exit codes: 0 every point completed, 1 some points failed (the file lists them; --resume
+    reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
+    (every finished point is kept; --resume continues).
+    """
+    from .sweep import SweepInterrupted, sweep
+    from .sweep.grid import parse_grid_option
+    from .driver.files import OutputExists
+
+    command = _sweep_command(config, output, grids, sets, jobs, scheduler, save_runs, resume,
+                             overwrite, quiet)
+    progress = None if quiet or not sys.stderr.isatty() else _SweepProgress()
+    try:
+        if resume:
+            if overwrite:
+                raise ValueError("--overwrite cannot be used with --resume")
+            if config and Path(config).suffix == ".h5":
+                if output and output != config:
+                    raise ValueError(f"--resume continues one file; got both {config!r} and "
+                                     f"-o {output!r}")
+                output, config = config, None
+            if not output:
+                raise ValueError("--resume needs the sweep file: rodjit sweep --resume -o "
+                                 "SWEEP.h5")
+            cfg = grid = None
+            if config or sets:          # given again: must match the file
+                cfg, _ = _load_config(config)
+                cfg = cfg.override(_overrides(sets)) if sets else cfg
+            if grids:
+                grid = parse_grid_option(grids)
+        else:
+            cfg, default_name = _load_config(config)
+            overrides = _overrides(sets)
+            if overrides:
+                cfg = cfg.override(overrides)
+            grid = parse_grid_option(grids)
+            if not output:
+                output = ("sweep.h5" if default_name == DEFAULT_OUTPUT
+                          else default_name[:-3] + "_sweep.h5")
+        table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
+                      save_runs=save_runs, resume=resume, overwrite=overwrite,
+                      progress=progress, command=command)
+    except OutputExists as exc:
+        raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite (or "
+                                          "--resume)")) from None
+    except SweepInterrupted as exc:
+        _close(progress)
+        if not quiet:
+            click.echo(exc.table.headline())
+        click.echo(str(exc), err=True)
+        sys.exit(128 + (exc.signum or 2))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    _close(progress)
+    if not quiet:
+        click.echo(table.headline())
+        click.echo(table.report(max_rows=40))
+    if table.counts["failed"]:
+        sys.exit(1)
+
+
 # ---- rodjit presets -----------------------------------------------------------------------
 @main.command("presets")
 def presets_command():
@@ -263,9 +406,61 @@ def plot_run(path: str, output: str | None, kind: str) -> None:
     click.echo(f"wrote {written}")
 
 
-INFO = {"run": info_run}          # rodjit_kind -> info(path)
-PLOT = {"run": plot_run}          # rodjit_kind -> plot(path, output, kind)
-PLOT_KINDS = ("heights", "energy", "bounces")
+def info_sweep(path: str) -> None:
+    from .output import sweep_file
+    from .sweep import load_sweep
+
+    try:
+        table = load_sweep(path)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    a = table.attrs
+    status = table.status
+    if status == "running":
+        with sweep_file.open_sweep(path) as f:
+            from .output.hdf5 import writer_alive
+            alive = writer_alive(f)
+        status += (" (the sweep is running)" if alive else
+                   f" (its process is gone; 'rodjit sweep --resume -o {path}' continues)"
+                   if alive is False else "")
+    c = table.counts
+    click.echo(f"rodjit sweep file {path} (format {sweep_file.FORMAT_VERSION}, written by "
+               f"rodjit {a.get('rodjit_version', '?')})")
+    click.echo(f"created   {a.get('created', '?')}")
+    click.echo(f"command   {a.get('command', '?')}")
+    click.echo(f"status    {status}" + (f": {table.message}" if table.message else ""))
+    click.echo(f"points    {len(table)} ({c['completed']} completed, {c['failed']} failed, "
+               f"{c['pending']} not run) on {a.get('scheduler', '?')}")
+    click.echo("grid:")
+    for key, values in zip(table.grid.keys, table.grid.values):
+        from .sweep.grid import format_value
+        click.echo(f"  {key} = {', '.join(format_value(v) for v in values)}")
+    if a.get("save_runs"):
+        click.echo(f"run files {a['save_runs']}")
+    click.echo("base configuration:")
+    for line in table.base.to_toml().strip().splitlines():
+        click.echo(f"  {line}")
+    click.echo(table.report())
+
+
+def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
+    from .plotting import MissingMatplotlib
+    from .plotting.sweep import plot_sweep_file
+
+    out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
+    try:
+        written = plot_sweep_file(path, out, kind, **options)
+    except MissingMatplotlib as exc:
+        raise RunFailed(str(exc)) from None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(f"wrote {written}")
+
+
+INFO = {"run": info_run, "sweep": info_sweep}      # rodjit_kind -> info(path)
+RUN_KINDS = ("heights", "energy", "bounces")
+SWEEP_KINDS = ("restitution", "heatmap")
+PLOT_KINDS = RUN_KINDS + SWEEP_KINDS
 
 
 @main.command("info")
@@ -279,15 +474,39 @@ def info_command(file):
 @click.argument("file", type=click.Path(dir_okay=True))
 @click.option("-o", "--output", type=click.Path(dir_okay=False),
               help="Image to write [default: FILE_KIND.png next to FILE].")
-@click.option("--kind", type=click.Choice(PLOT_KINDS), default="heights", show_default=True,
-              help="heights: all nodes against time (the paper's figures); energy: energy "
-                   "components and dissipation; bounces: restitution per bounce.")
-def plot_command(file, output, kind):
-    """Draw a figure of a rodjit file."""
+@click.option("--kind", type=click.Choice(PLOT_KINDS),
+              help="Run files: heights (all nodes against time, the paper's figures; the "
+                   "default), energy (components and dissipation), bounces (restitution per "
+                   "bounce).  Sweep files: restitution (against --x, one line per value of "
+                   "the other keys; the default), heatmap (over two keys at --at values).")
+@click.option("--quantity", metavar="COLUMN",
+              help="Sweep files: the summary column drawn [default: restitution_first].")
+@click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
+              "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
+@click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
+@click.option("--at", "at", multiple=True, metavar="KEY=VALUE",
+              help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "
+                   "the first value of each other key].")
+def plot_command(file, output, kind, quantity, x_key, y_key, at):
+    """Draw a figure of a rodjit file (a run or a sweep)."""
     kind_of_file = _kind(file)
-    if kind_of_file not in PLOT:
-        raise UsageError(f"rodjit plot does not draw {kind_of_file!r} files")
-    PLOT[kind_of_file](file, output, kind)
+    if kind_of_file == "run":
+        if kind is not None and kind not in RUN_KINDS:
+            raise UsageError(f"--kind {kind} is for sweep files; a run file takes one of "
+                             f"{', '.join(RUN_KINDS)}")
+        if quantity or x_key or y_key or at:
+            raise UsageError("--quantity, --x, --y and --at are for sweep files")
+        plot_run(file, output, kind or "heights")
+        return
+    if kind is not None and kind not in SWEEP_KINDS:
+        raise UsageError(f"--kind {kind} is for run files; a sweep file takes one of "
+                         f"{', '.join(SWEEP_KINDS)}")
+    try:
+        fixed = _overrides(at)
+    except ValueError as exc:
+        raise UsageError(str(exc).replace("--set", "--at")) from None
+    plot_sweep(file, output, kind or "restitution",
+               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed})
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -45,12 +45,13 @@ class Result:
 
     def energy_error(self) -> float:
         """max |E(t) + dissipated(t) − E(0)| / scale over the diagnostics samples, scale =
-        max(|E(0)|, max kinetic energy): the drift at μ = 0, the balance error at μ > 0."""
-        d = self.diagnostics
-        if d["t"].size == 0:
-            return 0.0
-        scale = max(abs(self.energy0), float(np.max(d["energy_kinetic"])), 1e-300)
-        return float(np.max(np.abs(d["energy_total"] + d["dissipated"] - self.energy0)) / scale)
+        max(|E(0)|, max kinetic energy): the drift at μ = 0, the balance error at μ > 0
+        (NaN without diagnostics samples)."""
+        from ..output.measures import RunMeasures
+
+        m = RunMeasures(self.energy0)
+        m.add_diagnostics(self.diagnostics)
+        return m.energy_error
 
 
 class MemorySink(Sink):

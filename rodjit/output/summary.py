@@ -12,10 +12,13 @@ import numpy as np
 
 from ..stepping import layout as L
 from . import hdf5
+from .measures import RunMeasures
 
 __all__ = ["RunSummary", "summarize"]
 
 BLOCK_ROWS = 1 << 16
+MEASURED = ("energy_total", "dissipated", "energy_kinetic", "min_strain", "u_bottom",
+            "floor_force")
 
 
 @dataclass
@@ -31,9 +34,11 @@ class RunSummary:
     counts: dict
     bounces: dict
     energy0: float
-    energy_error: float       # max |E + dissipated - E0| / max(|E0|, max kinetic energy)
+    energy_error: float       # max |E + dissipated - E0| / max(|E0|, max kinetic energy);
+                              # nan without diagnostics
     min_strain: float         # nan if nothing was sampled
     min_u0: float             # lowest bottom height seen (diagnostics and bounce records)
+    max_floor_force: float    # largest floor force seen (nan if nothing was sampled)
     steps: int
     rejected_steps: int
     compile_time: float
@@ -41,6 +46,7 @@ class RunSummary:
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
     writer_alive: bool | None = None
+    measures: RunMeasures | None = None
 
     @property
     def n_bounces(self) -> int:
@@ -77,8 +83,12 @@ class RunSummary:
                              f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
                              f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
                              f"  {e:>11}")
-        lines.append(f"  {self.energy_label():<22}{self.energy_error:.3g}  "
-                     f"(max |E + dissipated - E0| / max(|E0|, kinetic))")
+        if math.isnan(self.energy_error):
+            lines.append(f"  {self.energy_label():<22}not measured (no diagnostics: "
+                         f"output.diagnostics_interval = 0)")
+        else:
+            lines.append(f"  {self.energy_label():<22}{self.energy_error:.3g}  "
+                         f"(max |E + dissipated - E0| / max(|E0|, kinetic))")
         lines.append(f"  {'smallest strain':<22}{_num(self.min_strain, '.6g')}")
         if self.min_u0 < 0:
             lines.append(f"  {'deepest penetration':<22}{-self.min_u0:.6g}  "
@@ -112,27 +122,21 @@ def summarize(path) -> RunSummary:
                   for name, cols in hdf5.TABLES.items()}
         bounces = hdf5.read_table(f, "bounces")
         e0 = float(clock[L.E0])
-        err, kmax, smin, umin = 0.0, 0.0, math.inf, math.inf
+        measures = RunMeasures(e0)
         g = f["diagnostics"]
         for i in range(0, counts["diagnostics"], BLOCK_ROWS):
             sel = slice(i, min(i + BLOCK_ROWS, counts["diagnostics"]))
-            err = max(err, float(np.max(np.abs(g["energy_total"][sel] + g["dissipated"][sel]
-                                               - e0))))
-            kmax = max(kmax, float(np.max(g["energy_kinetic"][sel])))
-            smin = min(smin, float(np.min(g["min_strain"][sel])))
-            umin = min(umin, float(np.min(g["u_bottom"][sel])))
-        if bounces["min_strain"].size:
-            smin = min(smin, float(np.nanmin(bounces["min_strain"])))
-            umin = min(umin, float(np.nanmin(bounces["min_u0"])))
+            measures.add_diagnostics({c: g[c][sel] for c in MEASURED})
+        measures.add_bounces(bounces)
         steps = int(count[L.STEP])
         run_time = ck["run_time"]
         status = str(f.attrs["status"])
         return RunSummary(
             path=str(path), status=status, message=str(f.attrs["message"]), config=config,
             t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
-            energy0=e0, energy_error=err / max(abs(e0), kmax, 1e-300),
-            min_strain=smin if math.isfinite(smin) else math.nan,
-            min_u0=umin if math.isfinite(umin) else math.inf,
+            energy0=e0, energy_error=measures.energy_error, min_strain=measures.min_strain,
+            min_u0=math.inf if math.isnan(measures.min_u0) else measures.min_u0,
+            max_floor_force=measures.max_floor_force, measures=measures,
             steps=steps, rejected_steps=int(count[L.REJECTED]),
             compile_time=ck["compile_time"], run_time=run_time,
             node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,

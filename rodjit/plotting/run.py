@@ -1,8 +1,4 @@
-"""Figures of a run file: node heights (the paper's figures), energies, restitution.
-
-matplotlib is imported only when a figure is drawn (it lives in the ``plot`` extra); the
-figures are drawn without pyplot, so nothing depends on a display or a backend.
-"""
+"""Figures of a run file: node heights (the paper's figures), energies, restitution."""
 from __future__ import annotations
 
 import math
@@ -10,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .output import hdf5
+from ..output import hdf5
+from .mpl import MissingMatplotlib, new_figure
 
 __all__ = ["KINDS", "figure", "plot_file", "MissingMatplotlib"]
 
@@ -19,24 +16,11 @@ MAX_CURVES = 11        # node curves drawn at most (evenly spaced along the rod)
 MAX_POINTS = 20_000    # time samples drawn at most per curve (strided read)
 
 
-class MissingMatplotlib(ImportError):
-    pass
-
-
-def _figure(**kwargs):
-    try:
-        from matplotlib.figure import Figure
-    except ImportError:
-        raise MissingMatplotlib("plotting needs matplotlib; install it with: "
-                                "pip install 'rodjit[plot]'") from None
-    return Figure(**kwargs)
-
-
 def figure(path, kind: str = "heights"):
     """The matplotlib Figure of kind ``kind`` for the run file ``path``."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
-    fig = _figure(figsize=(7.5, 4.5), layout="constrained")
+    fig = new_figure(figsize=(7.5, 4.5), layout="constrained")
     with hdf5.open_file(path) as f:
         hdf5.check_run_file(f, path)
         config = hdf5.read_config(f)

@@ -1,0 +1,137 @@
+"""Parameter sweeps (issue 4): scaling over two cores, Dask against the process pool, and
+the overhead per point.
+
+1. A 64-point grid over μ × κ_b × β (4 × 4 × 4) on the paper setting (data/paper_mu100.toml:
+   N = 5, semi-implicit, t_end = 5 s): points per second with 1 and with 2 worker processes.
+   Target: ≥ 1.8× with 2 jobs on 2 cores.
+2. The same grid on a Dask LocalCluster of 2 single-threaded worker processes against the
+   pool with 2 jobs: target overhead < 15 %.
+3. Small rods where the overhead dominates: 256 points (N = 5, t_end = 0.02 s, ~60 steps
+   each), 1 job.  Overhead per point = (sweep time − start-up) × jobs / points − the point's
+   own stepping time (``run_time``): dispatch, the point's set-up in its worker, the result's
+   trip back and its HDF5 row.  Target < 20 ms.
+
+Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
+start-up (the workers importing rodjit, until all report ready; a LocalCluster's scheduler
+and workers) and the steady state after it, which is what points per second measure; the
+end-to-end ratios are printed too.  Each configuration is timed --repeat times in turns
+(best kept), so the machine's load hits every one alike.
+
+    python benchmarks/bench_sweep.py [--repeat 3] [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _util  # noqa: E402
+
+import rodjit  # noqa: E402
+from rodjit.presets import load_preset  # noqa: E402
+
+GRID = {"rod.mu": [0.0, 1.0, 10.0, 100.0], "floor.kappa_b": "logspace(3, 5, 4)",
+        "floor.beta": [0.01, 0.02, 0.03, 0.05]}
+SMALL_GRID = {"rod.mu": "linspace(0, 10, 16)", "floor.beta": "linspace(0.01, 0.05, 16)"}
+TARGET_SCALING, TARGET_DASK, TARGET_OVERHEAD = 1.8, 0.15, 0.020
+
+
+def timed_sweep(base, grid, tmp, **kwargs) -> dict:
+    path = Path(tmp) / "bench_sweep.h5"
+    table = rodjit.sweep(base, grid, output=path, overwrite=True, **kwargs)
+    s = table.stats
+    n = len(table)
+    steady = s["wall_time"] - (s["startup_time"] or 0.0)
+    assert table.counts["completed"] == n, table.report()
+    return {"wall": s["wall_time"], "startup": s["startup_time"] or 0.0, "steady": steady,
+            "points": n, "jobs": s["jobs"], "backend": s["backend"],
+            "points_per_second": n / steady, "points_per_second_end_to_end": n / s["wall_time"],
+            "point_wall_mean": float(np.mean(table["wall_time"])),
+            "point_run_mean": float(np.mean(table["run_time"])),
+            "overhead_per_point": steady * s["jobs"] / n - float(np.mean(table["run_time"])),
+            "setup_in_worker": float(np.mean(table["wall_time"] - table["run_time"]))}
+
+
+def best_of(runs: list[dict]) -> dict:
+    return min(runs, key=lambda r: r["steady"])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="one repetition, no Dask")
+    args = ap.parse_args(argv)
+    repeat = 1 if args.quick else args.repeat
+    _util.header("parameter sweeps: scaling, Dask, overhead per point")
+    base = load_preset("paper-mu100")
+    small = base.override({"time.t_end": 0.02})
+    cases = {"1 job": {"jobs": 1}, "2 jobs": {"jobs": 2}}
+    try:
+        import distributed  # noqa: F401
+        if not args.quick:
+            cases["dask 2 workers"] = {"jobs": 2, "scheduler": "local"}
+    except ImportError:
+        print("   (distributed not installed: no Dask row)")
+    results = {name: [] for name in cases}
+    small_runs = {"1 job": [], "2 jobs": []}
+    with tempfile.TemporaryDirectory() as tmp:
+        rodjit.sweep(base, {"rod.mu": [0.0]}, scheduler="inline")      # kernels in the cache
+        for _ in range(repeat):
+            for name, kw in cases.items():
+                results[name].append(timed_sweep(base, GRID, tmp, **kw))
+            for name, jobs in (("1 job", 1), ("2 jobs", 2)):
+                small_runs[name].append(timed_sweep(small, SMALL_GRID, tmp, jobs=jobs))
+    best = {name: best_of(r) for name, r in results.items()}
+    one, two = best["1 job"], best["2 jobs"]
+    scaling = two["points_per_second"] / one["points_per_second"]
+    scaling_e2e = two["points_per_second_end_to_end"] / one["points_per_second_end_to_end"]
+    rows = []
+    for name, r in best.items():
+        rows.append([name, r["backend"], r["points"], r["startup"], r["steady"],
+                     r["points_per_second"], r["points_per_second_end_to_end"],
+                     1e3 * r["point_wall_mean"]])
+    print(_util.table(rows, ["64-point grid", "backend", "points", "start-up [s]",
+                             "steady [s]", "points/s", "points/s end-to-end",
+                             "point mean [ms]"]))
+    print(f"   2 jobs / 1 job: {scaling:.2f}x steady state (target >= {TARGET_SCALING}x: "
+          f"{'yes' if scaling >= TARGET_SCALING else 'NO'}), {scaling_e2e:.2f}x end to end "
+          f"(start-up included)")
+    out = {"grid": GRID, "base": "paper-mu100", "repeat": repeat, "runs": results,
+           "scaling": scaling, "scaling_end_to_end": scaling_e2e,
+           "meets_scaling_target": scaling >= TARGET_SCALING}
+    if "dask 2 workers" in best:
+        d = best["dask 2 workers"]
+        over = d["steady"] / two["steady"] - 1
+        over_e2e = d["wall"] / two["wall"] - 1
+        print(f"   Dask LocalCluster vs pool, 2 workers: {100 * over:+.1f}% steady state (target "
+              f"< {100 * TARGET_DASK:g}%: {'yes' if over < TARGET_DASK else 'NO'}), "
+              f"{100 * over_e2e:+.1f}% end to end (cluster start-up {d['startup']:.2f} s vs "
+              f"pool {two['startup']:.2f} s)")
+        out.update(dask_overhead=over, dask_overhead_end_to_end=over_e2e,
+                   meets_dask_target=over < TARGET_DASK)
+    rows = []
+    for name, runs in small_runs.items():
+        r = best_of(runs)
+        rows.append([name, r["points"], r["steady"], r["points_per_second"],
+                     1e3 * r["point_run_mean"], 1e3 * r["setup_in_worker"],
+                     1e3 * r["overhead_per_point"]])
+        out[f"small_{name.replace(' ', '_')}"] = r
+    print(_util.table(rows, ["N = 5, t_end = 0.02", "points", "steady [s]", "points/s",
+                             "stepping [ms]", "set-up in worker [ms]",
+                             "overhead/point [ms]"]))
+    over = best_of(small_runs["1 job"])["overhead_per_point"]
+    print(f"   overhead per point, 1 job: {1e3 * over:.2f} ms (target < "
+          f"{1e3 * TARGET_OVERHEAD:g} ms: {'yes' if over < TARGET_OVERHEAD else 'NO'})")
+    out["overhead_per_point"] = over
+    out["meets_overhead_target"] = over < TARGET_OVERHEAD
+    path = _util.save("sweep", out)
+    print(f"   -> {path}")
+    return out
+
+
+if __name__ == "__main__":
+    main()

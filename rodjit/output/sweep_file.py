@@ -1,0 +1,207 @@
+"""The sweep file: one HDF5 file per sweep, a summary row per grid point (public contract).
+
+Layout (README "Sweeps"): root attributes (``rodjit_kind = "sweep"``, version, base
+configuration as TOML, the grid as JSON, command, status); ``/summary/<column>``, 1-D, one
+row per point in grid order (the swept keys, then ``point.SUMMARY_COLUMNS``); and
+``/points/<index>/bounces/<column>``, the bounce table of each point that ran.
+
+Every row exists from the start, ``status = "pending"`` until its point reports.  The parent
+process is the only writer; it opens the file for each batch of results and closes it
+again, so between batches the file is complete on disk and other processes can read it.
+"""
+from __future__ import annotations
+
+import datetime
+import time
+
+import h5py
+import numpy as np
+
+from ..sweep.grid import Grid
+from ..sweep.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS
+from . import hdf5
+
+__all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
+           "read_header", "read_summary", "read_bounces", "check_sweep_file", "key_columns",
+           "open_sweep", "reopen"]
+
+KIND = "sweep"
+FORMAT_VERSION = 1
+STATUSES = ("running", "completed", "interrupted", "failed")
+LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file before failing
+
+_STR = h5py.string_dtype("utf-8")
+_DTYPES = {"str": _STR, "int": np.int64, "float": np.float64}
+
+
+def _now() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def _key_kind(values) -> str:
+    v = values[0]
+    return "str" if isinstance(v, str) else "int" if isinstance(v, int) else "float"
+
+
+def key_columns(grid: Grid) -> dict[str, np.ndarray]:
+    """The swept keys' columns: the value of each key at every point, in grid order."""
+    out = {}
+    for axis, (key, values) in enumerate(zip(grid.keys, grid.values)):
+        idx = np.indices(grid.shape)[axis].ravel() if len(grid) else np.zeros(0, int)
+        kind = _key_kind(values)
+        arr = np.array(values, dtype=object if kind == "str" else _DTYPES[kind])
+        out[key] = arr[idx]
+    return out
+
+
+def _open(path, mode: str) -> h5py.File:
+    """Open for writing, waiting up to LOCK_WAIT for a reader (rodjit info) to let go."""
+    deadline = time.monotonic() + LOCK_WAIT
+    while True:
+        try:
+            return h5py.File(path, mode, libver="latest")
+        except OSError as exc:
+            if "lock" not in str(exc) or time.monotonic() > deadline:
+                if "lock" in str(exc):
+                    raise hdf5.FileBusy(f"{str(path)!r} is held open by another process; "
+                                        f"close it there and retry") from None
+                raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
+            time.sleep(0.05)
+
+
+def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
+    """A new sweep file: attributes, every summary column with all rows pending."""
+    from .. import __version__
+
+    n = len(grid)
+    with _open(path, "w") as f:
+        for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
+                           "rodjit_version": __version__, "created": _now(),
+                           "command": command, "base_config_toml": base.to_toml(),
+                           "grid": grid.to_json(), "grid_keys": list(grid.keys),
+                           "n_points": n, "status": "running", "message": "",
+                           "history": [f"{_now()} created by: {command}"],
+                           **hdf5._writer_attrs(), **attrs}.items():
+            f.attrs[key] = value
+        s = f.create_group("summary", track_order=True)
+        s.attrs["description"] = ("one row per grid point, in grid order (the last swept key "
+                                  "varies fastest); status 'pending' until the point has run")
+        chunk = (min(max(n, 1), 65536),)
+        for key, col in key_columns(grid).items():
+            kind = _key_kind(grid.values[grid.keys.index(key)])
+            ds = s.create_dataset(key, data=col, dtype=_DTYPES[kind], chunks=chunk)
+            ds.attrs["description"] = f"swept configuration key {key}"
+        for name, (kind, text) in SUMMARY_COLUMNS.items():
+            fill = {"status": "pending"}.get(name, {"str": "", "int": 0, "float": np.nan}[kind])
+            ds = s.create_dataset(name, shape=(n,), dtype=_DTYPES[kind], chunks=chunk,
+                                  fillvalue=None if kind == "str" else fill)
+            if kind == "str" and n:
+                ds[...] = np.array([fill] * n, dtype=object)
+            ds.attrs["description"] = text
+        p = f.create_group("points")
+        p.attrs["description"] = "per point: its bounce table (the run file's /bounces columns)"
+
+
+def reopen(path, *, history: str) -> None:
+    """Mark a sweep file running again (resume), recording who continues it."""
+    with _open(path, "r+") as f:
+        f.attrs["status"] = "running"
+        f.attrs["message"] = ""
+        f.attrs["history"] = [str(s) for s in f.attrs.get("history", [])] + [f"{_now()} {history}"]
+        for key, value in hdf5._writer_attrs().items():
+            f.attrs[key] = value
+
+
+def write_results(path, results) -> None:
+    """Write a batch of PointResults: their summary rows and bounce tables."""
+    if not results:
+        return
+    results = sorted(results, key=lambda r: r.index)
+    idx = np.array([r.index for r in results])
+    with _open(path, "r+") as f:
+        s = f["summary"]
+        for name, (kind, _) in SUMMARY_COLUMNS.items():
+            if name == "status":
+                continue      # last: a row counts as done only once all of it is there
+            vals = [r.values[name] for r in results]
+            s[name][idx] = np.array(vals, dtype=object if kind == "str" else _DTYPES[kind])
+        p = f["points"]
+        for r in results:
+            key = str(r.index)
+            if key in p:
+                del p[key]
+            b = p.create_group(key).create_group("bounces", track_order=True)
+            for name in BOUNCE_COLUMNS:
+                b.create_dataset(name, data=np.asarray(r.bounces[name]))
+        s["status"][idx] = np.array([r.status for r in results], dtype=object)
+
+
+def finish(path, status: str, message: str = "", attrs: dict | None = None) -> None:
+    if status not in STATUSES:
+        raise ValueError(f"status {status!r} is not one of {STATUSES}")
+    with _open(path, "r+") as f:
+        f.attrs["status"] = status
+        f.attrs["message"] = message
+        for key, value in (attrs or {}).items():
+            f.attrs[key] = value
+
+
+# ---- reading ------------------------------------------------------------------------------
+def check_sweep_file(f: h5py.File, path=None) -> None:
+    name = str(path if path is not None else f.filename)
+    kind = f.attrs.get("rodjit_kind")
+    if kind is None:
+        raise hdf5.NotARunFile(f"{name!r} is not a rodjit file (no 'rodjit_kind' attribute)")
+    if kind != KIND:
+        raise hdf5.NotARunFile(f"{name!r} is a rodjit {kind!r} file, not a sweep file")
+    version = int(f.attrs.get("format_version", 0))
+    if version != FORMAT_VERSION:
+        raise hdf5.NotARunFile(f"{name!r} has sweep-file format {version}; this rodjit reads "
+                               f"format {FORMAT_VERSION}")
+
+
+def read_header(f: h5py.File) -> dict:
+    """Base configuration, grid and the root attributes of an open sweep file."""
+    from ..config import Config
+
+    attrs = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in f.attrs.items()}
+    return {"base": Config.from_toml_string(f.attrs["base_config_toml"]),
+            "grid": Grid.from_json(f.attrs["grid"]), "attrs": attrs}
+
+
+def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
+    """The summary columns, in file order; text columns as arrays of str."""
+    out = {}
+    for name, ds in f["summary"].items():
+        out[name] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
+                     else ds[()])
+    return out
+
+
+def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
+    """Point ``index``'s bounce table (empty columns if the point has not run)."""
+    g = f["points"].get(str(index))
+    if g is None:
+        from ..sweep.point import empty_bounces
+        return empty_bounces()
+    return {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
+
+
+def open_sweep(path) -> h5py.File:
+    """Open a sweep file read-only (one-line errors for a missing or foreign file); waits
+    briefly while the sweep's writer has it open for a batch of results."""
+    deadline = time.monotonic() + 5.0
+    while True:
+        try:
+            f = hdf5.open_file(path)
+            break
+        except hdf5.NotARunFile as exc:
+            if "lock" not in str(exc) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.05)
+    try:
+        check_sweep_file(f, path)
+    except BaseException:
+        f.close()
+        raise
+    return f

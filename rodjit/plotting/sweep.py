@@ -1,0 +1,194 @@
+"""Figures of a sweep file: a summary column against one swept key (one line per value of
+the others), and a heatmap over two swept keys with the rest held fixed."""
+from __future__ import annotations
+
+import itertools
+from pathlib import Path
+
+import numpy as np
+
+from ..config import parse_value
+from ..sweep.grid import format_value
+from ..sweep.point import SUMMARY_COLUMNS
+from .mpl import new_figure
+
+__all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
+
+KINDS = ("restitution", "heatmap")
+DEFAULT_QUANTITY = "restitution_first"
+MAX_LINES = 24
+MAX_ANNOTATED = 15     # cells per side up to which a heatmap prints its values
+_SYMBOLS = {"rod.mu": "μ", "rod.kappa": "κ", "rod.gamma": "γ", "floor.kappa_b": "κ_b",
+            "floor.beta": "β", "gravity.g": "g", "rod.N": "N", "initial.height": "height",
+            "initial.velocity": "v0"}
+
+
+def _name(key: str) -> str:
+    return _SYMBOLS.get(key, key)
+
+
+def _check_quantity(quantity: str | None) -> str:
+    quantity = quantity or DEFAULT_QUANTITY
+    numeric = [c for c, (kind, _) in SUMMARY_COLUMNS.items() if kind != "str"]
+    if quantity not in numeric:
+        raise ValueError(f"--quantity {quantity!r} is not a numeric summary column (one of "
+                         f"{', '.join(numeric)})")
+    return quantity
+
+
+def _check_key(grid, key: str, what: str) -> str:
+    if key not in grid.keys:
+        raise ValueError(f"{what} {key!r} is not a swept key (swept: {', '.join(grid.keys)})")
+    return key
+
+
+def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
+    """The value each non-free swept key is held at: from ``at`` (matched against the grid's
+    values), else its first value when ``default_first``; keys left over vary."""
+    out = {}
+    for key, text in (at or {}).items():
+        _check_key(grid, key, "--at")
+        if key in free:
+            raise ValueError(f"--at {key} fixes the key the figure runs along")
+        values = grid.values[grid.keys.index(key)]
+        value = parse_value(key, text) if isinstance(text, str) else text
+        match = [v for v in values if v == value or (isinstance(v, float) and
+                                                      isinstance(value, (int, float)) and
+                                                      np.isclose(v, value, rtol=1e-12))]
+        if not match:
+            raise ValueError(f"--at {key}={text} is not on the grid ({key} = "
+                             f"{', '.join(format_value(v) for v in values)})")
+        out[key] = match[0]
+    if default_first:
+        for key, values in zip(grid.keys, grid.values):
+            if key not in free and key not in out:
+                out[key] = values[0]
+    return out
+
+
+def _select(table, fixed: dict) -> np.ndarray:
+    mask = np.ones(len(table), bool)
+    for key, value in fixed.items():
+        mask &= table[key] == value
+    return mask
+
+
+def _scale(ax_set, values) -> None:
+    """Log axis for positive values spanning two decades or more; symlog if 0 is among
+    otherwise such values."""
+    v = np.asarray(values, float)
+    pos = v[v > 0]
+    if pos.size >= 2 and pos.max() / pos.min() >= 100:
+        if np.all(v > 0):
+            ax_set("log")
+        elif np.all(v >= 0):
+            ax_set("symlog", linthresh=float(pos.min()))
+
+
+def _label(quantity: str) -> str:
+    return f"{quantity}: {SUMMARY_COLUMNS[quantity][1]}"
+
+
+def _restitution(fig, table, quantity, x, at) -> None:
+    grid = table.grid
+    x = _check_key(grid, x, "--x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
+    fixed = _fixed(grid, at, (x,), default_first=False)
+    others = [k for k in grid.keys if k != x and k not in fixed]
+    combos = list(itertools.product(*(grid.values[grid.keys.index(k)] for k in others)))
+    if len(combos) > MAX_LINES:
+        raise ValueError(f"{len(combos)} lines (one per value of {', '.join(others)}) are too "
+                         f"many to draw; fix some keys with --at KEY=VALUE")
+    ax = fig.add_subplot()
+    xs = np.asarray(grid.values[grid.keys.index(x)])
+    base = _select(table, fixed)
+    for combo in combos:
+        mask = base & _select(table, dict(zip(others, combo)))
+        order = np.argsort(table[x][mask])
+        xv = np.asarray(table[x][mask])[order]
+        yv = np.asarray(table[quantity][mask], float)[order]
+        label = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in zip(others, combo))
+        ax.plot(xv, yv, "o-", ms=4, lw=1.0, label=label or None)
+    _scale(ax.set_xscale, xs)
+    ax.set_xlabel(_name(x) if _name(x) == x else f"{_name(x)} ({x})")
+    ax.set_ylabel(quantity)
+    title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
+    ax.set_title(_label(quantity) + (f"\n{title}" if title else ""), fontsize=9)
+    if quantity.startswith("restitution"):
+        ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
+    if others:
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+
+
+def _heatmap(fig, table, quantity, x, y, at) -> None:
+    grid = table.grid
+    varied = [k for k, v in zip(grid.keys, grid.values) if len(v) > 1 and k not in (at or {})]
+    prefer = [k for k in ("floor.kappa_b", "floor.beta") if k in varied]
+    rest = [k for k in varied if k not in prefer]
+    pick = prefer + rest
+    x = _check_key(grid, x, "--x") if x else None
+    y = _check_key(grid, y, "--y") if y else None
+    x = x or next((k for k in pick if k != y), None)
+    y = y or next((k for k in pick if k != x), None)
+    if x is None or y is None or x == y:
+        raise ValueError(f"a heatmap needs two swept keys with several values that --at does "
+                         f"not fix (swept: {', '.join(grid.keys)})")
+    fixed = _fixed(grid, at, (x, y), default_first=True)
+    xs = list(grid.values[grid.keys.index(x)])
+    ys = list(grid.values[grid.keys.index(y)])
+    z = np.full((len(ys), len(xs)), np.nan)
+    status = np.full((len(ys), len(xs)), "pending", dtype=object)
+    mask = _select(table, fixed)
+    for i in np.flatnonzero(mask):
+        r, c = ys.index(table[y][i]), xs.index(table[x][i])
+        z[r, c] = table[quantity][i]
+        status[r, c] = table["status"][i]
+    ax = fig.add_subplot()
+    mesh = ax.pcolormesh(np.ma.masked_invalid(z), cmap="viridis", shading="flat")
+    ax.set_facecolor("0.85")
+    fig.colorbar(mesh, ax=ax, label=quantity)
+    ax.set_xticks(np.arange(len(xs)) + 0.5, [format_value(v) for v in xs])
+    ax.set_yticks(np.arange(len(ys)) + 0.5, [format_value(v) for v in ys])
+    ax.set_xlabel(f"{_name(x)} ({x})" if _name(x) != x else x)
+    ax.set_ylabel(f"{_name(y)} ({y})" if _name(y) != y else y)
+    if len(xs) <= MAX_ANNOTATED and len(ys) <= MAX_ANNOTATED:
+        finite = z[np.isfinite(z)]
+        mid = (finite.min() + finite.max()) / 2 if finite.size else 0.0
+        for r in range(len(ys)):
+            for c in range(len(xs)):
+                text = (f"{z[r, c]:.3g}" if np.isfinite(z[r, c]) else
+                        "failed" if status[r, c] == "failed" else "-")
+                color = "k" if not np.isfinite(z[r, c]) or z[r, c] > mid else "w"
+                ax.text(c + 0.5, r + 0.5, text, ha="center", va="center", fontsize=7,
+                        color=color)
+    title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
+    ax.set_title(_label(quantity) + (f"\nat {title}" if title else ""), fontsize=9)
+
+
+def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
+                 at=None):
+    """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable."""
+    from ..sweep.table import SweepTable, load_sweep
+
+    if kind not in KINDS:
+        raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
+    table = source if isinstance(source, SweepTable) else load_sweep(source)
+    quantity = _check_quantity(quantity)
+    fig = new_figure(figsize=(7.5, 4.8), layout="constrained")
+    if kind == "restitution":
+        if y:
+            raise ValueError("--y is for heatmaps")
+        _restitution(fig, table, quantity, x, at)
+    else:
+        _heatmap(fig, table, quantity, x, y, at)
+    name = Path(table.path).name if table.path else "sweep"
+    fig.suptitle(f"{name}: {len(table)} points, N = {table.base.rod.N}", fontsize=10)
+    return fig
+
+
+def plot_sweep_file(path, output, kind: str = "restitution", *, dpi: int = 150,
+                    **options) -> Path:
+    """Draw figure ``kind`` of the sweep file ``path`` into the image file ``output``."""
+    fig = sweep_figure(path, kind, **options)
+    output = Path(output)
+    fig.savefig(output, dpi=dpi)
+    return output

@@ -1,0 +1,287 @@
+"""``rodjit.sweep``: run every point of a grid, write each result as it arrives.
+
+Everything is validated before anything is written or started.  Results stream back from
+the executor in the order points finish; the parent is the only writer of the sweep file,
+which it updates in batches (at least every ``flush_interval`` seconds).  SIGINT/SIGTERM
+stop the workers, and the file keeps every finished point; ``resume=True`` runs only the
+points that are still pending or failed.
+"""
+from __future__ import annotations
+
+import math
+import os
+import signal
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..driver.files import _StopFlag, check_output
+from ..output import hdf5
+from .executors import default_jobs, make_executor
+from .grid import Grid
+from .point import SUMMARY_COLUMNS, PointTask, law_modules
+from .table import SweepTable
+
+__all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
+
+FLUSH_INTERVAL = 1.0
+
+
+class SweepInterrupted(RuntimeError):
+    """A sweep stopped by SIGINT/SIGTERM; its file holds every finished point (``table``)."""
+
+    def __init__(self, message: str, signum: int | None, table: SweepTable):
+        super().__init__(message)
+        self.signum = signum
+        self.table = table
+
+
+@dataclass
+class SweepProgress:
+    """Where a sweep stands, passed to ``progress`` after every result and heartbeat."""
+
+    done: int          # points finished, earlier sessions included
+    total: int
+    failed: int
+    run: int           # points finished in this call
+    todo: int          # points this call set out to run
+    elapsed: float     # seconds since this call started
+
+    @property
+    def eta(self) -> float:
+        """Seconds left at the rate of this call so far (NaN before the first point)."""
+        if self.run == 0:
+            return math.nan
+        return self.elapsed / self.run * (self.todo - self.run)
+
+
+def _check_jobs(jobs) -> int:
+    if jobs is None:
+        return default_jobs()
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs = {jobs!r} is out of range (a whole number >= 1)")
+    return jobs
+
+
+def _check_scheduler(scheduler) -> None:
+    if scheduler is None:
+        return
+    if not isinstance(scheduler, str) or not (
+            scheduler in ("processes", "inline", "local") or scheduler.startswith("tcp://")
+            or scheduler.startswith("tls://")):
+        raise ValueError(f"scheduler = {scheduler!r} is not allowed (one of: processes "
+                         f"(default), local (a Dask LocalCluster), inline (this process), "
+                         f"tcp://HOST:PORT (an existing Dask scheduler))")
+
+
+def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
+    from ..output.sweep_file import key_columns
+
+    n = len(grid)
+    cols = dict(key_columns(grid))
+    for name, (kind, _) in SUMMARY_COLUMNS.items():
+        if kind == "str":
+            cols[name] = np.array([""] * n, dtype=object)
+        elif kind == "int":
+            cols[name] = np.zeros(n, np.int64)
+        else:
+            cols[name] = np.full(n, np.nan)
+    cols["status"][:] = "pending"
+    return cols
+
+
+def _prepare_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
+    """Check the --save-runs directory (created later, once everything else is valid)."""
+    if save_runs is None:
+        return None
+    d = Path(save_runs).resolve()
+    if d.exists() and not d.is_dir():
+        raise ValueError(f"--save-runs {str(save_runs)!r} is not a directory")
+    existing = d.parent
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"--save-runs directory {str(save_runs)!r} cannot be created here")
+    if d.is_dir() and not (overwrite or resume):
+        clash = next((grid.run_name(i) for i in todo if (d / grid.run_name(i)).exists()), None)
+        if clash:
+            raise ValueError(f"--save-runs {str(save_runs)!r} already holds {clash!r}; use "
+                             f"--overwrite to replace its run files, or --resume")
+    return d
+
+
+def _open_resume(output, config, grid):
+    """Base config, grid, columns and attributes of the sweep file to continue."""
+    from ..output import sweep_file
+
+    with sweep_file.open_sweep(output) as f:
+        header = sweep_file.read_header(f)
+        columns = sweep_file.read_summary(f)
+        alive = hdf5.writer_alive(f) if header["attrs"].get("status") == "running" else False
+    if alive:
+        raise hdf5.FileBusy(f"{str(output)!r} is being written by a running sweep (process "
+                            f"{header['attrs'].get('writer_pid')}); stop it before resuming")
+    base, file_grid = header["base"], header["grid"]
+    if config is not None and config != base:
+        differ = sorted(k for k, v in config.flat().items() if base.flat()[k] != v)
+        raise ValueError(f"the configuration differs from the one in {str(output)!r} "
+                         f"({', '.join(differ)}); --resume continues the file's sweep: drop "
+                         f"the changes or start a new sweep")
+    if grid is not None and Grid.from_spec(grid) != file_grid:
+        raise ValueError(f"the grid differs from the one in {str(output)!r} "
+                         f"({file_grid.to_json()}); --resume continues the file's sweep: "
+                         f"drop --grid or start a new sweep")
+    return base, file_grid, columns, header["attrs"]
+
+
+def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, save_runs=None,
+          resume: bool = False, overwrite: bool = False, progress=None, command=None,
+          handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL) -> SweepTable:
+    """Run ``config`` (None: the built-in run) at every point of ``grid`` and return the
+    summary table; with ``output``, stream it to that sweep file as points finish.
+
+    ``grid``: ``{"rod.mu": [0, 1, 10], "floor.kappa_b": "logspace(3, 5, 3)", ...}`` (any
+    configuration key; the Cartesian product).  ``jobs``: worker processes (default: every
+    core).  ``scheduler``: None/"processes" (local pool), "local" (a Dask LocalCluster of
+    ``jobs`` workers), "tcp://HOST:PORT" (an existing Dask cluster) or "inline" (this
+    process).  ``save_runs``: a directory for one full run file per point.  ``resume``:
+    continue ``output``, running only its pending and failed points.  ``progress(p)`` gets
+    a SweepProgress.  Bad input raises ValueError before anything is written; SIGINT or
+    SIGTERM raise SweepInterrupted after the file is closed with every finished point.
+    """
+    from ..config import Config
+    from ..output import sweep_file
+
+    if config is not None and not isinstance(config, Config):
+        raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
+    jobs = _check_jobs(jobs)
+    _check_scheduler(scheduler)
+    if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
+        raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
+    attrs = {}
+    if resume:
+        if output is None:
+            raise ValueError("resume needs the sweep file to continue (output=PATH, or "
+                             "rodjit sweep --resume -o PATH)")
+        base, grid, columns, attrs = _open_resume(output, config, grid)
+        if save_runs is None and attrs.get("save_runs"):
+            save_runs = attrs["save_runs"]
+    else:
+        if grid is None:
+            raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]} or --grid "
+                             "rod.mu=0,1,10")
+        base = config if config is not None else Config()
+        grid = Grid.from_spec(grid)
+        grid.validate(base)
+        columns = _new_columns(grid)
+        if output is not None:
+            output = check_output(output, overwrite)
+            _check_not_live(output)
+    todo = [i for i in range(len(grid)) if columns["status"][i] != "completed"]
+    runs_dir = _prepare_runs_dir(save_runs, grid, todo, overwrite, resume)
+    if command is None:
+        command = f"rodjit.sweep(config, grid, output={str(output) if output else None!r})"
+
+    executor = make_executor(scheduler, jobs)      # the last check: a cluster may be unreachable
+    if runs_dir is not None:
+        runs_dir.mkdir(parents=True, exist_ok=True)
+    if output is not None:
+        run_attrs = {"save_runs": str(runs_dir) if runs_dir else "", "scheduler": executor.name,
+                     "jobs": executor.jobs}
+        if resume:
+            sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) by: "
+                                              f"{command}")
+        else:
+            sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
+    table = SweepTable(grid=grid, base=base, columns=columns,
+                       path=str(output) if output is not None else None, status="running")
+    return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
+                  flush_interval)
+
+
+def _check_not_live(output: Path) -> None:
+    """Refuse to replace a sweep file whose sweep is still running."""
+    if not output.exists():
+        return
+    try:
+        with hdf5.open_file(output) as f:
+            live = (f.attrs.get("status") == "running" and hdf5.writer_alive(f) is True)
+    except (ValueError, OSError):
+        return
+    if live:
+        raise hdf5.FileBusy(f"{str(output)!r} is being written by a running rodjit process; "
+                            f"stop it before replacing the file")
+
+
+def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
+           flush_interval) -> SweepTable:
+    from ..output import sweep_file
+
+    grid, base, cols = table.grid, table.base, table.columns
+    output = table.path
+    n = len(grid)
+    done0 = n - len(todo)
+
+    def tasks():
+        for i in todo:
+            cfg = grid.config(base, i)
+            path = str(runs_dir / grid.run_name(i)) if runs_dir is not None else None
+            yield PointTask(i, cfg, path, law_modules(cfg))
+
+    t0 = time.perf_counter()
+    ran = failed = 0
+    batch = []
+    last = time.monotonic()
+    status, message, signum = "completed", "", None
+    results = executor.results(tasks())
+    with _StopFlag(handle_signals) as stop:
+        try:
+            for result in results:
+                if result is not None:
+                    for name in SUMMARY_COLUMNS:
+                        cols[name][result.index] = result.values[name]
+                    if output is None:
+                        table._bounces[result.index] = result.bounces
+                    else:
+                        batch.append(result)
+                    ran += 1
+                    failed += result.status == "failed"
+                if progress is not None:
+                    progress(SweepProgress(done0 + ran, n, int(np.sum(cols["status"] == "failed")),
+                                           ran, len(todo), time.perf_counter() - t0))
+                if stop.signum is not None:
+                    status, signum = "interrupted", stop.signum
+                    break
+                if batch and time.monotonic() - last >= flush_interval:
+                    sweep_file.write_results(output, batch)
+                    batch, last = [], time.monotonic()
+        except KeyboardInterrupt:          # a second signal while stopping
+            status = "interrupted"
+        except BaseException as exc:
+            results.close()
+            if output is not None:
+                sweep_file.write_results(output, batch)
+                sweep_file.finish(output, "failed", f"{type(exc).__name__}: {exc}")
+            raise
+        finally:
+            results.close()
+            executor.close(cancel=status != "completed")
+    wall = time.perf_counter() - t0
+    table.stats = {"wall_time": wall, "points_run": ran, "points_failed": failed,
+                   "points_per_second": ran / wall if wall > 0 else 0.0,
+                   "startup_time": getattr(executor, "startup_time", None),
+                   "worker_deaths": getattr(executor, "deaths", 0),
+                   "backend": executor.name, "jobs": executor.jobs}
+    if status == "interrupted":
+        name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
+        message = (f"interrupted by {name} after {done0 + ran} of {n} points"
+                   + (f"; continue with: rodjit sweep --resume -o {output}" if output else ""))
+    table.status, table.message = status, message
+    if output is not None:
+        sweep_file.write_results(output, batch)
+        sweep_file.finish(output, status, message)
+    if status == "interrupted":
+        raise SweepInterrupted(message, signum, table)
+    return table

@@ -1,0 +1,354 @@
+"""Where sweep points run: this process, a pool of local worker processes, or Dask.
+
+Every executor turns an iterator of PointTasks into an iterator of PointResults, in the
+order they finish, with ``None`` as a heartbeat (at least every HEARTBEAT seconds) so the
+caller can check for signals and flush while points run.  A worker process that dies
+yields a failed result for the point it held; the other points go on.
+"""
+from __future__ import annotations
+
+import importlib
+import logging
+import multiprocessing as mp
+import os
+import signal
+import time
+import uuid
+from contextlib import contextmanager
+from multiprocessing.connection import wait
+
+from .point import PointTask, died, run_point
+
+__all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "WORKER_ENV", "SCHEDULERS",
+           "default_jobs"]
+
+HEARTBEAT = 0.2
+# one thread per worker: the workers are the parallelism (no oversubscribed cores)
+WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+              "MKL_NUM_THREADS": "1"}
+SCHEDULERS = ("processes", "local", "inline", "tcp://HOST:PORT")
+
+
+def default_jobs() -> int:
+    """The cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not Linux
+        return os.cpu_count() or 1
+
+
+@contextmanager
+def _worker_environment():
+    """WORKER_ENV set while worker processes start (they inherit it before Numba is
+    imported); the caller's environment is restored afterwards."""
+    old = {k: os.environ.get(k) for k in WORKER_ENV}
+    os.environ.update(WORKER_ENV)
+    try:
+        yield
+    finally:
+        for k, v in old.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+
+
+def _death_message(pid: int, code: int | None) -> str:
+    if code is not None and code < 0:
+        try:
+            how = f"killed by {signal.Signals(-code).name}"
+        except ValueError:
+            how = f"killed by signal {-code}"
+    else:
+        how = f"exited with code {code}"
+    return f"the worker process (pid {pid}) died while running this point ({how})"
+
+
+class Inline:
+    """Points run one after another in this process (debugging, NUMBA_DISABLE_JIT)."""
+
+    name = "inline"
+    jobs = 1
+
+    def results(self, tasks):
+        for task in tasks:
+            yield run_point(task)
+
+    def close(self, cancel: bool = False) -> None:
+        pass
+
+
+def _die_with_parent() -> None:
+    """Linux: the kernel kills this worker if the sweep's process dies (even by SIGKILL)."""
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL)       # PR_SET_PDEATHSIG
+        if os.getppid() == 1:                # the parent died before prctl took effect
+            os._exit(1)
+    except (OSError, AttributeError):
+        pass
+
+
+def _worker_main(conn) -> None:
+    """A pool worker: run the tasks the parent sends until it sends None or goes away."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
+    _die_with_parent()
+    from .point import worker_info
+
+    conn.send(("ready", worker_info()))
+    while True:
+        try:
+            task = conn.recv()
+        except (EOFError, OSError):
+            return
+        if task is None:
+            return
+        try:
+            conn.send(run_point(task))
+        except (BrokenPipeError, OSError):
+            return
+
+
+class _Worker:
+    def __init__(self, ctx):
+        self.conn, child = ctx.Pipe()
+        self.process = ctx.Process(target=_worker_main, args=(child,), daemon=True,
+                                   name="rodjit-sweep-worker")
+        with _worker_environment():
+            self.process.start()
+        child.close()
+        self.task: PointTask | None = None
+        self.ready = False
+
+    def assign(self, task: PointTask | None) -> None:
+        self.task = task
+        try:
+            self.conn.send(task)
+        except (BrokenPipeError, OSError):
+            pass       # it died; its sentinel reports it
+
+    def stop(self, cancel: bool) -> None:
+        if cancel:
+            self.process.terminate()
+        else:
+            self.assign(None)
+        self.process.join(timeout=5)
+        if self.process.is_alive():
+            self.process.kill()
+            self.process.join()
+        self.conn.close()
+
+
+class ProcessPool:
+    """``jobs`` worker processes (spawned: no state inherited), one point each at a time.
+
+    Each worker imports rodjit once and loads the kernels from the disk cache at its first
+    point; a worker that dies is replaced.
+    """
+
+    name = "processes"
+
+    def __init__(self, jobs: int):
+        self.jobs = jobs
+        self.ctx = mp.get_context("spawn")
+        self.workers: list[_Worker] = []
+        self.started = time.perf_counter()
+        self.startup_time: float | None = None     # until every first worker was ready
+        self.deaths = 0
+
+    def _spawn(self) -> _Worker:
+        w = _Worker(self.ctx)
+        self.workers.append(w)
+        return w
+
+    def _retire(self, w: _Worker, cancel: bool = False) -> None:
+        if w in self.workers:
+            self.workers.remove(w)
+            w.stop(cancel)
+
+    def results(self, tasks):
+        tasks = iter(tasks)
+        busy = []
+        for _ in range(self.jobs):
+            task = next(tasks, None)
+            if task is None:
+                break
+            w = self._spawn()
+            w.assign(task)
+            busy.append(w)
+        try:
+            while busy:
+                by_conn = {w.conn: w for w in busy}
+                by_sentinel = {w.process.sentinel: w for w in busy}
+                ready = wait(list(by_conn) + list(by_sentinel), timeout=HEARTBEAT)
+                if not ready:
+                    yield None
+                    continue
+                seen = set()
+                for obj in ready:
+                    w = by_conn.get(obj) or by_sentinel.get(obj)
+                    if id(w) in seen:
+                        continue
+                    seen.add(id(w))
+                    kind, result = self._receive(w)
+                    if kind == "idle":
+                        continue
+                    if kind == "dead":
+                        self.deaths += 1
+                        lost = died(w.task.index, _death_message(w.process.pid, result))
+                        busy.remove(w)
+                        self._retire(w, cancel=True)
+                        task = next(tasks, None)
+                        if task is not None:           # a fresh worker takes over
+                            nw = self._spawn()
+                            nw.assign(task)
+                            busy.append(nw)
+                        yield lost
+                        continue
+                    task = next(tasks, None)           # keep the worker busy first
+                    if task is None:
+                        busy.remove(w)
+                        self._retire(w)
+                    else:
+                        w.assign(task)
+                    yield result
+        finally:
+            self.close(cancel=True)
+
+    def _receive(self, w: _Worker):
+        """``("result", PointResult)``, ``("dead", exit code)`` or ``("idle", None)`` (a
+        ready message, or nothing yet)."""
+        try:
+            if w.conn.poll():
+                msg = w.conn.recv()
+            elif w.process.is_alive():
+                return "idle", None
+            else:
+                msg = None
+        except (EOFError, OSError):
+            msg = None
+        if msg is None:
+            w.process.join(timeout=5)
+            return "dead", w.process.exitcode
+        if isinstance(msg, tuple) and msg and msg[0] == "ready":
+            w.ready = True
+            if self.startup_time is None and all(x.ready for x in self.workers):
+                self.startup_time = time.perf_counter() - self.started
+            return "idle", None
+        return "result", msg
+
+    def close(self, cancel: bool = False) -> None:
+        for w in list(self.workers):
+            self._retire(w, cancel)
+
+
+class DaskCluster:
+    """Points as Dask tasks: on a LocalCluster of ``jobs`` single-threaded worker
+    processes (``scheduler="local"``) or on an existing cluster (``tcp://HOST:PORT``)."""
+
+    name = "dask"
+
+    def __init__(self, scheduler: str, jobs: int):
+        try:
+            import distributed
+        except ImportError:
+            raise ValueError(f"--scheduler {scheduler} needs Dask distributed; install it with: "
+                             f"pip install 'rodjit[dask]'") from None
+        self.distributed = distributed
+        self.cluster = None
+        self.started = time.perf_counter()
+        if scheduler == "local":
+            self.cluster = distributed.LocalCluster(
+                n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
+                env=dict(WORKER_ENV), silence_logs=logging.ERROR)
+            self.client = distributed.Client(self.cluster)
+            self.name = f"dask LocalCluster ({jobs} workers)"
+        else:
+            try:
+                self.client = distributed.Client(scheduler, timeout=10)
+            except (OSError, TimeoutError) as exc:
+                raise ValueError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+            self.name = f"dask {scheduler}"
+        self.jobs = max(1, sum(self.client.nthreads().values()))
+        try:     # every worker imports rodjit now (and says so if it cannot)
+            self.client.run(importlib.import_module, "rodjit.sweep.point")
+        except ImportError as exc:
+            self.close()
+            raise ValueError(f"the Dask workers cannot import rodjit ({exc}); install rodjit "
+                             f"where they run") from None
+        self.startup_time = time.perf_counter() - self.started
+        self._futures: dict = {}
+
+    def results(self, tasks):
+        d = self.distributed
+        tasks = iter(tasks)
+        token = uuid.uuid4().hex[:8]
+        ac = d.as_completed()
+
+        def submit() -> bool:
+            task = next(tasks, None)
+            if task is None:
+                return False
+            fut = self.client.submit(run_point, task, key=f"rodjit-point-{task.index}-{token}",
+                                     pure=False)
+            self._futures[fut] = task
+            ac.add(fut)
+            return True
+
+        # one point per worker thread in flight: Dask would otherwise assign several points
+        # to one worker, and a worker that dies would fail all of them
+        limit = max(self.jobs, 1)
+        while len(self._futures) < limit and submit():
+            pass
+        beat = time.monotonic()
+        try:
+            while self._futures:
+                if not ac.has_ready():
+                    time.sleep(0.01)
+                    if time.monotonic() - beat >= HEARTBEAT:
+                        beat = time.monotonic()
+                        yield None
+                    continue
+                fut = next(ac)
+                task = self._futures.pop(fut)
+                submit()
+                try:
+                    result = fut.result()
+                except d.KilledWorker:
+                    result = died(task.index, "the Dask worker process running this point died, "
+                                              "on every attempt (KilledWorker)")
+                except Exception as exc:     # cancelled, lost, or an error outside run_point
+                    result = died(task.index, f"the Dask task failed: {type(exc).__name__}: {exc}")
+                yield result
+                fut.release()
+        finally:
+            self.close(cancel=True)
+
+    def close(self, cancel: bool = False) -> None:
+        if self._futures and cancel:
+            try:
+                self.client.cancel(list(self._futures))
+            except Exception:
+                pass
+        self._futures = {}
+        try:
+            self.client.close()
+        finally:
+            if self.cluster is not None:
+                self.cluster.close()
+
+
+def make_executor(scheduler: str | None, jobs: int):
+    """The executor for ``--scheduler``: None/"processes" (the local pool), "inline",
+    "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing Dask cluster)."""
+    if scheduler in (None, "processes"):
+        return ProcessPool(jobs)
+    if scheduler == "inline":
+        return Inline()
+    if scheduler == "local" or "://" in scheduler:
+        return DaskCluster(scheduler, jobs)
+    raise ValueError(f"--scheduler {scheduler!r} is not allowed (one of: processes (default), "
+                     f"local (a Dask LocalCluster), inline (this process), tcp://HOST:PORT "
+                     f"(an existing Dask scheduler))")

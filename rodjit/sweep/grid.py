@@ -1,0 +1,187 @@
+"""A sweep's grid: values per configuration key, their Cartesian product, the point configs.
+
+A key's values are a list (``0,1,10,100`` on the command line, any sequence in Python) or a
+range, ``linspace(a, b, n)`` (n evenly spaced values from a to b) or ``logspace(a, b, n)``
+(n values from 10^a to 10^b, as ``numpy.logspace``).  The product runs over the keys in the
+order given, the last key fastest, so point ``i`` is row ``i`` of ``numpy.ndindex(shape)``.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import re
+from dataclasses import dataclass
+from typing import Any, Iterator, Mapping
+
+import numpy as np
+
+from ..config import Config, _FIELDS, _unknown_key_error, parse_value
+
+__all__ = ["Grid", "parse_grid_option", "format_value"]
+
+_RANGE = re.compile(r"^\s*(linspace|logspace)\s*\((.*)\)\s*$")
+
+
+def _field(key: str):
+    section, _, name = key.partition(".")
+    if section not in _FIELDS or name not in _FIELDS[section]:
+        raise _unknown_key_error(key)
+    return _FIELDS[section][name]
+
+
+def _range_values(key: str, kind: str, args: str) -> list[float]:
+    parts = [p.strip() for p in args.split(",")]
+    usage = f"grid {key}: {kind}(a, b, n) takes two numbers and a whole number n >= 1"
+    if len(parts) != 3:
+        raise ValueError(f"{usage}, got {kind}({args})")
+    try:
+        a, b = float(parts[0]), float(parts[1])
+        n = float(parts[2])
+    except ValueError:
+        raise ValueError(f"{usage}, got {kind}({args})") from None
+    if not (math.isfinite(a) and math.isfinite(b)) or not n.is_integer() or n < 1:
+        raise ValueError(f"{usage}, got {kind}({args})")
+    fn = np.linspace if kind == "linspace" else np.logspace
+    return [float(x) for x in fn(a, b, int(n))]
+
+
+def _values_from_text(key: str, text: str) -> list[Any]:
+    m = _RANGE.match(text)
+    if m:
+        return _range_values(key, m.group(1), m.group(2))
+    items = [t for t in (s.strip() for s in text.split(",")) if t != ""]
+    if not items:
+        raise ValueError(f"grid {key}: no values given (e.g. --grid {key}=1,2,3 or "
+                         f"{key}=linspace(0,1,5))")
+    return [parse_value(key, item) for item in items]
+
+
+def _coerce(key: str, values) -> tuple[Any, ...]:
+    """Check every value against the key's type and range (one line naming both)."""
+    spec = _field(key)
+    out = []
+    for value in values:
+        if isinstance(value, np.generic):
+            value = value.item()
+        if isinstance(value, str) and spec.kind != "str":
+            value = parse_value(key, value)
+        out.append(spec.coerce(key, value))
+    seen = set()
+    for value in out:
+        if value in seen:
+            raise ValueError(f"grid {key} lists the value {value!r} twice")
+        seen.add(value)
+    if not out:
+        raise ValueError(f"grid {key}: no values given")
+    return tuple(out)
+
+
+def format_value(value: Any) -> str:
+    """A value as it is written in names and tables: shortest round-trip form."""
+    if isinstance(value, float):
+        text = repr(value)
+        return text[:-2] if text.endswith(".0") else text
+    return str(value)
+
+
+@dataclass(frozen=True)
+class Grid:
+    """The swept keys (in order) and their values; points are their Cartesian product."""
+
+    keys: tuple[str, ...]
+    values: tuple[tuple[Any, ...], ...]
+
+    @classmethod
+    def from_spec(cls, spec: Mapping[str, Any]) -> "Grid":
+        """From ``{"rod.mu": [0, 1, 10], "floor.beta": "linspace(0.01, 0.05, 3)"}``: lists,
+        arrays, or text as on the command line."""
+        if isinstance(spec, Grid):
+            return spec
+        if not isinstance(spec, Mapping) or not spec:
+            raise ValueError("grid must map at least one configuration key to its values, "
+                             "e.g. {'rod.mu': [0, 1, 10]}")
+        keys, values = [], []
+        for key, vals in spec.items():
+            if not isinstance(key, str):
+                raise _unknown_key_error(str(key))
+            _field(key)
+            if isinstance(vals, str):
+                vals = _values_from_text(key, vals)
+            elif np.isscalar(vals):
+                vals = [vals]
+            keys.append(key)
+            values.append(_coerce(key, list(vals)))
+        return cls(tuple(keys), tuple(values))
+
+    @classmethod
+    def from_json(cls, text: str) -> "Grid":
+        return cls.from_spec(json.loads(text))
+
+    def to_json(self) -> str:
+        """The grid as stored in a sweep file: ``{"key": [values...], ...}`` in order."""
+        return json.dumps({k: list(v) for k, v in zip(self.keys, self.values)})
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(v) for v in self.values)
+
+    def __len__(self) -> int:
+        return math.prod(self.shape)
+
+    def point(self, index: int) -> dict[str, Any]:
+        """The overrides of point ``index`` (``{"rod.mu": 10.0, ...}``)."""
+        if not 0 <= index < len(self):
+            raise IndexError(f"point {index} is outside the grid of {len(self)} points")
+        idx = np.unravel_index(index, self.shape)
+        return {k: v[i] for k, v, i in zip(self.keys, self.values, idx)}
+
+    def points(self) -> Iterator[dict[str, Any]]:
+        for combo in itertools.product(*self.values):
+            yield dict(zip(self.keys, combo))
+
+    def describe(self, index: int) -> str:
+        """``rod.mu=10 floor.beta=0.05``: point ``index`` in a line."""
+        return " ".join(f"{k}={format_value(v)}" for k, v in self.point(index).items())
+
+    def run_name(self, index: int) -> str:
+        """File name of the point's run for ``--save-runs``: the index (zero-padded, so the
+        names sort in grid order) then each swept key and value; the same grid always gives
+        the same names."""
+        width = len(str(max(len(self) - 1, 0)))
+        parts = [f"{index:0{width}d}"]
+        for k, v in self.point(index).items():
+            parts.append(f"{k}={format_value(v)}")
+        name = "_".join(parts)
+        return re.sub(r"[^A-Za-z0-9._=+-]", "-", name) + ".h5"
+
+    def config(self, base: Config, index: int) -> Config:
+        """Point ``index``'s configuration: ``base`` with the point's values."""
+        try:
+            return base.override(self.point(index))
+        except ValueError as exc:
+            raise ValueError(f"grid point {index} ({self.describe(index)}): {exc}") from None
+
+    def validate(self, base: Config) -> None:
+        """Build every point's configuration once (and drop it, so memory does not grow with
+        the grid): a bad point raises ValueError naming the point, the field and its range,
+        before anything runs or is written."""
+        for i in range(len(self)):
+            self.config(base, i)
+
+
+def parse_grid_option(items) -> dict[str, str]:
+    """``("rod.mu=0,1,10", "floor.beta=linspace(0.01,0.05,3)")`` -> ordered spec dict."""
+    spec: dict[str, str] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise ValueError(f"--grid expects KEY=VALUES (e.g. --grid rod.mu=0,1,10 or "
+                             f"--grid floor.beta=linspace(0.01,0.05,3)), got {item!r}")
+        if key in spec:
+            raise ValueError(f"--grid {key} is given twice; list all its values in one --grid")
+        spec[key] = text
+    if not spec:
+        raise ValueError("a sweep needs at least one --grid KEY=VALUES")
+    return spec

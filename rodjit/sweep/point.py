@@ -1,0 +1,224 @@
+"""One sweep point, run where a worker is: the task, its result, and the summary row.
+
+A point runs exactly the configuration ``rodjit run`` would run for it (snapshots are
+taken, so the steps land on the same output times, and discarded); only its summary and
+bounce table travel back.  With ``save_path`` the full run file is written instead, and the
+summary read back from it: the row is the same either way.
+"""
+from __future__ import annotations
+
+import importlib
+import math
+import os
+import socket
+import time
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..driver.run import Run, SimulationError, Sink
+from ..output.measures import RunMeasures
+from ..stepping import layout as L
+
+__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "died",
+           "law_modules", "BOUNCE_COLUMNS"]
+
+# the summary columns a point fills, after the swept keys: name -> (dtype, description)
+SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
+    "status": ("str", "completed | failed (pending: not run yet)"),
+    "message": ("str", "why the point failed ('' if it completed)"),
+    "n_bounces": ("int", "bounces recorded, an unfinished last one included"),
+    "n_complete_bounces": ("int", "bounces whose last contact episode ended"),
+    "restitution_first": ("float", "restitution -w_release/w_impact of the first complete "
+                                   "bounce (NaN if none)"),
+    "restitution_mean": ("float", "mean restitution over the complete bounces (NaN if none)"),
+    "contact_time_first": ("float", "t_release - t_impact of the first complete bounce"),
+    "min_u0": ("float", "lowest bottom height u_0 (deepest penetration if < 0)"),
+    "max_floor_force": ("float", "largest floor force sigma_b(u_0)"),
+    "min_strain": ("float", "smallest segment strain"),
+    "energy_error": ("float", "max |E + dissipated - E0| / max(|E0|, kinetic): drift at "
+                              "mu = 0, balance error at mu > 0 (NaN without diagnostics)"),
+    "steps": ("int", "accepted steps"),
+    "rejected_steps": ("int", "rejected trial steps"),
+    "wall_time": ("float", "seconds the point took in its worker, set-up included"),
+    "compile_time": ("float", "of which compiling or loading kernels from the disk cache"),
+    "run_time": ("float", "of which stepping in compiled code"),
+    "t_final": ("float", "simulated time reached"),
+    "run_file": ("str", "the point's run file (--save-runs), '' if none"),
+}
+_FILL = {"str": "", "int": 0, "float": math.nan}
+
+# the bounce table of a point: the run file's columns and dtypes
+BOUNCE_COLUMNS = L.BOUNCE_COLUMNS + ("open",)
+
+
+class PointTask(NamedTuple):
+    """What a worker needs for one point (small and picklable)."""
+
+    index: int
+    config: Any                 # rodjit.Config of the point
+    save_path: str | None       # full run file to write, or None
+    laws: tuple[str, ...]       # modules to import first: they register non-built-in laws
+
+
+@dataclass
+class PointResult:
+    """A point's summary row (``values``), bounce table and where it ran."""
+
+    index: int
+    values: dict
+    bounces: dict = field(default_factory=dict)
+    worker: dict = field(default_factory=dict)
+
+    @property
+    def status(self) -> str:
+        return self.values["status"]
+
+
+def empty_values(status: str = "pending", message: str = "") -> dict:
+    values = {name: _FILL[kind] for name, (kind, _) in SUMMARY_COLUMNS.items()}
+    values.update(status=status, message=message)
+    return values
+
+
+def empty_bounces() -> dict:
+    out = {name: np.zeros(0) for name in L.BOUNCE_COLUMNS}
+    out["n_episodes"] = np.zeros(0, np.int64)
+    out["open"] = np.zeros(0, bool)
+    return out
+
+
+def died(index: int, message: str) -> PointResult:
+    """The result of a point whose worker process died while running it."""
+    return PointResult(index, empty_values("failed", message), empty_bounces())
+
+
+def law_modules(config) -> tuple[str, ...]:
+    """Modules defining the point's stress laws, unless rodjit's own (a worker in a fresh
+    process must import them to find the laws by name)."""
+    from ..model.laws import get_law
+
+    mods = []
+    for kind, name in (("rod", config.rod.law), ("floor", config.floor.law)):
+        fn = get_law(kind, name).value
+        mod = getattr(getattr(fn, "py_func", fn), "__module__", "")
+        if mod and not mod.startswith("rodjit.") and mod not in mods:
+            mods.append(mod)
+    return tuple(mods)
+
+
+class _PointSink(Sink):
+    """Keeps what a summary row needs: running measures and the bounce rows."""
+
+    def __init__(self, run: Run):
+        self.run = run
+        self.measures: RunMeasures | None = None
+        self.rows: list[np.ndarray] = []
+        self._diag = {name: j for j, name in enumerate(L.DIAG_COLUMNS)}
+
+    def diagnostics(self, rows):
+        if self.measures is None:   # E0 is set by the compiled start, before the first drain
+            self.measures = RunMeasures(self.run.energy0)
+        self.measures.add_diagnostics({name: rows[:, j] for name, j in self._diag.items()})
+
+    def bounces(self, rows):
+        self.rows.append(rows.copy())
+
+
+def _bounce_table(sink: _PointSink, run: Run) -> dict:
+    rows = list(sink.rows)
+    is_open = [np.zeros(len(r), bool) for r in rows]
+    pending = run.pending_bounce()
+    if pending is not None:
+        rows.append(pending[0][None, :])
+        is_open.append(np.array([pending[1]]))
+    b = np.concatenate(rows) if rows else np.zeros((0, len(L.BOUNCE_COLUMNS)))
+    out = {name: b[:, j].copy() for j, name in enumerate(L.BOUNCE_COLUMNS)}
+    out["n_episodes"] = out["n_episodes"].astype(np.int64)
+    out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)
+    return out
+
+
+def _bounce_values(bounces: dict) -> dict:
+    done = ~bounces["open"]
+    e = bounces["restitution"][done]
+    first = int(np.argmax(done)) if done.any() else -1
+    return {
+        "n_bounces": int(bounces["t_impact"].size),
+        "n_complete_bounces": int(done.sum()),
+        "restitution_first": float(e[0]) if e.size else math.nan,
+        "restitution_mean": float(np.mean(e)) if e.size else math.nan,
+        "contact_time_first": (float(bounces["t_release"][first] - bounces["t_impact"][first])
+                               if first >= 0 else math.nan),
+    }
+
+
+def _run_in_memory(config) -> tuple[dict, dict]:
+    run = Run(config)
+    sink = _PointSink(run)
+    status, message = "completed", ""
+    try:
+        run.start(sink)
+        while run.advance(sink) != L.DONE:
+            pass
+    except SimulationError as exc:
+        status, message = "failed", str(exc)
+    if sink.measures is None:                      # no diagnostics were sampled
+        sink.measures = RunMeasures(run.energy0)
+    bounces = _bounce_table(sink, run)
+    sink.measures.add_bounces(bounces)
+    m = sink.measures
+    values = {"status": status, "message": message, "min_u0": m.min_u0,
+              "max_floor_force": m.max_floor_force, "min_strain": m.min_strain,
+              "energy_error": m.energy_error, "steps": run.steps,
+              "rejected_steps": run.rejected, "compile_time": run.compile_time,
+              "run_time": run.run_time,
+              "t_final": run.t, "run_file": ""}
+    return values, bounces
+
+
+def _run_to_file(config, path: str) -> tuple[dict, dict]:
+    from ..driver.files import run_to_file
+
+    try:
+        s = run_to_file(config, path, overwrite=True, handle_signals=False,
+                        command=f"rodjit sweep point -> {path}")
+        status, message = "completed", ""
+    except SimulationError as exc:
+        s = exc.summary
+        status, message = "failed", str(exc)
+    values = {"status": status, "message": message, "min_u0": s.measures.min_u0,
+              "max_floor_force": s.measures.max_floor_force,
+              "min_strain": s.measures.min_strain, "energy_error": s.measures.energy_error,
+              "steps": s.steps, "rejected_steps": s.rejected_steps,
+              "compile_time": s.compile_time, "run_time": s.run_time, "t_final": s.t,
+              "run_file": os.path.basename(path)}
+    return values, {name: np.asarray(s.bounces[name]) for name in BOUNCE_COLUMNS}
+
+
+def run_point(task: PointTask) -> PointResult:
+    """Run one point; every failure of the point itself becomes ``status = failed``."""
+    t0 = time.perf_counter()
+    values = empty_values()
+    bounces = empty_bounces()
+    try:
+        for mod in task.laws:
+            importlib.import_module(mod)
+        if task.save_path is None:
+            got, bounces = _run_in_memory(task.config)
+        else:
+            got, bounces = _run_to_file(task.config, task.save_path)
+        values.update(got)
+        values.update(_bounce_values(bounces))
+    except Exception as exc:   # a bug or a resource error: the sweep goes on without it
+        values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
+    values["wall_time"] = time.perf_counter() - t0
+    return PointResult(task.index, values, bounces, worker_info())
+
+
+def worker_info() -> dict:
+    import numba
+
+    return {"pid": os.getpid(), "host": socket.gethostname(),
+            "numba_threads": int(numba.config.NUMBA_NUM_THREADS)}

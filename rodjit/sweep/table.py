@@ -1,0 +1,144 @@
+"""The summary table of a sweep: what ``rodjit.sweep`` returns and ``load_sweep`` reads."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .grid import Grid, format_value
+from .point import SUMMARY_COLUMNS
+
+__all__ = ["SweepTable", "load_sweep", "TABLE_COLUMNS"]
+
+# the columns `report` prints after the swept keys (messages of failed points follow)
+TABLE_COLUMNS = ("status", "n_bounces", "restitution_first", "restitution_mean",
+                 "contact_time_first", "min_u0", "max_floor_force", "min_strain",
+                 "energy_error", "steps", "wall_time")
+
+
+@dataclass
+class SweepTable:
+    """One row per grid point, in grid order: the swept keys, then ``SUMMARY_COLUMNS``.
+
+    ``table["restitution_first"]`` is a column; ``to_pandas()`` a DataFrame indexed by point;
+    ``to_xarray()`` a Dataset with one dimension per swept key; ``bounces(i)`` point i's
+    bounce table (read from the file, or kept in memory for a sweep without one).
+    """
+
+    grid: Grid
+    base: object                       # the base rodjit.Config
+    columns: dict[str, np.ndarray]
+    path: str | None = None
+    status: str = "completed"
+    message: str = ""
+    stats: dict = field(default_factory=dict)
+    attrs: dict = field(default_factory=dict)
+    _bounces: dict = field(default_factory=dict, repr=False)
+
+    def __len__(self) -> int:
+        return len(self.grid)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.columns[name]
+
+    @property
+    def counts(self) -> dict[str, int]:
+        status = self.columns["status"]
+        return {s: int(np.sum(status == s)) for s in ("completed", "failed", "pending")}
+
+    def config(self, index: int):
+        """The configuration point ``index`` ran."""
+        return self.grid.config(self.base, index)
+
+    def bounces(self, index: int) -> dict[str, np.ndarray]:
+        if index in self._bounces:
+            return self._bounces[index]
+        if self.path is None:
+            from .point import empty_bounces
+            return empty_bounces()
+        from ..output import sweep_file
+
+        with sweep_file.open_sweep(self.path) as f:
+            return sweep_file.read_bounces(f, index)
+
+    def to_pandas(self):
+        """A pandas DataFrame, one row per point (index: the point number)."""
+        import pandas as pd
+
+        df = pd.DataFrame(self.columns)
+        df.index.name = "point"
+        return df
+
+    def to_xarray(self):
+        """An xarray Dataset over the grid: one dimension per swept key."""
+        return self.to_pandas().set_index(list(self.grid.keys)).to_xarray()
+
+    def report(self, max_rows: int | None = None) -> str:
+        """The table as text: one line per point, then the failures' messages."""
+        keys = list(self.grid.keys)
+        head = ["#"] + keys + list(TABLE_COLUMNS)
+        n = len(self)
+        show = list(range(n))
+        if max_rows is not None and n > max_rows:
+            half = max(1, max_rows // 2)
+            show = show[:half] + [-1] + show[n - half:]
+        rows = []
+        for i in show:
+            if i < 0:
+                rows.append(["..."] + [""] * (len(head) - 1))
+                continue
+            rows.append([str(i)] + [_cell(self.columns[c][i], c) for c in keys + list(TABLE_COLUMNS)])
+        widths = [max(len(h), *(len(r[j]) for r in rows)) if rows else len(h)
+                  for j, h in enumerate(head)]
+        lines = ["  ".join(h.rjust(w) for h, w in zip(head, widths))]
+        lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths)) for r in rows]
+        failed = np.flatnonzero(self.columns["status"] == "failed")
+        if failed.size:
+            lines.append(f"failed points ({failed.size}):")
+            for i in failed[:max_rows] if max_rows else failed:
+                lines.append(f"  {i}: {self.grid.describe(int(i))}: {self.columns['message'][i]}")
+            if max_rows and failed.size > max_rows:
+                lines.append(f"  ... and {failed.size - max_rows} more (rodjit info shows all)")
+        return "\n".join(lines)
+
+    def headline(self) -> str:
+        c = self.counts
+        where = self.path or "in memory"
+        text = (f"{where}: sweep {self.status}, {len(self)} points ({c['completed']} completed, "
+                f"{c['failed']} failed, {c['pending']} not run)")
+        if self.stats.get("wall_time"):
+            s = self.stats
+            text += (f" in {s['wall_time']:.3g} s ({s['points_run']} run here, "
+                     f"{s['points_per_second']:.3g} points/s, {s['backend']})")
+        return text
+
+
+def _cell(value, column: str) -> str:
+    if isinstance(value, str):
+        return value
+    if isinstance(value, (bool, np.bool_)):
+        return str(bool(value))
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    value = float(value)
+    if value != value:
+        return "-"
+    if column in ("wall_time",):
+        return f"{value:.3g}"
+    if column in SUMMARY_COLUMNS:
+        return f"{value:.5g}"
+    return format_value(value)
+
+
+def load_sweep(path) -> SweepTable:
+    """Read a sweep file's summary table (also while the sweep is still running)."""
+    from ..output import sweep_file
+
+    with sweep_file.open_sweep(path) as f:
+        header = sweep_file.read_header(f)
+        columns = sweep_file.read_summary(f)
+        attrs = header["attrs"]
+    return SweepTable(grid=header["grid"], base=header["base"], columns=columns,
+                      path=str(Path(path)), status=str(attrs["status"]),
+                      message=str(attrs.get("message", "")), attrs=attrs)

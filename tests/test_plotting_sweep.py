@@ -1,0 +1,57 @@
+"""Figures of a sweep file: the lines and cells drawn are the table's values."""
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit.plotting.sweep import sweep_figure
+
+pytest.importorskip("matplotlib")
+
+GRID = {"rod.mu": [0.0, 1.0, 10.0], "floor.kappa_b": [1e3, 1e4], "floor.beta": [0.01, 0.05]}
+
+
+@pytest.fixture(scope="module")
+def sweep_path(tmp_path_factory):
+    path = tmp_path_factory.mktemp("plot") / "s.h5"
+    rodjit.sweep(rodjit.Config().override({"time.t_end": 1.0}), GRID, output=path,
+                 scheduler="inline")
+    return path
+
+
+def test_restitution_against_mu_one_line_per_floor(sweep_path):
+    table = rodjit.load_sweep(sweep_path)
+    ax = sweep_figure(sweep_path).axes[0]
+    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+    assert [ln.get_label() for ln in lines] == [
+        "κ_b = 1000, β = 0.01", "κ_b = 1000, β = 0.05", "κ_b = 10000, β = 0.01",
+        "κ_b = 10000, β = 0.05"]
+    for ln, (kb, beta) in zip(lines, [(1e3, 0.01), (1e3, 0.05), (1e4, 0.01), (1e4, 0.05)]):
+        mask = (table["floor.kappa_b"] == kb) & (table["floor.beta"] == beta)
+        assert np.array_equal(ln.get_xdata(), table["rod.mu"][mask])
+        assert np.array_equal(ln.get_ydata(), table["restitution_first"][mask], equal_nan=True)
+    assert ax.get_xscale() == "linear"          # 0, 1, 10: less than two decades
+
+
+def test_heatmap_cells_are_the_table_at_the_chosen_mu(sweep_path):
+    table = rodjit.load_sweep(sweep_path)
+    fig = sweep_figure(sweep_path, "heatmap", quantity="contact_time_first",
+                       at={"rod.mu": "1"})
+    ax = fig.axes[0]
+    z = ax.collections[0].get_array().reshape(2, 2)     # rows: β, columns: κ_b
+    for r, beta in enumerate([0.01, 0.05]):
+        for c, kb in enumerate([1e3, 1e4]):
+            i = np.flatnonzero((table["rod.mu"] == 1.0) & (table["floor.kappa_b"] == kb)
+                               & (table["floor.beta"] == beta))[0]
+            assert z[r, c] == table["contact_time_first"][i]
+    assert "at μ = 1" in ax.get_title()
+    assert [t.get_text() for t in ax.get_xticklabels()] == ["1000", "10000"]
+
+
+def test_a_log_axis_for_values_over_decades(tmp_path):
+    path = tmp_path / "log.h5"
+    rodjit.sweep(rodjit.Config().override({"time.t_end": 0.5}),
+                 {"floor.kappa_b": [1e3, 1e4, 1e5]}, output=path, scheduler="inline")
+    ax = sweep_figure(path, x="floor.kappa_b", quantity="min_u0").axes[0]
+    assert ax.get_xscale() == "log"
+    with pytest.raises(ValueError, match="kind = 'pie' is not allowed"):
+        sweep_figure(path, "pie")

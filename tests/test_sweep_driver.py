@@ -1,0 +1,307 @@
+"""rodjit.sweep: backends agree, the file layout, failures, dying workers, resume, memory."""
+import math
+import os
+import signal
+import tracemalloc
+
+import h5py
+import numpy as np
+import pytest
+
+import killer_law  # noqa: F401  (registers "kill-test", which kills its worker)
+import rodjit
+from rodjit.output import sweep_file
+from rodjit.sweep.executors import WORKER_ENV, ProcessPool
+from rodjit.sweep.grid import Grid
+from rodjit.sweep.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, PointTask, run_point
+
+from conftest import assert_same_files
+
+BASE = rodjit.Config().override({"time.t_end": 0.8})       # the fall and one impact
+GRID = {"rod.mu": [0.0, 10.0], "floor.beta": [0.01, 0.05]}
+TIMINGS = ("wall_time", "compile_time", "run_time")
+FAILING = {"time.dt": 1e-3}                                 # with initial.velocity = -100
+
+
+def same_values(a, b, skip=TIMINGS):
+    """Two tables (or column dicts) hold the same results, timings apart."""
+    a = getattr(a, "columns", a)
+    b = getattr(b, "columns", b)
+    assert list(a) == list(b)
+    for name in a:
+        if name in skip:
+            continue
+        x, y = np.asarray(a[name]), np.asarray(b[name])
+        if x.dtype.kind == "f":
+            assert np.array_equal(x, y, equal_nan=True), name
+        else:
+            assert list(x) == list(y), name
+
+
+@pytest.fixture(scope="module")
+def inline_table():
+    return rodjit.sweep(BASE, GRID, scheduler="inline")
+
+
+def test_each_row_is_its_point_run_alone(inline_table):
+    t = inline_table
+    grid = Grid.from_spec(GRID)
+    assert len(t) == 4 and t.status == "completed" and t.counts["completed"] == 4
+    assert list(t.columns)[:2] == ["rod.mu", "floor.beta"]
+    assert list(t.columns)[2:] == list(SUMMARY_COLUMNS)
+    assert list(t["rod.mu"]) == [0.0, 0.0, 10.0, 10.0]
+    assert list(t["floor.beta"]) == [0.01, 0.05, 0.01, 0.05]
+    for i in range(len(t)):
+        alone = run_point(PointTask(i, grid.config(BASE, i), None, ()))
+        row = {name: t[name][i] for name in SUMMARY_COLUMNS}
+        same_values({k: [v] for k, v in row.items()}, {k: [v] for k, v in alone.values.items()})
+        for name in BOUNCE_COLUMNS:
+            assert np.array_equal(t.bounces(i)[name], alone.bounces[name], equal_nan=True)
+    assert t.config(3).rod.mu == 10.0 and t.config(3).floor.beta == 0.05
+
+
+def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
+    path = tmp_path / "sweep.h5"
+    table = rodjit.sweep(BASE, GRID, output=path, jobs=2, command="test sweep")
+    same_values(table, inline_table)
+    assert table.stats["backend"] == "processes" and table.stats["jobs"] == 2
+    assert table.stats["points_run"] == 4 and table.stats["worker_deaths"] == 0
+    loaded = rodjit.load_sweep(path)
+    same_values(loaded, inline_table)
+    with h5py.File(path, "r") as f:
+        a = f.attrs
+        assert a["rodjit_kind"] == "sweep" and a["format_version"] == 1
+        assert a["status"] == "completed" and a["command"] == "test sweep"
+        assert rodjit.Config.from_toml_string(a["base_config_toml"]) == BASE
+        assert Grid.from_json(a["grid"]) == Grid.from_spec(GRID)
+        assert list(a["grid_keys"]) == ["rod.mu", "floor.beta"] and a["n_points"] == 4
+        s = f["summary"]
+        assert list(s) == ["rod.mu", "floor.beta", *SUMMARY_COLUMNS]   # in table order
+        assert s["rod.mu"].dtype == np.float64 and s["steps"].dtype == np.int64
+        assert h5py.check_string_dtype(s["status"].dtype)
+        assert all(s[c].shape == (4,) for c in s)
+        for i in range(4):
+            g = f[f"points/{i}/bounces"]
+            assert list(g) == list(BOUNCE_COLUMNS)
+            for name in BOUNCE_COLUMNS:
+                assert np.array_equal(g[name][()], inline_table.bounces(i)[name], equal_nan=True)
+    df = rodjit.load_sweep(path).to_pandas()                # the README's one line
+    assert list(df.columns) == list(loaded.columns) and len(df) == 4
+    assert df.loc[3, "status"] == "completed" and df["steps"].dtype == np.int64
+    ds = loaded.to_xarray()
+    assert ds["restitution_first"].dims == ("rod.mu", "floor.beta")
+    assert float(ds["steps"].sel({"rod.mu": 10.0, "floor.beta": 0.05})) == loaded["steps"][3]
+
+
+def test_a_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
+    base = BASE.override(FAILING)
+    table = rodjit.sweep(base, {"initial.velocity": [0.0, -100.0, -1.0]}, scheduler="inline",
+                         output=tmp_path / "s.h5")
+    assert list(table["status"]) == ["completed", "failed", "completed"]
+    assert "fixed step time.dt = 0.001 failed" in table["message"][1]
+    assert table["message"][0] == "" and table["steps"][1] > 0
+    assert table.status == "completed"
+    assert "failed points (1):" in table.report() and "initial.velocity=-100" in table.report()
+    assert rodjit.load_sweep(tmp_path / "s.h5")["status"][1] == "failed"
+
+
+KILLER = {"rod.law": "kill-test"}
+KILLER_GRID = {"rod.kappa": [100.0, 13.0], "initial.velocity": [0.0, -100.0]}
+
+
+def test_a_dying_worker_fails_its_point_only():
+    grid = {"rod.kappa": [100.0, 50.0, 13.0], "rod.mu": [0.0, 1.0]}
+    table = rodjit.sweep(BASE.override(KILLER), grid, jobs=2)
+    assert list(table["status"]) == ["completed"] * 4 + ["failed"] * 2
+    for i in (4, 5):
+        assert "worker process" in table["message"][i]
+        assert "died while running this point (killed by SIGKILL)" in table["message"][i]
+    assert table.stats["worker_deaths"] == 2
+    assert np.all(table["steps"][:4] > 0)
+
+
+def test_workers_run_numba_single_threaded():
+    before = {k: os.environ.get(k) for k in WORKER_ENV}
+    pool = ProcessPool(1)
+    results = [r for r in pool.results([PointTask(0, BASE, None, ())]) if r is not None]
+    assert len(results) == 1 and results[0].status == "completed"
+    assert results[0].worker["numba_threads"] == 1 and results[0].worker["pid"] != os.getpid()
+    assert {k: os.environ.get(k) for k in WORKER_ENV} == before   # the caller's env restored
+    assert pool.startup_time is not None and not pool.workers
+
+
+def _interrupt_after(k):
+    state = {"sent": False}
+
+    def progress(p):
+        if p.run >= k and not state["sent"]:
+            state["sent"] = True
+            os.kill(os.getpid(), signal.SIGINT)
+    return progress
+
+
+@pytest.mark.parametrize("scheduler", ["inline", "processes"])
+def test_interrupt_keeps_finished_points_and_resume_runs_the_rest(tmp_path, inline_table,
+                                                                  scheduler):
+    path = tmp_path / "cut.h5"
+    with pytest.raises(rodjit.SweepInterrupted) as info:
+        rodjit.sweep(BASE, GRID, output=path, scheduler=scheduler, jobs=1,
+                     progress=_interrupt_after(2))
+    assert info.value.signum == signal.SIGINT
+    assert "after 2 of 4 points; continue with: rodjit sweep --resume -o" in str(info.value)
+    cut = rodjit.load_sweep(path)
+    assert cut.status == "interrupted"
+    assert list(cut["status"]) == ["completed", "completed", "pending", "pending"]
+    same_values({k: v[:2] for k, v in cut.columns.items()},
+                {k: v[:2] for k, v in inline_table.columns.items()})
+    walls = cut["wall_time"][:2].copy()
+    table = rodjit.sweep(output=path, resume=True, scheduler=scheduler, jobs=1)
+    assert table.stats["points_run"] == 2 and table.status == "completed"
+    final = rodjit.load_sweep(path)
+    same_values(final, inline_table)
+    assert np.array_equal(final["wall_time"][:2], walls)      # finished points were not rerun
+    with h5py.File(path, "r") as f:
+        assert "resumed (2 points to run)" in f.attrs["history"][-1]
+
+
+def test_resume_reruns_failed_points_only(tmp_path, inline_table):
+    path = tmp_path / "s.h5"
+    rodjit.sweep(BASE, GRID, output=path, scheduler="inline")
+    with h5py.File(path, "r+") as f:        # as if point 1 had failed
+        f["summary/status"][1] = "failed"
+        f["summary/steps"][1] = 0
+        del f["points/1"]
+    walls = rodjit.load_sweep(path)["wall_time"].copy()
+    table = rodjit.sweep(BASE, GRID, output=path, resume=True, scheduler="inline")
+    assert table.stats["points_run"] == 1
+    same_values(rodjit.load_sweep(path), inline_table)
+    now = rodjit.load_sweep(path)["wall_time"]
+    assert now[1] != walls[1] and np.array_equal(np.delete(now, 1), np.delete(walls, 1))
+    assert rodjit.sweep(output=path, resume=True).stats["points_run"] == 0
+
+
+def test_resume_refuses_another_grid_or_config(tmp_path):
+    path = tmp_path / "s.h5"
+    rodjit.sweep(BASE, GRID, output=path, scheduler="inline")
+    before = path.read_bytes()
+    with pytest.raises(ValueError, match="the grid differs from the one in"):
+        rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=True)
+    with pytest.raises(ValueError, match=r"the configuration differs .*\(rod.kappa\)"):
+        rodjit.sweep(BASE.override({"rod.kappa": 50.0}), GRID, output=path, resume=True)
+    with pytest.raises(ValueError, match="resume needs the sweep file"):
+        rodjit.sweep(resume=True)
+    assert path.read_bytes() == before
+
+
+def test_bad_input_writes_nothing(tmp_path):
+    out = tmp_path / "s.h5"
+    runs = tmp_path / "runs"
+    cases = [
+        ({"grid": {"rod.mu": [-1.0]}}, r"rod.mu = -1.0 is out of range"),
+        ({"grid": {"floor.beta": [0.1, 0.001], "initial.height": [-0.01]}},
+         r"grid point 1 \(floor.beta=0.001 initial.height=-0.01\)"),
+        ({"grid": GRID, "jobs": 0}, r"jobs = 0 is out of range \(a whole number >= 1\)"),
+        ({"grid": GRID, "scheduler": "mpi"}, "scheduler = 'mpi' is not allowed"),
+        ({"grid": None}, "a sweep needs a grid"),
+        ({"grid": GRID, "output": tmp_path / "missing" / "s.h5"}, "does not exist"),
+    ]
+    for kwargs, message in cases:
+        kwargs = {"output": out, "save_runs": runs, **kwargs}
+        with pytest.raises(ValueError, match=message):
+            rodjit.sweep(BASE, **kwargs)
+    assert not out.exists() and not runs.exists()
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match="is not a directory"):
+        rodjit.sweep(BASE, GRID, save_runs=tmp_path / "file")
+    out.write_bytes(b"x")
+    with pytest.raises(rodjit.OutputExists, match="already exists"):
+        rodjit.sweep(BASE, GRID, output=out)
+    with pytest.raises(TypeError, match="config must be a rodjit.Config"):
+        rodjit.sweep({"rod.mu": 1.0}, GRID)
+
+
+def test_save_runs_writes_each_points_run_file(tmp_path, inline_table):
+    runs = tmp_path / "runs"
+    table = rodjit.sweep(BASE, GRID, output=tmp_path / "s.h5", save_runs=runs, jobs=2)
+    same_values(table, inline_table, skip=TIMINGS + ("run_file",))
+    grid = Grid.from_spec(GRID)
+    names = [grid.run_name(i) for i in range(len(grid))]
+    assert sorted(p.name for p in runs.iterdir()) == names
+    assert list(table["run_file"]) == names
+    for i, name in enumerate(names):
+        ref = tmp_path / f"ref{i}.h5"
+        rodjit.run_to_file(grid.config(BASE, i), ref)
+        assert_same_files(runs / name, ref)
+    with h5py.File(tmp_path / "s.h5", "r") as f:
+        assert f.attrs["save_runs"] == str(runs.resolve())
+    with pytest.raises(ValueError, match=r"already holds '0_rod.mu=0_floor.beta=0.01.h5'; use "
+                                         r"--overwrite"):
+        rodjit.sweep(BASE, GRID, output=tmp_path / "t.h5", save_runs=runs)
+
+
+def _peak_traced(n_values, tmp_path):
+    tracemalloc.start()
+    try:
+        rodjit.sweep(BASE.override({"time.t_end": 0.05, "output.diagnostics_interval": 0.01}),
+                     {"rod.mu": np.linspace(0, 1, n_values)}, output=tmp_path / f"{n_values}.h5",
+                     jobs=2)
+        return tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+
+
+def test_memory_does_not_grow_with_the_number_of_points(tmp_path):
+    """Python-level peak memory of the sweep's process: 400 points vs 40."""
+    small = _peak_traced(40, tmp_path)
+    large = _peak_traced(400, tmp_path)
+    assert large - small < 2 * 2**20, (small, large)
+
+
+def test_dask_local_cluster_of_two_workers(tmp_path, inline_table):
+    distributed = pytest.importorskip("distributed")
+    import dask
+
+    table = rodjit.sweep(BASE, GRID, output=tmp_path / "d.h5", scheduler="local", jobs=2)
+    same_values(table, inline_table)
+    assert table.stats["backend"] == "dask LocalCluster (2 workers)"
+    same_values(rodjit.load_sweep(tmp_path / "d.h5"), inline_table)
+    # a failing point and a point that kills its worker: the others finish
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):   # no retries
+        t = rodjit.sweep(BASE.override({**FAILING, **KILLER}), KILLER_GRID, scheduler="local",
+                         jobs=2)
+    assert list(t["status"]) == ["completed", "failed", "failed", "failed"]
+    assert "fixed step time.dt" in t["message"][1]
+    for i in (2, 3):
+        assert "the Dask worker process running this point died" in t["message"][i]
+        assert math.isnan(t["restitution_first"][i]) and t["steps"][i] == 0
+    assert t["steps"][0] > 0 and distributed.__version__
+
+
+def test_progress_reports_points_failures_and_time_left():
+    seen = []
+    base = BASE.override(FAILING)
+    rodjit.sweep(base, {"initial.velocity": [0.0, -100.0, -1.0]}, scheduler="inline",
+                 progress=seen.append)
+    done = [(p.done, p.failed, p.total) for p in seen]
+    assert done == [(1, 0, 3), (2, 1, 3), (3, 1, 3)]
+    assert seen[-1].eta == 0.0 and seen[0].eta > 0 and seen[0].elapsed > 0
+
+
+def test_the_same_sweep_with_jit_disabled(tmp_path):
+    """A sweep in a process with NUMBA_DISABLE_JIT=1 (the kernels as plain Python) writes
+    the same table as the compiled one."""
+    import subprocess
+    import sys
+
+    over = {"time.t_end": 0.5, "rod.N": 4}
+    grid = {"rod.mu": [0.0, 1.0]}
+    path = tmp_path / "nojit.h5"
+    code = ("import rodjit; rodjit.sweep(rodjit.Config().override(%r), %r, output=%r, "
+            "scheduler='inline')" % (over, grid, str(path)))
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=600)
+    plain = rodjit.load_sweep(path)
+    compiled = rodjit.sweep(rodjit.Config().override(over), grid, scheduler="inline")
+    assert list(plain["steps"]) == list(compiled["steps"])
+    for name in ("restitution_first", "min_u0", "max_floor_force", "energy_error"):
+        assert np.allclose(plain[name], compiled[name], rtol=1e-12, atol=0, equal_nan=True)
