@@ -14,7 +14,7 @@ from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
 from .driver.simulate import simulate
 from .output.hdf5 import load_file
 from .presets import load_preset, preset_names
-from .sweep import SweepInterrupted, SweepTable, load_sweep, sweep
+from .sweeps import SweepInterrupted, SweepTable, load_sweep, sweep
 
 try:
     __version__ = _version("rodjit")

@@ -277,8 +277,8 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
-    from .sweep import SweepInterrupted, sweep
-    from .sweep.grid import parse_grid_option
+    from .sweeps import SweepInterrupted, sweep
+    from .sweeps.grid import parse_grid_option
     from .driver.files import OutputExists
 
     command = _sweep_command(config, output, grids, sets, jobs, scheduler, save_runs, resume,
@@ -408,7 +408,7 @@ def plot_run(path: str, output: str | None, kind: str) -> None:
 
 def info_sweep(path: str) -> None:
     from .output import sweep_file
-    from .sweep import load_sweep
+    from .sweeps import load_sweep
 
     try:
         table = load_sweep(path)
@@ -433,7 +433,7 @@ def info_sweep(path: str) -> None:
                f"{c['pending']} not run) on {a.get('scheduler', '?')}")
     click.echo("grid:")
     for key, values in zip(table.grid.keys, table.grid.values):
-        from .sweep.grid import format_value
+        from .sweeps.grid import format_value
         click.echo(f"  {key} = {', '.join(format_value(v) for v in values)}")
     if a.get("save_runs"):
         click.echo(f"run files {a['save_runs']}")

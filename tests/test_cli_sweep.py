@@ -160,3 +160,16 @@ def test_ctrl_c_stops_a_real_sweep_and_resume_finishes_it(tmp_path):
     ref = rodjit.sweep(rodjit.Config().override({"time.t_end": 6.0, "rod.N": 200}),
                        {"floor.beta": "linspace(0.01,0.05,16)"}, jobs=2)
     same_values(final, ref)
+
+
+def test_sweep_progress_bar_writes_to_stderr(capsys):
+    from rodjit.cli import _SweepProgress
+    from rodjit.sweeps import SweepProgress
+
+    bar = _SweepProgress()
+    bar(SweepProgress(done=13, total=52, failed=2, run=10, todo=49, elapsed=75.0))
+    bar.close()
+    err = capsys.readouterr().err
+    assert "13/52 points" in err and " 25%" in err and "2 failed" in err
+    assert "1:15 elapsed" in err and "4:52 left" in err       # 75 s / 10 × 39 points left
+    assert capsys.readouterr().out == ""

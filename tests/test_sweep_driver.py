@@ -11,9 +11,9 @@ import pytest
 import killer_law  # noqa: F401  (registers "kill-test", which kills its worker)
 import rodjit
 from rodjit.output import sweep_file
-from rodjit.sweep.executors import WORKER_ENV, ProcessPool
-from rodjit.sweep.grid import Grid
-from rodjit.sweep.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, PointTask, run_point
+from rodjit.sweeps.executors import WORKER_ENV, ProcessPool
+from rodjit.sweeps.grid import Grid
+from rodjit.sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, PointTask, run_point
 
 from conftest import assert_same_files
 
@@ -274,7 +274,27 @@ def test_dask_local_cluster_of_two_workers(tmp_path, inline_table):
     for i in (2, 3):
         assert "the Dask worker process running this point died" in t["message"][i]
         assert math.isnan(t["restitution_first"][i]) and t["steps"][i] == 0
-    assert t["steps"][0] > 0 and distributed.__version__
+    assert t["steps"][0] > 0
+
+
+def test_an_existing_dask_cluster_by_address(tmp_path, inline_table, monkeypatch):
+    distributed = pytest.importorskip("distributed")
+    import logging
+
+    import rodjit.sweeps.executors as executors
+
+    monkeypatch.setattr(executors, "CONNECT_TIMEOUT", 1.0)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+        address = cluster.scheduler_address
+        assert address.startswith("tcp://")
+        table = rodjit.sweep(BASE, GRID, output=tmp_path / "d.h5", scheduler=address)
+        assert table.stats["backend"] == f"dask {address}" and table.stats["jobs"] == 2
+        same_values(table, inline_table)
+        assert len(cluster.scheduler_info["workers"]) == 2     # the cluster is left running
+    with pytest.raises(ValueError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+        rodjit.sweep(BASE, GRID, output=tmp_path / "e.h5", scheduler="tcp://127.0.0.1:9")
+    assert not (tmp_path / "e.h5").exists()
 
 
 def test_progress_reports_points_failures_and_time_left():
@@ -305,3 +325,38 @@ def test_the_same_sweep_with_jit_disabled(tmp_path):
     assert list(plain["steps"]) == list(compiled["steps"])
     for name in ("restitution_first", "min_u0", "max_floor_force", "energy_error"):
         assert np.allclose(plain[name], compiled[name], rtol=1e-12, atol=0, equal_nan=True)
+
+
+def test_a_reader_holding_the_file_delays_writes_but_loses_nothing(tmp_path, monkeypatch,
+                                                                  inline_table):
+    """Another process keeps the sweep file open (HDF5 locks it): batch writes wait and
+    retry, and the finished file holds every point."""
+    import subprocess
+    import sys
+
+    path = tmp_path / "s.h5"
+    busy = []
+    write = sweep_file.write_results
+
+    def counting(*args, **kwargs):
+        try:
+            return write(*args, **kwargs)
+        except rodjit.output.hdf5.FileBusy:
+            busy.append(1)
+            raise
+    monkeypatch.setattr(sweep_file, "write_results", counting)
+    reader = {}
+
+    def progress(p):
+        if "proc" not in reader:
+            code = ("import h5py, sys, time; f = h5py.File(sys.argv[1], 'r'); print('open', "
+                    "flush=True); time.sleep(2.5); f.close()")
+            reader["proc"] = subprocess.Popen([sys.executable, "-c", code, str(path)],
+                                              stdout=subprocess.PIPE, text=True)
+            assert reader["proc"].stdout.readline().strip() == "open"
+    table = rodjit.sweep(BASE, GRID, output=path, scheduler="inline", progress=progress,
+                         flush_interval=1e-3)
+    reader["proc"].wait(timeout=30)
+    assert busy, "no write met the reader's lock"
+    same_values(rodjit.load_sweep(path), inline_table)
+    assert table.status == "completed"

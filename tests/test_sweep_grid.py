@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.sweep.grid import Grid, format_value, parse_grid_option
+from rodjit.sweeps.grid import Grid, format_value, parse_grid_option
 
 
 def test_lists_and_ranges_from_the_command_line():

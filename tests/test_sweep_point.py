@@ -6,7 +6,7 @@ import pytest
 
 import custom_law  # noqa: F401  (registers "log-test")
 import rodjit
-from rodjit.sweep.point import BOUNCE_COLUMNS, PointTask, SUMMARY_COLUMNS, law_modules, run_point
+from rodjit.sweeps.point import BOUNCE_COLUMNS, PointTask, SUMMARY_COLUMNS, law_modules, run_point
 
 from conftest import assert_same_files
 

@@ -17,8 +17,8 @@ import time
 import h5py
 import numpy as np
 
-from ..sweep.grid import Grid
-from ..sweep.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS
+from ..sweeps.grid import Grid
+from ..sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS
 from . import hdf5
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
@@ -54,9 +54,9 @@ def key_columns(grid: Grid) -> dict[str, np.ndarray]:
     return out
 
 
-def _open(path, mode: str) -> h5py.File:
-    """Open for writing, waiting up to LOCK_WAIT for a reader (rodjit info) to let go."""
-    deadline = time.monotonic() + LOCK_WAIT
+def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
+    """Open for writing, waiting up to ``wait`` seconds for a reader to let go."""
+    deadline = time.monotonic() + wait
     while True:
         try:
             return h5py.File(path, mode, libver="latest")
@@ -112,13 +112,14 @@ def reopen(path, *, history: str) -> None:
             f.attrs[key] = value
 
 
-def write_results(path, results) -> None:
-    """Write a batch of PointResults: their summary rows and bounce tables."""
+def write_results(path, results, wait: float = LOCK_WAIT) -> None:
+    """Write a batch of PointResults: their summary rows and bounce tables.  FileBusy if
+    another process holds the file open for longer than ``wait`` seconds."""
     if not results:
         return
     results = sorted(results, key=lambda r: r.index)
     idx = np.array([r.index for r in results])
-    with _open(path, "r+") as f:
+    with _open(path, "r+", wait) as f:
         s = f["summary"]
         for name, (kind, _) in SUMMARY_COLUMNS.items():
             if name == "status":
@@ -182,7 +183,7 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
     """Point ``index``'s bounce table (empty columns if the point has not run)."""
     g = f["points"].get(str(index))
     if g is None:
-        from ..sweep.point import empty_bounces
+        from ..sweeps.point import empty_bounces
         return empty_bounces()
     return {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
 

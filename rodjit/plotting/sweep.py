@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 
 from ..config import parse_value
-from ..sweep.grid import format_value
-from ..sweep.point import SUMMARY_COLUMNS
+from ..sweeps.grid import format_value
+from ..sweeps.point import SUMMARY_COLUMNS
 from .mpl import new_figure
 
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
@@ -167,7 +167,7 @@ def _heatmap(fig, table, quantity, x, y, at) -> None:
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
                  at=None):
     """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable."""
-    from ..sweep.table import SweepTable, load_sweep
+    from ..sweeps.table import SweepTable, load_sweep
 
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")

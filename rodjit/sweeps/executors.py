@@ -7,7 +7,6 @@ yields a failed result for the point it held; the other points go on.
 """
 from __future__ import annotations
 
-import importlib
 import logging
 import multiprocessing as mp
 import os
@@ -23,6 +22,7 @@ __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "WORKER_ENV"
            "default_jobs"]
 
 HEARTBEAT = 0.2
+CONNECT_TIMEOUT = 10.0     # seconds to reach an existing Dask scheduler
 # one thread per worker: the workers are the parallelism (no oversubscribed cores)
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
@@ -267,13 +267,13 @@ class DaskCluster:
             self.name = f"dask LocalCluster ({jobs} workers)"
         else:
             try:
-                self.client = distributed.Client(scheduler, timeout=10)
+                self.client = distributed.Client(scheduler, timeout=CONNECT_TIMEOUT)
             except (OSError, TimeoutError) as exc:
                 raise ValueError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
             self.name = f"dask {scheduler}"
         self.jobs = max(1, sum(self.client.nthreads().values()))
         try:     # every worker imports rodjit now (and says so if it cannot)
-            self.client.run(importlib.import_module, "rodjit.sweep.point")
+            self.client.run(_ready)
         except ImportError as exc:
             self.close()
             raise ValueError(f"the Dask workers cannot import rodjit ({exc}); install rodjit "
@@ -338,6 +338,13 @@ class DaskCluster:
         finally:
             if self.cluster is not None:
                 self.cluster.close()
+
+
+def _ready() -> dict:
+    """Run on each Dask worker at start: import rodjit, report the worker."""
+    from .point import worker_info
+
+    return worker_info()
 
 
 def make_executor(scheduler: str | None, jobs: int):

@@ -27,6 +27,7 @@ from .table import SweepTable
 __all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
 
 FLUSH_INTERVAL = 1.0
+BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
 
 
 class SweepInterrupted(RuntimeError):
@@ -184,6 +185,13 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     if command is None:
         command = f"rodjit.sweep(config, grid, output={str(output) if output else None!r})"
 
+    table = SweepTable(grid=grid, base=base, columns=columns,
+                       path=str(output) if output is not None else None, status="running")
+    if not todo:                                   # a resume with nothing left to run
+        table.status = "completed"
+        table.stats = _stats(0.0, 0, 0, None)
+        sweep_file.finish(output, "completed")
+        return table
     executor = make_executor(scheduler, jobs)      # the last check: a cluster may be unreachable
     if runs_dir is not None:
         runs_dir.mkdir(parents=True, exist_ok=True)
@@ -195,8 +203,6 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
                                               f"{command}")
         else:
             sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
-    table = SweepTable(grid=grid, base=base, columns=columns,
-                       path=str(output) if output is not None else None, status="running")
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval)
 
@@ -213,6 +219,16 @@ def _check_not_live(output: Path) -> None:
     if live:
         raise hdf5.FileBusy(f"{str(output)!r} is being written by a running rodjit process; "
                             f"stop it before replacing the file")
+
+
+def _stats(wall: float, ran: int, failed: int, executor) -> dict:
+    """What ``SweepTable.stats`` reports of this call."""
+    return {"wall_time": wall, "points_run": ran, "points_failed": failed,
+            "points_per_second": ran / wall if wall > 0 else 0.0,
+            "startup_time": getattr(executor, "startup_time", None),
+            "worker_deaths": getattr(executor, "deaths", 0),
+            "backend": executor.name if executor is not None else "none",
+            "jobs": executor.jobs if executor is not None else 0}
 
 
 def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
@@ -255,8 +271,12 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                     status, signum = "interrupted", stop.signum
                     break
                 if batch and time.monotonic() - last >= flush_interval:
-                    sweep_file.write_results(output, batch)
-                    batch, last = [], time.monotonic()
+                    try:
+                        sweep_file.write_results(output, batch, wait=BUSY_WAIT)
+                        batch = []
+                    except hdf5.FileBusy:   # a reader holds the file: keep them, retry later
+                        pass
+                    last = time.monotonic()
         except KeyboardInterrupt:          # a second signal while stopping
             status = "interrupted"
         except BaseException as exc:
@@ -268,12 +288,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         finally:
             results.close()
             executor.close(cancel=status != "completed")
-    wall = time.perf_counter() - t0
-    table.stats = {"wall_time": wall, "points_run": ran, "points_failed": failed,
-                   "points_per_second": ran / wall if wall > 0 else 0.0,
-                   "startup_time": getattr(executor, "startup_time", None),
-                   "worker_deaths": getattr(executor, "deaths", 0),
-                   "backend": executor.name, "jobs": executor.jobs}
+    table.stats = _stats(time.perf_counter() - t0, ran, failed, executor)
     if status == "interrupted":
         name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
         message = (f"interrupted by {name} after {done0 + ran} of {n} points"
