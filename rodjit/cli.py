@@ -86,8 +86,8 @@ def _command(config, output, sets, t_end, overwrite, resume, quiet) -> str:
     return shlex.join(words)
 
 
-class _Progress:
-    """A one-line progress bar on stderr: simulated time, steps/s, bounces so far."""
+class _Bar:
+    """A one-line progress bar on stderr, redrawn at most every 0.1 s."""
 
     WIDTH = 24
 
@@ -95,22 +95,34 @@ class _Progress:
         self.last = 0.0
         self.shown = False
 
-    def __call__(self, run) -> None:
+    def _due(self, final: bool = False) -> bool:
         now = time.monotonic()
-        if now - self.last < 0.1:
-            return
+        if now - self.last < 0.1 and not final:
+            return False
         self.last = now
-        frac = min(1.0, max(0.0, run.t / run.t_end)) if run.t_end > 0 else 1.0
+        return True
+
+    def _show(self, frac: float, head: str, tail: str) -> None:
         fill = int(round(frac * self.WIDTH))
-        rate = run.steps / run.run_time if run.run_time > 0 else 0.0   # compiled-loop rate
-        line = (f"\r  t = {run.t:.4g} / {run.t_end:g} [{'#' * fill}{'.' * (self.WIDTH - fill)}] "
-                f"{100 * frac:3.0f}%  {rate:.3g} steps/s  {run.bounces_total} bounces")
-        click.echo(line, err=True, nl=False)
+        click.echo(f"\r  {head} [{'#' * fill}{'.' * (self.WIDTH - fill)}] {100 * frac:3.0f}%  "
+                   f"{tail}", err=True, nl=False)
         self.shown = True
 
     def close(self) -> None:
         if self.shown:
             click.echo("\r" + " " * 100 + "\r", err=True, nl=False)
+
+
+class _Progress(_Bar):
+    """Of a run: simulated time, steps/s, bounces so far."""
+
+    def __call__(self, run) -> None:
+        if not self._due():
+            return
+        frac = min(1.0, max(0.0, run.t / run.t_end)) if run.t_end > 0 else 1.0
+        rate = run.steps / run.run_time if run.run_time > 0 else 0.0   # compiled-loop rate
+        self._show(frac, f"t = {run.t:.4g} / {run.t_end:g}",
+                   f"{rate:.3g} steps/s  {run.bounces_total} bounces")
 
 
 @main.command("run")
@@ -192,32 +204,15 @@ def _close(progress) -> None:
 
 
 # ---- rodjit sweep -------------------------------------------------------------------------
-class _SweepProgress:
-    """A one-line progress bar on stderr: points done / total, failures, time left."""
-
-    WIDTH = 24
-
-    def __init__(self):
-        self.last = 0.0
-        self.shown = False
+class _SweepProgress(_Bar):
+    """Of a sweep: points done / total, failures, elapsed and estimated time left."""
 
     def __call__(self, p) -> None:
-        now = time.monotonic()
-        if now - self.last < 0.1 and p.done < p.total:
+        if not self._due(final=p.done == p.total):
             return
-        self.last = now
-        frac = p.done / p.total if p.total else 1.0
-        fill = int(round(frac * self.WIDTH))
         eta = "-" if p.eta != p.eta else _duration(p.eta)
-        line = (f"\r  {p.done}/{p.total} points [{'#' * fill}{'.' * (self.WIDTH - fill)}] "
-                f"{100 * frac:3.0f}%  {p.failed} failed  {_duration(p.elapsed)} elapsed, "
-                f"{eta} left ")
-        click.echo(line, err=True, nl=False)
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            click.echo("\r" + " " * 100 + "\r", err=True, nl=False)
+        self._show(p.done / p.total if p.total else 1.0, f"{p.done}/{p.total} points",
+                   f"{p.failed} failed  {_duration(p.elapsed)} elapsed, {eta} left ")
 
 
 def _duration(seconds: float) -> str:

@@ -1,37 +1,16 @@
 """A rod law whose set-up kills its own process with SIGKILL when rod.kappa = 13: a point
 that crashes its worker as hard as a segfault in user code would (used in workers only).
-Otherwise it is a proper law: f(ε) = κ ε/(1+ε), as tests/custom_law.py."""
-import math
+Otherwise it is the law of tests/custom_law.py, f(ε) = κ ε/(1+ε)."""
 import os
 import signal
 from typing import NamedTuple
 
-from rodjit._jit import kernel
+from custom_law import deriv, lower, primitive, value
 from rodjit.model.laws import Law, register
 
 
 class KillRod(NamedTuple):
     kappa: float
-
-
-@kernel
-def value(e, p):
-    return p.kappa * e / (1.0 + e)
-
-
-@kernel
-def deriv(e, p):
-    return p.kappa / ((1.0 + e) * (1.0 + e))
-
-
-@kernel
-def primitive(e, p):
-    return p.kappa * (e - math.log1p(e))
-
-
-@kernel
-def lower(p):
-    return -1.0
 
 
 def _params(rod):

@@ -95,16 +95,18 @@ def died(index: int, message: str) -> PointResult:
 
 
 def law_modules(config) -> tuple[str, ...]:
-    """Modules defining the point's stress laws, unless rodjit's own (a worker in a fresh
-    process must import them to find the laws by name)."""
+    """Modules defining the point's stress laws, unless rodjit's own: a worker in a fresh
+    process imports them to find the laws by name (the module of ``from_config`` is the
+    one that registers a law, the kernels may come from others)."""
     from ..model.laws import get_law
 
     mods = []
     for kind, name in (("rod", config.rod.law), ("floor", config.floor.law)):
-        fn = get_law(kind, name).value
-        mod = getattr(getattr(fn, "py_func", fn), "__module__", "")
-        if mod and not mod.startswith("rodjit.") and mod not in mods:
-            mods.append(mod)
+        law = get_law(kind, name)
+        for part in (law.from_config, law.value, law.deriv, law.primitive, law.lower):
+            mod = getattr(getattr(part, "py_func", part), "__module__", None) or ""
+            if mod and mod != "__main__" and not mod.startswith("rodjit.") and mod not in mods:
+                mods.append(mod)
     return tuple(mods)
 
 
