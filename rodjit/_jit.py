@@ -37,12 +37,16 @@ JIT_OPTIONS = {"cache": True, "error_model": "numpy",
 kernel = numba.njit(**JIT_OPTIONS)
 
 # Kernels called on every step of the time loop (the step, its forces and sub-steps, the
-# event and step-size helpers) are also marked for inlining into the loop (LLVM
-# alwaysinline): a step then makes no calls and passes no arrays, which matters for short
-# rods, where the work per step is a few dozen flops (N = 5: ~3x fewer ns per step;
-# benchmarks/bench_scipy.py).  Numba without the option compiles them as plain kernels.
+# event and step-size helpers, the stress laws) are also marked for inlining into the loop
+# (LLVM alwaysinline), and so are the overloads that dispatch to them (``STEP_JIT_OPTIONS``:
+# the scheme's step, the law functions): a step then makes no calls and passes no arrays,
+# which matters for short rods, where the work per step is a few dozen flops (N = 5: ~3x
+# fewer ns per step; benchmarks/bench_scipy.py).  A call also makes every live
+# floating-point register spill (all are caller-saved).  Numba without the option compiles
+# them as plain kernels.
 _CAN_FORCE_INLINE = hasattr(CPUTargetOptions, "forceinline")
-step_kernel = (numba.njit(**JIT_OPTIONS, forceinline=True) if _CAN_FORCE_INLINE else kernel)
+STEP_JIT_OPTIONS = {**JIT_OPTIONS, **({"forceinline": True} if _CAN_FORCE_INLINE else {})}
+step_kernel = numba.njit(**STEP_JIT_OPTIONS)
 
 # the packages whose modules hold compiled code (a change anywhere here may change a kernel)
 COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")
