@@ -49,9 +49,9 @@ from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
 from ..kernels.discrete_gradient import quotient, quotient_slope
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term)
-from ..model.laws import deriv, lower, primitive
+from ..model.laws import deriv, lower
 from .schemes import register_scheme
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 __all__ = ["Energy", "initial", "step", "WORK_ROWS", "GAP_CONTROL"]
 
@@ -72,24 +72,23 @@ EPS = 2.220446049250313e-16
 S = 0         # segment stresses (accel)
 K = 1         # curvatures
 E1 = 2        # strains of uⁿ
-P1 = 3        # f̂(strains of uⁿ)
-AD = 4        # ȧⁿ, the time derivative of the acceleration
-DP = 5        # predictor increment u_p − uⁿ
-R = 6         # Newton residual
-J0 = 7        # Jacobian diagonals (i,i), (i,i+1), (i,i+2)
-J1 = 8
-J2 = 9
-L1 = 10       # factor (L1 also the Thomas scratch)
-L2 = 11
-DINV = 12
-DEL = 13      # Newton update
-DT = 14       # line-search trial increment
-SC = 15       # magnitude of the residual's terms (rounding scale)
-UB = 16       # midpoint uⁿ + d/2 for the bending term
-D = 17        # Newton iterate d
-Q = 18        # quotients of the last evaluation (segments; node 0's at index N)
-QP = 19       # their slopes at the last Jacobian
-WORK_ROWS = 20
+AD = 3        # ȧⁿ, the time derivative of the acceleration
+DP = 4        # predictor increment u_p − uⁿ
+R = 5         # Newton residual
+J0 = 6        # Jacobian diagonals (i,i), (i,i+1), (i,i+2)
+J1 = 7
+J2 = 8
+L1 = 9         # factor (L1 also the Thomas scratch)
+L2 = 10
+DINV = 11
+DEL = 12      # Newton update
+DT = 13       # line-search trial increment
+SC = 14       # magnitude of the residual's terms (rounding scale)
+UB = 15       # midpoint uⁿ + d/2 for the bending term
+D = 16        # Newton iterate d
+Q = 17        # quotients of the last evaluation (segments; node 0's at index N)
+QP = 18       # their slopes at the last Jacobian
+WORK_ROWS = 19
 
 
 class Energy(NamedTuple):
@@ -105,28 +104,35 @@ def _build(tc):
     return Energy(float(tc.rtol), float(tc.atol), NEWTON_TOL, MAX_NEWTON)
 
 
-@kernel
+@step_kernel
 def _mass(i, n, h):
     return h if 0 < i < n else 0.5 * h
 
 
-@kernel
+@step_kernel
+def _inv_mass(i, n, ih):
+    """1/m_i from ih = 1/h: 2/h at the ends is 2·(1/h) exactly, so this is 1/_mass bit for
+    bit, without a division."""
+    return ih if 0 < i < n else 2.0 * ih
+
+
+@step_kernel
 def full_accel(system, rod, floor, u, v, a, s, k):
     """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
     ``accel``'s ``(status, value, min_strain, floor_force, omega2)``."""
     res = accel(u, a, s, k, system, rod, floor, True)
     if res[0] == OK and system.mu > 0.0:
         n = system.n
-        h = system.h
-        c = system.mu / h
+        ih = 1.0 / system.h
+        c = system.mu * ih
         for i in range(n):
             t = c * (v[i + 1] - v[i])
-            a[i] += t / _mass(i, n, h)
-            a[i + 1] -= t / _mass(i + 1, n, h)
+            a[i] += t * _inv_mass(i, n, ih)
+            a[i + 1] -= t * _inv_mass(i + 1, n, ih)
     return res
 
 
-@kernel
+@step_kernel
 def jerk(system, rod, floor, u, v, a, out, k):
     """ȧ = M⁻¹(−H(u)v − μKa), the time derivative of the acceleration along the motion
     (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself)."""
@@ -134,21 +140,23 @@ def jerk(system, rod, floor, u, v, a, out, k):
     h = system.h
     ih = 1.0 / h
     mu = system.mu
-    for i in range(n + 1):
-        out[i] = 0.0
+    # out_i = t_i − t_{i−1} with the segment terms t (no zeroing pass: LLVM makes it a
+    # memset call, which costs more than the whole loop for a short rod)
+    t_prev = 0.0
     for i in range(n):
         e = (u[i + 1] - u[i]) * ih - 1.0
         t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
-        out[i] += t
-        out[i + 1] -= t
+        out[i] = t - t_prev
+        t_prev = t
+    out[n] = -t_prev
     out[0] += deriv(u[0], floor) * v[0]
     if system.gamma > 0.0:
         add_beam_term(v, out, k, h, -system.gamma, False)
     for i in range(n + 1):
-        out[i] /= _mass(i, n, h)
+        out[i] *= _inv_mass(i, n, ih)
 
 
-@kernel
+@step_kernel
 def _error_rate(scheme, u, ad):
     """max_i |ȧ_i|/12 / (atol + rtol|u_i|): the predicted u error per dt³."""
     r = 0.0
@@ -157,7 +165,7 @@ def _error_rate(scheme, u, ad):
     return r
 
 
-@kernel
+@step_kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``.  The first step: the accuracy estimate from ȧ, at most the explicit limit
@@ -169,11 +177,11 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
     rate = _error_rate(scheme, u, work[AD])
     if rate > 0.0:
-        dt = min(dt, 0.5 * rate ** (-1.0 / 3.0))
+        dt = min(dt, 0.5 / np.cbrt(rate))
     return OK, 0.0, emin, fl, dt
 
 
-@kernel
+@step_kernel
 def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
     """Residual F(d) (row R) and its rounding scale (row SC); leaves u² = uⁿ + d in ``u2``
     and the quotients in row Q (segments, then node 0's at index n) for ``_jacobian``.
@@ -190,7 +198,6 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
     r = work[R]
     sc = work[SC]
     e1 = work[E1]
-    p1 = work[P1]
     qs = work[Q]
     qps = work[QP]
     c2 = 0.5 * dt * dt
@@ -206,7 +213,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
         e2 = (u2[i + 1] - u2[i]) * ih - 1.0
         if not e2 > lo:
             return (BAD_STRAIN if math.isfinite(e2) else NON_FINITE), 0.0, 0.0
-        q = quotient(e1[i], p1[i], e2, rod)
+        q = quotient(e1[i], np.nan, e2, rod)   # P(εⁿ) only if the exact quotient is used
         qs[i] = q
         tq = c2 * q
         tv = cv * (d[i + 1] - d[i])
@@ -217,7 +224,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
         sc[i + 1] += at
     if not u2[0] > lower(floor):
         return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
-    qb = quotient(u[0], primitive(u[0], floor), u2[0], floor)
+    qb = quotient(u[0], np.nan, u2[0], floor)
     qs[n] = qb
     r[0] -= c2 * qb
     sc[0] += c2 * abs(qb)
@@ -236,7 +243,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
     rn = 0.0
     sn = 0.0
     for i in range(n + 1):
-        im = 1.0 / _mass(i, n, h)
+        im = _inv_mass(i, n, ih)
         rn += r[i] * r[i] * im
         sn += sc[i] * sc[i] * im
     if not math.isfinite(rn + sn):
@@ -244,7 +251,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
     return OK, math.sqrt(rn), math.sqrt(sn)
 
 
-@kernel
+@step_kernel
 def _jacobian(system, rod, floor, u, d, u2, dt, work):
     """Jacobian of F at the last evaluated iterate (rows J0–J2; slopes kept in row QP):
     M + dt²/2 (Σ_i q_i'/h (e_{i+1} − e_i)(e_{i+1} − e_i)ᵀ − q_b' e_0e_0ᵀ + γB/2) + dt μ/2 K,
@@ -259,17 +266,16 @@ def _jacobian(system, rod, floor, u, d, u2, dt, work):
     qps = work[QP]
     c2 = 0.5 * dt * dt
     cv = 0.5 * dt * system.mu * ih
-    for i in range(n + 1):
-        j0[i] = _mass(i, n, h)
-        j1[i] = 0.0
-    for i in range(n):
+    j0[0] = _mass(0, n, h)
+    for i in range(n):   # each entry written once: no zeroing pass (a memset call)
         e2 = (u2[i + 1] - u2[i]) * ih - 1.0
         qp = quotient_slope(e1[i], e2, qs[i], rod)
         qps[i] = qp
         c = c2 * qp * ih + cv
         j0[i] += c
-        j0[i + 1] += c
-        j1[i] -= c
+        j0[i + 1] = _mass(i + 1, n, h) + c
+        j1[i] = -c
+    j1[n] = 0.0
     j0[0] -= c2 * quotient_slope(u[0], u2[0], qs[n], floor)
     if system.gamma > 0.0:
         # c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²
@@ -286,7 +292,7 @@ def _jacobian(system, rod, floor, u, d, u2, dt, work):
             j2[i - 1] += w
 
 
-@kernel
+@step_kernel
 def _newton_update(system, work):
     """δ = −J⁻¹F with the banded solvers (tridiagonal for γ = 0, else pentadiagonal)."""
     rhs = work[DEL]
@@ -300,10 +306,10 @@ def _newton_update(system, work):
         sym_tridiag_solve(work[J0], work[J1], rhs, rhs, work[L1])
 
 
-@kernel
+@step_kernel
 def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
-    """Solve F(d) = 0 from the (admissible) start value in row D; leaves d in row D and
-    uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
+    """Solve F(d) = 0 from the (admissible) start value in row D (row QP zero: no slopes
+    yet); leaves d in row D and uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
     update size in ``value``.
 
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
@@ -315,9 +321,6 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     d = work[D]
     dl = work[DEL]
     dtr = work[DT]
-    qps = work[QP]
-    for i in range(n1):
-        qps[i] = 0.0
     status, rn, sn = _evaluate(system, rod, floor, u, v, d, u2, dt, work)
     if status != OK:
         return status, 0.0
@@ -364,7 +367,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     return NO_CONVERGENCE, last
 
 
-@kernel
+@step_kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
@@ -377,15 +380,14 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     ih = 1.0 / h
     n1 = n + 1
     e1 = work[E1]
-    p1 = work[P1]
     dp = work[DP]
     ad = work[AD]
     d = work[D]
     jerk(system, rod, floor, u, v, a, ad, work[K])
+    qps = work[QP]
     for i in range(n):
-        e = (u[i + 1] - u[i]) * ih - 1.0
-        e1[i] = e
-        p1[i] = primitive(e, rod)
+        e1[i] = (u[i + 1] - u[i]) * ih - 1.0
+        qps[i] = 0.0      # no slopes yet: the first residual's rounding scale omits them
     # predictor (error estimate and Newton's start), pulled back into the admissible set
     hdt2 = 0.5 * dt * dt
     for i in range(n1):
@@ -416,17 +418,18 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K])
     if status != OK:
         return status, val, emin, fl, 0.0, 0.0, 0.0
-    # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²
+    # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
+    # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node
     err = 0.0
     w = 0.0
     for i in range(n1):
-        eu = (d[i] - dp[i]) / 3.0
-        vp = v[i] + dt * a[i] + hdt2 * ad[i]
-        ev = (v2[i] - vp) / 3.0
+        eu = abs(d[i] - dp[i])
+        ev = abs(v2[i] - (v[i] + dt * a[i] + hdt2 * ad[i]))
         su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
         sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
-        err = max(err, abs(eu) / su, abs(ev) / sv)
+        err = max(err, max(eu * sv, ev * su) / (su * sv))
         w += _mass(i, n, h) * v2[i]
+    err /= 3.0
     diss = 0.0
     if system.mu > 0.0:
         for i in range(n):
@@ -437,7 +440,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         return NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0
     fac = FAC_MAX
     if err > 0.0:
-        fac = min(FAC_MAX, max(FAC_MIN, SAFETY * err ** (-1.0 / 3.0)))
+        fac = min(FAC_MAX, max(FAC_MIN, SAFETY / np.cbrt(err)))
     if err > 1.0:
         return INACCURATE, err, emin, fl, dt * fac, w, diss
     return OK, 0.0, emin, fl, dt * fac, w, diss
