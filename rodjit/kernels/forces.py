@@ -158,7 +158,7 @@ def worst_segment(u, h):
     return best
 
 
-@kernel
+@step_kernel
 def energies(u, v, k, system, rod, floor):
     """``(kinetic, stretch, bend, floor, gravity, min_strain, cm_height, cm_velocity)``."""
     n = system.n

@@ -50,14 +50,14 @@ def _next_target(clock, count):
     return target
 
 
-@kernel
+@step_kernel
 def _skip_past(clock, count, kidx, dtidx, t):
     """Advance the output index to the first grid time after t (+ tolerance)."""
     while clock[L.T0] + count[kidx] * clock[dtidx] <= t + clock[L.TOL]:
         count[kidx] += 1
 
 
-@kernel
+@step_kernel
 def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
           snap_t, snap_step, snap_u, snap_v, diag):
     """Write the snapshot and/or diagnostics row due at time t."""
