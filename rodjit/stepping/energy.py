@@ -182,15 +182,19 @@ def initial(scheme, system, rod, floor, u, v, a, work):
 
 
 @step_kernel
-def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
-    """Residual F(d) (row R) and its rounding scale (row SC); leaves u² = uⁿ + d in ``u2``
-    and the quotients in row Q (segments, then node 0's at index n) for ``_jacobian``.
+def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
+    """Residual F(d) (row R); leaves u² = uⁿ + d in ``u2`` and the quotients in row Q
+    (segments, then node 0's at index n).  With ``jac`` it also assembles the Jacobian at
+    d (what ``_jacobian`` does, in the same pass: the evaluation that starts a Newton
+    iteration needs it), without it the residual's rounding scale (the evaluations that
+    may end the iteration need that).
 
-    Returns ``(status, |F|, |scale|)`` in the norm |x|² = Σ x_i²/m_i; status is BAD_STRAIN,
-    BAD_FLOOR or NON_FINITE for an iterate outside the admissible set.  The scale sums the
-    magnitudes of the residual's terms, plus the stress change that the rounding of u² in a
-    strain causes (slopes from the last Jacobian), so 64 ε_mach × scale is the residual's
-    rounding level.
+    Returns ``(status, |F|², |scale|²)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 with
+    ``jac``); status is BAD_STRAIN, BAD_FLOOR or NON_FINITE for an iterate outside the
+    admissible set.  The scale sums the magnitudes of the residual's terms, plus the stress
+    change that the rounding of u² in a strain causes (slopes from the last Jacobian), so
+    64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
+    takes the terms of segments i − 1 (carried over) and i.
     """
     n = system.n
     h = system.h
@@ -200,55 +204,118 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
     e1 = work[E1]
     qs = work[Q]
     qps = work[QP]
+    j0 = work[J0]
+    j1 = work[J1]
     c2 = 0.5 * dt * dt
     cv = 0.5 * dt * system.mu * ih
     g = system.g
     lo = lower(rod)
     for i in range(n + 1):
-        m = _mass(i, n, h)
         u2[i] = u[i] + d[i]
-        r[i] = m * (d[i] - dt * v[i]) - c2 * m * g
-        sc[i] = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
-    for i in range(n):
-        e2 = (u2[i + 1] - u2[i]) * ih - 1.0
-        if not e2 > lo:
-            return (BAD_STRAIN if math.isfinite(e2) else NON_FINITE), 0.0, 0.0
-        q = quotient(e1[i], np.nan, e2, rod)   # P(εⁿ) only if the exact quotient is used
-        qs[i] = q
-        tq = c2 * q
-        tv = cv * (d[i + 1] - d[i])
-        r[i + 1] += tq + tv
-        r[i] -= tq + tv
-        at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
-        sc[i] += at
-        sc[i + 1] += at
     if not u2[0] > lower(floor):
         return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
     qb = quotient(u[0], np.nan, u2[0], floor)
     qs[n] = qb
-    r[0] -= c2 * qb
-    sc[0] += c2 * abs(qb)
-    if system.gamma > 0.0:
+    beam = system.gamma > 0.0
+    cb = c2 * system.gamma
+    if beam:   # the bending terms first, into rows R and SC
         ub = work[UB]
         for i in range(n + 1):
             ub[i] = u[i] + 0.5 * d[i]
-        cb = c2 * system.gamma
+            r[i] = 0.0
+            sc[i] = 0.0
         add_beam_term(ub, r, work[K], h, cb, False)
-        kk = work[K]
-        for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
-            t = abs(cb * kk[i]) * ih
-            sc[i - 1] += t
-            sc[i] += 2.0 * t
-            sc[i + 1] += t
+        if not jac:
+            kk = work[K]
+            for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
+                t = abs(cb * kk[i]) * ih
+                sc[i - 1] += t
+                sc[i] += 2.0 * t
+                sc[i + 1] += t
     rn = 0.0
     sn = 0.0
+    t_prev = 0.0      # segment i − 1: its force term, scale term and Jacobian coupling
+    a_prev = 0.0
+    c_prev = 0.0
+    bad = False
+    nonfinite = False
     for i in range(n + 1):
+        m = _mass(i, n, h)
+        ri = m * (d[i] - dt * v[i]) - c2 * m * g
+        if beam:
+            ri += r[i]
+        ri += t_prev
+        si = 0.0
+        ji = 0.0
+        if jac:
+            ji = m + c_prev
+        else:
+            si = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
+            if beam:
+                si += sc[i]
+            si += a_prev
+        if i < n:
+            e2 = (u2[i + 1] - u2[i]) * ih - 1.0
+            bad |= not e2 > lo
+            nonfinite |= not math.isfinite(e2)
+            q = quotient(e1[i], np.nan, e2, rod)   # P(εⁿ) only if the exact quotient is used
+            qs[i] = q
+            tq = c2 * q
+            tv = cv * (d[i + 1] - d[i])
+            t = tq + tv
+            ri -= t
+            t_prev = t
+            if jac:
+                qp = quotient_slope(e1[i], e2, q, rod)
+                qps[i] = qp
+                c = c2 * qp * ih + cv
+                ji += c
+                j1[i] = -c
+                c_prev = c
+            else:
+                at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
+                si += at
+                a_prev = at
+        if i == 0:
+            ri -= c2 * qb
+            if jac:
+                ji -= c2 * quotient_slope(u[0], u2[0], qb, floor)
+            else:
+                si += c2 * abs(qb)
+        r[i] = ri
+        if jac:
+            j0[i] = ji
         im = _inv_mass(i, n, ih)
-        rn += r[i] * r[i] * im
-        sn += sc[i] * sc[i] * im
+        rn += ri * ri * im
+        sn += si * si * im
+    if bad:
+        return (NON_FINITE if nonfinite else BAD_STRAIN), 0.0, 0.0
+    if jac:
+        j1[n] = 0.0
+        if beam:
+            _add_bending_jacobian(system, work, c2, ih)
     if not math.isfinite(rn + sn):
         return NON_FINITE, 0.0, 0.0
-    return OK, math.sqrt(rn), math.sqrt(sn)
+    return OK, rn, sn
+
+
+@step_kernel
+def _add_bending_jacobian(system, work, c2, ih):
+    """Rows J0–J2 += c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²."""
+    n = system.n
+    j0 = work[J0]
+    j1 = work[J1]
+    j2 = work[J2]
+    for i in range(n + 1):
+        j2[i] = 0.0
+    w = 0.5 * c2 * system.gamma * ih * ih * ih
+    for i in range(1, n):
+        j0[i - 1] += w
+        j0[i] += 4.0 * w
+        j0[i + 1] += w
+        j1[i - 1] -= 2.0 * w
+        j1[i] -= 2.0 * w
+        j2[i - 1] += w
 
 
 @step_kernel
@@ -278,18 +345,7 @@ def _jacobian(system, rod, floor, u, d, u2, dt, work):
     j1[n] = 0.0
     j0[0] -= c2 * quotient_slope(u[0], u2[0], qs[n], floor)
     if system.gamma > 0.0:
-        # c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²
-        j2 = work[J2]
-        for i in range(n + 1):
-            j2[i] = 0.0
-        w = 0.5 * c2 * system.gamma * ih * ih * ih
-        for i in range(1, n):
-            j0[i - 1] += w
-            j0[i] += 4.0 * w
-            j0[i + 1] += w
-            j1[i - 1] -= 2.0 * w
-            j1[i] -= 2.0 * w
-            j2[i - 1] += w
+        _add_bending_jacobian(system, work, c2, ih)
 
 
 @step_kernel
@@ -308,29 +364,36 @@ def _newton_update(system, work):
 
 @step_kernel
 def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
-    """Solve F(d) = 0 from the (admissible) start value in row D (row QP zero: no slopes
-    yet); leaves d in row D and uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
+    """Solve F(d) = 0 from the (admissible) start value in row D; leaves d in row D and
+    uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
     update size in ``value``.
 
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
     terms), or when the update is at most newton_tol × |d|∞: that update is applied and
     leaves a residual O(update²) by quadratic convergence.  Each update is backtracked
-    until the iterate is admissible and the residual drops (Armijo).
+    until the iterate is admissible and the residual drops (Armijo).  The start value is
+    always updated once (the Taylor predictor is never a root to rounding, so its residual
+    is not tested): its evaluation assembles the first Jacobian instead.  Norms are
+    compared squared.
     """
     n1 = u.size
     d = work[D]
     dl = work[DEL]
     dtr = work[DT]
-    status, rn, sn = _evaluate(system, rod, floor, u, v, d, u2, dt, work)
+    status, rn2, sn2 = _evaluate(system, rod, floor, u, v, d, u2, dt, work, True)
     if status != OK:
         return status, 0.0
+    have_jacobian = True
+    rounding2 = (64.0 * EPS) ** 2
     last = np.inf
     for it in range(scheme.max_newton + 1):
-        if rn <= 64.0 * EPS * sn:
+        if it > 0 and rn2 <= rounding2 * sn2:
             return OK, 0.0
         if it == scheme.max_newton:
             break
-        _jacobian(system, rod, floor, u, d, u2, dt, work)
+        if not have_jacobian:
+            _jacobian(system, rod, floor, u, d, u2, dt, work)
+        have_jacobian = False
         _newton_update(system, work)
         sstats[0] += 1
         dmax = 0.0
@@ -344,14 +407,15 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         small = dmax <= scheme.newton_tol * dref
         alpha = 1.0
         accepted = False
-        rt = 0.0
-        st_ = 0.0
+        rt2 = 0.0
+        st2 = 0.0
         for _ in range(MAX_BACKTRACK):
             for i in range(n1):
                 dtr[i] = d[i] + alpha * dl[i]
-            status, rt, st_ = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work)
-            if status == OK and (small or rt <= (1.0 - ARMIJO * alpha) * rn
-                                 or rt <= 64.0 * EPS * st_):
+            status, rt2, st2 = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work, False)
+            armijo = 1.0 - ARMIJO * alpha
+            if status == OK and (small or rt2 <= armijo * armijo * rn2
+                                 or rt2 <= rounding2 * st2):
                 accepted = True
                 break
             alpha *= 0.5
@@ -359,8 +423,8 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             break
         for i in range(n1):
             d[i] = dtr[i]
-        rn = rt
-        sn = st_
+        rn2 = rt2
+        sn2 = st2
         if small and alpha == 1.0:
             return OK, 0.0
     sstats[1] += 1
@@ -384,10 +448,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     ad = work[AD]
     d = work[D]
     jerk(system, rod, floor, u, v, a, ad, work[K])
-    qps = work[QP]
     for i in range(n):
         e1[i] = (u[i + 1] - u[i]) * ih - 1.0
-        qps[i] = 0.0      # no slopes yet: the first residual's rounding scale omits them
     # predictor (error estimate and Newton's start), pulled back into the admissible set
     hdt2 = 0.5 * dt * dt
     for i in range(n1):
