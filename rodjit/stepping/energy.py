@@ -27,10 +27,10 @@ differentiated consistently) converges.  Iterates are kept admissible and the re
 decreasing by backtracking; no convergence in ``max_newton`` iterations returns
 NO_CONVERGENCE (the loop retries a shorter step).
 
-Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ (Newton's start)
-and v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
+Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ and
+v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
 and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
-step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1 returns
+step's local error.  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1 returns
 INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in [0.2, 5]×).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
 Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
@@ -364,9 +364,10 @@ def _newton_update(system, work):
 
 @step_kernel
 def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
-    """Solve F(d) = 0 from the (admissible) start value in row D; leaves d in row D and
-    uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
-    update size in ``value``.
+    """Solve F(d) = 0 from the start value in row D; leaves d in row D and uⁿ + d in
+    ``u2``.  Returns ``(status, value)``: OK, NO_CONVERGENCE with the last update size in
+    ``value``, or the first evaluation's BAD_STRAIN, BAD_FLOOR or NON_FINITE if the start
+    is not admissible (row D then unchanged).
 
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
     terms), or when the update is at most newton_tol × |d|∞: that update is applied and
@@ -450,26 +451,23 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     jerk(system, rod, floor, u, v, a, ad, work[K])
     for i in range(n):
         e1[i] = (u[i + 1] - u[i]) * ih - 1.0
-    # predictor (error estimate and Newton's start), pulled back into the admissible set
+    # the Taylor predictor dp (error estimate); Newton's start is dp + dt³ȧ/4, the step's
+    # own leading-order deviation from it (module docstring), pulled back toward uⁿ
+    # (halved) while it is outside the admissible set (the first residual evaluation
+    # reports that, before Newton changes anything)
     hdt2 = 0.5 * dt * dt
+    c3 = 0.5 * dt * hdt2          # dt³/4
     for i in range(n1):
         dp[i] = dt * v[i] + hdt2 * a[i]
-        d[i] = dp[i]
-    lo = lower(rod)
-    lo_b = lower(floor)
+        d[i] = dp[i] + c3 * ad[i]
     alpha = 1.0
     for _ in range(60):
-        ok = u[0] + d[0] > lo_b
-        for i in range(n):
-            if not (((u[i + 1] + d[i + 1]) - (u[i] + d[i])) * ih - 1.0 > lo):
-                ok = False
-                break
-        if ok:
+        status, val = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+        if status != BAD_STRAIN and status != BAD_FLOOR:
             break
         alpha *= 0.5
         for i in range(n1):
-            d[i] = alpha * dp[i]
-    status, val = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+            d[i] = alpha * (dp[i] + c3 * ad[i])
     if status != OK:
         return status, val, 0.0, 0.0, 0.0, 0.0, 0.0
     # vⁿ⁺¹ from the increment itself: 2(u2 − u)/dt would amplify the rounding of u2 by 1/dt
