@@ -64,13 +64,15 @@ def add_beam_term(u, out, k, h, scale, by_mass):
 
 
 @step_kernel
-def accel(u, a, s, k, system, rod, floor, beam):
+def accel(u, a, s, k, system, rod, floor, beam, bound=True):
     """Explicit acceleration a = M⁻¹(stretch + floor [+ bending if ``beam``]) + g.
 
     Fills ``a`` (and the segment stresses ``s``, curvatures ``k``).  Returns
     ``(status, value, min_strain, floor_force, omega2)``: ``status``/``value`` flag a
     non-admissible or non-finite state, ``omega2`` bounds the largest squared frequency of
-    the explicit part (Gershgorin on M⁻¹K: 4 max f'/h² + 2|σ_b'|/h [+ 16γ/h⁴]).
+    the explicit part (Gershgorin on M⁻¹K: 4 max f'/h² + 2|σ_b'|/h [+ 16γ/h⁴]); with
+    ``bound=False`` (a scheme whose step does not need it) it is 0 and no derivative is
+    evaluated.
     """
     n = system.n
     h = system.h
@@ -95,8 +97,11 @@ def accel(u, a, s, k, system, rod, floor, beam):
     if not u0 > lower(floor):
         return BAD_FLOOR, u0, emin, 0.0, np.inf
     fl = value(u0, floor)
-    fd = abs(deriv(u0, floor))
-    fpmax = max_deriv(u, ih, emin, emax, rod)   # the largest f' over the segments
+    fd = 0.0
+    fpmax = 0.0
+    if bound:
+        fd = abs(deriv(u0, floor))
+        fpmax = max_deriv(u, ih, emin, emax, rod)   # the largest f' over the segments
     if bad or not math.isfinite(fl + fpmax + fd):
         return NON_FINITE, fl + fpmax, emin, fl, np.inf
     ie = 2.0 * ih

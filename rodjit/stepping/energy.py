@@ -117,10 +117,11 @@ def _inv_mass(i, n, ih):
 
 
 @step_kernel
-def full_accel(system, rod, floor, u, v, a, s, k):
+def full_accel(system, rod, floor, u, v, a, s, k, bound):
     """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
-    ``accel``'s ``(status, value, min_strain, floor_force, omega2)``."""
-    res = accel(u, a, s, k, system, rod, floor, True)
+    ``accel``'s ``(status, value, min_strain, floor_force, omega2)`` (omega2 = 0 unless
+    ``bound``: only the first step's proposal uses it)."""
+    res = accel(u, a, s, k, system, rod, floor, True, bound)
     if res[0] == OK and system.mu > 0.0:
         n = system.n
         ih = 1.0 / system.h
@@ -170,7 +171,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``.  The first step: the accuracy estimate from ȧ, at most the explicit limit
     2/ω (the controller grows it from there)."""
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K])
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
     if status != OK:
         return status, val, emin, fl, 0.0
     jerk(system, rod, floor, u, v, a, work[AD], work[K])
@@ -475,7 +476,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     for i in range(n1):
         u2[i] = u[i] + d[i]
         v2[i] = idt2 * d[i] - v[i]
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K])
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K], False)
     if status != OK:
         return status, val, emin, fl, 0.0, 0.0, 0.0
     # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;

@@ -69,18 +69,20 @@ def floor_value(h, p):
     # κ_b (r³ − 1), r = β/(h+β); r³ − 1 = (r − 1)(r² + r + 1) and r − 1 = −h/(h+β)
     if h > 0.0:
         return 0.0
-    s = h + p.beta
-    r = p.beta / s
-    return -p.kappa_b * (h / s) * (r * r + r + 1.0)
+    inv = 1.0 / (h + p.beta)     # one division (the floor is evaluated several times a step)
+    r = p.beta * inv
+    return -p.kappa_b * (h * inv) * (r * r + r + 1.0)
 
 
 @step_kernel
 def floor_deriv(h, p):
     if h > 0.0:
         return 0.0
-    r = p.beta / (h + p.beta)
-    r2 = r * r
-    return -3.0 * p.kappa_b * r2 * r2 / p.beta
+    # −3κ_b r⁴/β = −3κ_b β³/(h+β)⁴: one division
+    s = h + p.beta
+    s2 = s * s
+    b = p.beta
+    return -3.0 * p.kappa_b * (b * b * b) / (s2 * s2)
 
 
 @step_kernel
