@@ -282,6 +282,20 @@ def test_adaptive_steps_shrink_in_contact_and_grow_in_flight():
     assert run.rejected > 0
 
 
+def test_step_factor_is_the_clamped_inverse_cube_root():
+    """The step-size factor SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX], without libm's cbrt:
+    < 1e-7 relative over the unclamped range, the bounds outside it (0 included)."""
+    errs = np.concatenate([[0.0, 1e-300, 1e-9, EN.ERR_FAC_MAX, EN.ERR_FAC_MIN, 1e300],
+                           np.geomspace(EN.ERR_FAC_MAX / 10, EN.ERR_FAC_MIN * 10, 5001)])
+    got = np.array([EN._step_factor(e) for e in errs])
+    with np.errstate(divide="ignore"):
+        want = np.clip(EN.SAFETY / np.cbrt(errs), EN.FAC_MIN, EN.FAC_MAX)
+    assert np.abs(got / want - 1.0).max() < 1e-7
+    assert got[0] == EN.FAC_MAX and got[-1] == want[-1]
+    inner = (errs > EN.ERR_FAC_MAX) & (errs < EN.ERR_FAC_MIN)
+    assert inner.sum() > 3000 and np.all(np.diff(got[6:]) <= 0)     # monotone in err
+
+
 def test_resume_is_bit_identical():
     cfg = energy_config(**{"rod.N": 10, "rod.mu": 0.2, "time.t_end": 0.9, "time.rtol": 1e-5})
     one = Run(cfg)

@@ -116,6 +116,38 @@ def _inv_mass(i, n, ih):
     return ih if 0 < i < n else 2.0 * ih
 
 
+# the range of errors where the step factor SAFETY·err^(−1/3) is not clamped
+ERR_FAC_MAX = (SAFETY / FAC_MAX) ** 3
+ERR_FAC_MIN = (SAFETY / FAC_MIN) ** 3
+
+
+@step_kernel
+def _step_factor(err):
+    """SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX] (the next step over this one).
+
+    err^(−1/3) by Newton's iteration y ← y(4 − x y³)/3 on x = err·8^k ∈ [1, 8), from the
+    least-squares quadratic of x^(−1/3) on [1, 8] (7 % off at worst): three iterations
+    leave < 1e-7 relative, far below what a step-size heuristic needs, and cost less than
+    the libm cbrt call they replace (~8 % of an N = 5 step).  Plain arithmetic: the same
+    bits everywhere."""
+    if not err > ERR_FAC_MAX:      # also err = 0
+        return FAC_MAX
+    if err >= ERR_FAC_MIN:
+        return FAC_MIN
+    x = err
+    scale = 1.0
+    while x < 1.0:
+        x *= 8.0
+        scale *= 2.0
+    while x >= 8.0:
+        x *= 0.125
+        scale *= 0.5
+    y = 1.07144173 + x * (-0.15170626 + x * 0.01044221)
+    for _ in range(3):
+        y = y * (4.0 - x * y * y * y) * (1.0 / 3.0)
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * scale * y))
+
+
 @step_kernel
 def full_accel(system, rod, floor, u, v, a, s, k, bound):
     """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
@@ -499,9 +531,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         diss *= dt * system.mu * ih
     if not math.isfinite(err):
         return NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0
-    fac = FAC_MAX
-    if err > 0.0:
-        fac = min(FAC_MAX, max(FAC_MIN, SAFETY / np.cbrt(err)))
+    fac = _step_factor(err)
     if err > 1.0:
         return INACCURATE, err, emin, fl, dt * fac, w, diss
     return OK, 0.0, emin, fl, dt * fac, w, diss
