@@ -90,6 +90,23 @@ def test_a_law_without_deriv_max_gives_the_same_bits(integrator):
     assert np.array_equal(a.diagnostics["dt"], b.diagnostics["dt"])
 
 
+@pytest.mark.parametrize("u0", [0.3, -0.01])
+def test_acceleration_without_the_stiffness_bound_is_the_same(rng, u0):
+    """``accel(bound=False)`` (the energy step) fills the same accelerations and stresses
+    and reports the same status, strain and floor force; only the bound is left out."""
+    n = 12
+    system = RodSystem(n, 1.0 / n, 1e-3, 0.0, -9.81)
+    u = u0 + np.linspace(0.0, 1.0, n + 1) + 1e-3 * rng.normal(size=n + 1)
+    out = {}
+    for bound in (True, False):
+        work = np.zeros((3, n + 1))
+        res = accel(u, work[2], work[0], work[1], system, ROD, FLOOR, True, bound)
+        out[bound] = (res, work)
+    (r1, w1), (r0, w0) = out[True], out[False]
+    assert r1[:4] == r0[:4] and r1[0] == OK and np.array_equal(w1, w0)
+    assert r1[4] > 0.0 and r0[4] == 0.0
+
+
 def test_exact_compression_limit_is_flagged_not_raised():
     """ε = −1 exactly divides by zero in f: IEEE inf/nan (error_model="numpy"), which the
     admissibility test reports, never a ZeroDivisionError inside the loop."""

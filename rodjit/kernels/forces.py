@@ -112,7 +112,8 @@ def accel(u, a, s, k, system, rod, floor, beam, bound=True):
     omega2 = 4.0 * fpmax * ih * ih + 2.0 * fd * ih
     if beam and system.gamma > 0.0:
         add_beam_term(u, a, k, h, -system.gamma, True)
-        omega2 += 16.0 * system.gamma * ih * ih * ih * ih
+        if bound:
+            omega2 += 16.0 * system.gamma * ih * ih * ih * ih
     return OK, 0.0, emin, fl, omega2
 
 
