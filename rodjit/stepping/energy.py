@@ -30,8 +30,9 @@ NO_CONVERGENCE (the loop retries a shorter step).
 Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ and
 v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
 and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
-step's local error.  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1 returns
-INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in [0.2, 5]×).
+step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1
+returns INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in
+[0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
 Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
 tiny there) and ``rtol`` that of the flight: raise atol to stop resolving every micro-contact.
