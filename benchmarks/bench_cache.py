@@ -33,7 +33,7 @@ PROBE = textwrap.dedent("""
     from rodjit.presets import load_preset
     from rodjit.stepping import loop
     t1 = time.perf_counter()
-    run = Run(load_preset(sys.argv[1]))
+    run = Run(load_preset(sys.argv[1]).override(json.loads(sys.argv[2])))
     sink = Sink()
     run.start(sink)
     run.advance(sink, max_steps=1)
@@ -50,12 +50,14 @@ CASES = {"verlet (paper-mu0, the default run)": "paper-mu0",
          "semi-implicit (paper-mu100)": "paper-mu100"}
 
 
-def probe(cache_dir: Path, preset: str) -> dict:
+def probe(cache_dir: Path, preset: str, overrides: dict | None = None) -> dict:
+    """One fresh process on ``preset`` (with configuration ``overrides``, e.g. another
+    integrator) and the cache directory ``cache_dir``."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
     env.pop("NUMBA_DISABLE_JIT", None)
     t0 = time.perf_counter()
-    out = subprocess.run([sys.executable, "-c", PROBE, preset], env=env, capture_output=True,
-                         text=True, timeout=1800)
+    out = subprocess.run([sys.executable, "-c", PROBE, preset, json.dumps(overrides or {})],
+                         env=env, capture_output=True, text=True, timeout=1800)
     wall = time.perf_counter() - t0
     if out.returncode != 0:
         raise RuntimeError(out.stderr[-3000:])

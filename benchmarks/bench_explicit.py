@@ -35,12 +35,11 @@ import rodjit  # noqa: E402
 from rodjit.stepping import verlet  # noqa: E402
 from rodjit.stepping.schemes import Verlet  # noqa: E402
 
-try:
-    from rodjit.kernels.borrow import borrow
-except ImportError:        # older rodjit: plain arrays
-    @numba.njit
-    def borrow(a):
-        return a
+try:      # rodjit's own options (no reference counting), without the disk cache
+    from rodjit._jit import JIT_OPTIONS
+    _BARE_OPTIONS = {k: v for k, v in JIT_OPTIONS.items() if k != "cache"}
+except ImportError:
+    _BARE_OPTIONS = {}
 
 N = 1000
 STEPS = 20_000
@@ -69,12 +68,8 @@ def rodjit_run(cfg):
     return st["run_time"] * 1e9 / (st["steps"] * (cfg.rod.N + 1)), res
 
 
-@numba.njit   # not cached: it is compiled against whichever rodjit is imported
+@numba.njit(**_BARE_OPTIONS)   # not cached: compiled against whichever rodjit is imported
 def _bare_loop(scheme, system, rod, floor, state, trial, work, sstats, dt, pairs):
-    state = borrow(state)
-    trial = borrow(trial)
-    work = borrow(work)
-    sstats = borrow(sstats)
     u, v, a = state[0], state[1], state[2]
     u2, v2, a2 = trial[0], trial[1], trial[2]
     bad = 0

@@ -3,7 +3,16 @@
 ``error_model="numpy"``: a division by zero gives inf/nan (which the admissibility checks
 reject) instead of raising inside compiled code, and keeps loops vectorisable.
 ``cache=True``: compiled code is stored on disk, so later processes start warm.
-Stress laws written by users should use ``kernel`` too.
+``_nrt=False``: no reference counting.  Numba counts references to every array it holds:
+each view (``state[0]``, ``work[R]``) and each array handed to a function costs calls to
+NRT_incref/NRT_decref, which are never inlined, and every such call also makes the
+floating-point values live across it spill from their registers.  The time loop makes
+hundreds of them per step (benchmarks/README.md: up to half the time of a short rod's
+step).  rodjit's kernels never allocate and never keep an array beyond the call: they work
+in arrays their caller owns for the whole call, so there is nothing to count.  Numba
+refuses to compile an allocation, or the return of a new array, under this option, so
+that guarantee is checked at compile time.
+Stress laws written by users should use ``kernel`` too (and so must not allocate).
 
 Numba invalidates a cached function only when *its own* file changes, not when a function
 it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever
@@ -19,17 +28,25 @@ import numba
 from numba.core import caching
 from numba.core.cpu import CPUTargetOptions
 
-JIT_OPTIONS = {"cache": True, "error_model": "numpy"}
+# ``_nrt`` is an option of Numba's CPU target (Numba compiles its own allocation-free
+# helpers with it); a Numba without it compiles the kernels with reference counting
+_CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
+JIT_OPTIONS = {"cache": True, "error_model": "numpy",
+               **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
 
 kernel = numba.njit(**JIT_OPTIONS)
 
 # Kernels called on every step of the time loop (the step, its forces and sub-steps, the
-# event and step-size helpers) are also marked for inlining into the loop (LLVM
-# alwaysinline): a step then makes no calls and passes no arrays, which matters for short
-# rods, where the work per step is a few dozen flops (N = 5: ~3x fewer ns per step;
-# benchmarks/bench_scipy.py).  Numba without the option compiles them as plain kernels.
+# event and step-size helpers, the stress laws) are also marked for inlining into the loop
+# (LLVM alwaysinline), and so are the overloads that dispatch to them (``STEP_JIT_OPTIONS``:
+# the scheme's step, the law functions): a step then makes no calls and passes no arrays,
+# which matters for short rods, where the work per step is a few dozen flops (N = 5: ~3x
+# fewer ns per step; benchmarks/bench_scipy.py).  A call also makes every live
+# floating-point register spill (all are caller-saved).  Numba without the option compiles
+# them as plain kernels.
 _CAN_FORCE_INLINE = hasattr(CPUTargetOptions, "forceinline")
-step_kernel = (numba.njit(**JIT_OPTIONS, forceinline=True) if _CAN_FORCE_INLINE else kernel)
+STEP_JIT_OPTIONS = {**JIT_OPTIONS, **({"forceinline": True} if _CAN_FORCE_INLINE else {})}
+step_kernel = numba.njit(**STEP_JIT_OPTIONS)
 
 # the packages whose modules hold compiled code (a change anywhere here may change a kernel)
 COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")

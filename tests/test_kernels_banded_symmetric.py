@@ -5,7 +5,7 @@ import pytest
 from rodjit.kernels.banded import sym_tridiag_solve
 
 
-@pytest.mark.parametrize("n1", [1, 2, 3, 17, 400])
+@pytest.mark.parametrize("n1", [1, 2, 3, 6, 7, 17, 400])
 def test_solves_spd_tridiagonal_systems(n1):
     rng = np.random.default_rng(n1)
     e = rng.uniform(-1.0, 1.0, n1)           # e[i] couples i and i+1 (last entry unused)

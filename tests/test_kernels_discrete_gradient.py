@@ -193,3 +193,22 @@ def test_limits_at_coinciding_arguments():
         qp = quotient_slope(x, x, q, p)
         assert q == pytest.approx(value(x, p), rel=1e-15, abs=1e-300)
         assert qp == pytest.approx(0.5 * deriv(x, p), rel=1e-15, abs=1e-300)
+
+
+@pytest.mark.parametrize("law", ["rod", "floor"])
+def test_primitive_left_to_the_quotient_gives_the_same_bits(law):
+    """``pa = NaN`` makes ``quotient`` evaluate P(a) itself, and only on the exact branch:
+    both paths give exactly the quotient with P(a) passed in (the compiled step relies on
+    it)."""
+    p = LAWS[law][0]
+    rng = np.random.default_rng(11)
+    lo = -1.0 if law == "rod" else -FLOOR.beta
+    branches = set()
+    for _ in range(400):
+        a = lo + abs(lo) * rng.uniform(0.05, 1.5)
+        b = a + abs(lo) * rng.choice([1e-7, 1e-4, 1e-2, 0.5]) * rng.normal()
+        if not b > lo:
+            continue
+        branches.add(points(a, b, p))
+        assert quotient(a, np.nan, b, p) == quotient(a, primitive(a, p), b, p)
+    assert branches == {0, 2, 3, 4}

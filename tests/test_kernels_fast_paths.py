@@ -9,8 +9,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit._jit import kernel
-from rodjit.kernels.borrow import borrow
+from rodjit._jit import _CAN_DISABLE_NRT, JIT_OPTIONS, kernel
 from rodjit.kernels.forces import BAD_STRAIN, NON_FINITE, OK, accel, momentum
 from rodjit.kernels.reduce import nan_max, nan_min
 from rodjit.model.laws import AikiKosugiFloor, AikiKosugiRod, Law, aiki_kosugi, register
@@ -91,6 +90,23 @@ def test_a_law_without_deriv_max_gives_the_same_bits(integrator):
     assert np.array_equal(a.diagnostics["dt"], b.diagnostics["dt"])
 
 
+@pytest.mark.parametrize("u0", [0.3, -0.01])
+def test_acceleration_without_the_stiffness_bound_is_the_same(rng, u0):
+    """``accel(bound=False)`` (the energy step) fills the same accelerations and stresses
+    and reports the same status, strain and floor force; only the bound is left out."""
+    n = 12
+    system = RodSystem(n, 1.0 / n, 1e-3, 0.0, -9.81)
+    u = u0 + np.linspace(0.0, 1.0, n + 1) + 1e-3 * rng.normal(size=n + 1)
+    out = {}
+    for bound in (True, False):
+        work = np.zeros((3, n + 1))
+        res = accel(u, work[2], work[0], work[1], system, ROD, FLOOR, True, bound)
+        out[bound] = (res, work)
+    (r1, w1), (r0, w0) = out[True], out[False]
+    assert r1[:4] == r0[:4] and r1[0] == OK and np.array_equal(w1, w0)
+    assert r1[4] > 0.0 and r0[4] == 0.0
+
+
 def test_exact_compression_limit_is_flagged_not_raised():
     """ε = −1 exactly divides by zero in f: IEEE inf/nan (error_model="numpy"), which the
     admissibility test reports, never a ZeroDivisionError inside the loop."""
@@ -103,20 +119,46 @@ def test_exact_compression_limit_is_flagged_not_raised():
     assert accel(u, work[2], work[0], work[1], system, ROD, FLOOR, True)[0] == NON_FINITE
 
 
-@numba.njit
-def _write_through(a):
-    b = borrow(a)
-    row = b[1]
-    for i in range(row.size):
-        row[i] = i
-    return b[1].sum()
+@kernel
+def _weighted_sum(x, y):
+    """A kernel that is not inlined: its callers hand it arrays."""
+    s = 0.0
+    for i in range(x.size):
+        s += x[i] * (i + 1) + y[i]
+    return s
 
 
-def test_borrowed_views_alias_the_original():
-    a = np.zeros((2, 5))
-    assert _write_through(a) == 10.0
-    assert np.array_equal(a[1], np.arange(5.0)) and not a[0].any()
-    assert borrow(a) is a
+def _alternating_views(state, trial, work, steps):
+    """The time loop's pattern: rows of whichever array holds the current state, handed
+    to a kernel that is not inlined, and a write through a view."""
+    e = 0.0
+    for j in range(steps):
+        cur = state if j % 2 == 0 else trial
+        e += _weighted_sum(cur[0], cur[1])
+        row = work[2]
+        row[j] = e
+    return e
+
+
+@pytest.mark.skipif(not _CAN_DISABLE_NRT, reason="this Numba cannot disable reference counting")
+def test_kernels_count_no_references(rng):
+    """Compiled with rodjit's options (rodjit._jit), views and array arguments make no
+    NRT_incref/NRT_decref calls, where Numba's defaults make them; the results and the
+    writes through views are the same."""
+    n = 4
+    state = rng.normal(size=(3, n + 1))
+    trial = rng.normal(size=(3, n + 1))
+    want = [_weighted_sum(x[0], x[1]) for x in (state, trial, state)]
+    ir = {}
+    for name, opts in (("rodjit", {k: v for k, v in JIT_OPTIONS.items() if k != "cache"}),
+                       ("default", {})):
+        f = numba.njit(**opts)(_alternating_views)
+        work = np.zeros((3, n + 1))
+        e = f(state, trial, work, 3)
+        assert e == sum(want) and np.array_equal(work[2, :3], np.cumsum(want))
+        ir[name] = "".join(f.inspect_llvm().values())
+    assert "call void @NRT_incref" in ir["default"] and "call void @NRT_decref" in ir["default"]
+    assert "@NRT_incref" not in ir["rodjit"] and "@NRT_decref" not in ir["rodjit"]
 
 
 @pytest.mark.parametrize("sub", [viscous_cn, viscous_sdirk2])

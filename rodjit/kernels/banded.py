@@ -71,19 +71,54 @@ def penta_solve(l1, l2, dinv, rhs, x):
         x[i] = z
 
 
-@kernel
+@step_kernel
 def sym_tridiag_solve(d, e, rhs, x, cp):
     """Solve the symmetric tridiagonal system with diagonal ``d`` and off-diagonal ``e``
-    (e[i] is entry (i, i+1)) in one sweep each way (Thomas; one division per row); ``cp``
-    is scratch, ``x`` may alias ``rhs``.  For SPD matrices (the Newton Jacobians of the
-    energy step, rebuilt at every iterate), so no pivoting."""
+    (e[i] is entry (i, i+1)); ``cp`` is scratch, ``x`` may alias ``rhs``.  For SPD
+    matrices (the Newton Jacobians of the energy step, rebuilt at every iterate), so no
+    pivoting.
+
+    A twisted factorisation: Thomas eliminations from both ends at once, meeting at the
+    middle row k (one division per row, as one sweep, but two independent recurrences of
+    half the length: each row waits for the division of the row before it), then the
+    substitution outward from row k.  Every pivot of an SPD matrix is positive, from either
+    end."""
     n1 = d.size
-    inv = 1.0 / d[0]
-    cp[0] = e[0] * inv
-    x[0] = rhs[0] * inv
-    for i in range(1, n1):
-        inv = 1.0 / (d[i] - e[i - 1] * cp[i - 1])
-        cp[i] = e[i] * inv
-        x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * inv
-    for i in range(n1 - 2, -1, -1):
-        x[i] -= cp[i] * x[i + 1]
+    n = n1 - 1
+    k = n1 // 2
+    # rows 0 … k−1 downward (cp[i]: e[i]/pivot) and rows n … k+1 upward (cp[i]: e[i−1]/pivot)
+    if k >= 1:
+        inv = 1.0 / d[0]
+        cp[0] = e[0] * inv
+        x[0] = rhs[0] * inv
+    if n >= k + 1:
+        inv = 1.0 / d[n]
+        cp[n] = e[n - 1] * inv
+        x[n] = rhs[n] * inv
+    for j in range(1, max(k, n - k)):
+        i = j
+        if i <= k - 1:
+            inv = 1.0 / (d[i] - e[i - 1] * cp[i - 1])
+            cp[i] = e[i] * inv
+            x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * inv
+        i = n - j
+        if i >= k + 1:
+            inv = 1.0 / (d[i] - e[i] * cp[i + 1])
+            cp[i] = e[i - 1] * inv
+            x[i] = (rhs[i] - e[i] * x[i + 1]) * inv
+    piv = d[k]
+    z = rhs[k]
+    if k >= 1:
+        piv -= e[k - 1] * cp[k - 1]
+        z -= e[k - 1] * x[k - 1]
+    if n >= k + 1:
+        piv -= e[k] * cp[k + 1]
+        z -= e[k] * x[k + 1]
+    x[k] = z / piv
+    for j in range(1, max(k, n - k) + 1):
+        i = k - j
+        if i >= 0:
+            x[i] -= cp[i] * x[i + 1]
+        i = k + j
+        if i <= n:
+            x[i] -= cp[i] * x[i - 1]

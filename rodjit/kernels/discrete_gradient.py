@@ -30,7 +30,7 @@ accurate there (see above), so the quadrature never integrates across the kink.
 """
 
 from ..model.laws import deriv, lower, primitive, value
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 TAU = 0.02      # 4 points up to here, the exact quotient beyond
 TAU3 = 1e-3     # 3 points up to here
@@ -47,7 +47,7 @@ W31 = 0.5555555555555556
 X21 = 0.5773502691896258
 
 
-@kernel
+@step_kernel
 def points(a, b, p):
     """Gauss–Legendre points ``quotient`` uses for q(a, b): 2, 3, 4, or 0 for the exact
     quotient (interval long for its distance to the pole, or with 0 inside)."""
@@ -64,18 +64,21 @@ def points(a, b, p):
     return 0
 
 
-@kernel
+@step_kernel
 def uses_quadrature(a, b, p):
     """True if ``quotient`` evaluates q(a, b) by quadrature."""
     return points(a, b, p) > 0
 
 
-@kernel
+@step_kernel
 def quotient(a, pa, b, p):
-    """q(a, b) = (P(b) − P(a))/(b − a) of the law ``p``; ``pa`` = P(a) (cached by the
-    caller: a is fixed during a step).  Both a and b must be admissible."""
+    """q(a, b) = (P(b) − P(a))/(b − a) of the law ``p``; ``pa`` = P(a), or NaN to have it
+    evaluated here if the exact quotient needs it (the quadrature does not: P is then
+    not evaluated at all).  Both a and b must be admissible."""
     m = points(a, b, p)
     if m == 0:
+        if pa != pa:
+            pa = primitive(a, p)
         return (primitive(b, p) - pa) / (b - a)
     c = 0.5 * (a + b)
     hw = 0.5 * (b - a)
@@ -87,7 +90,7 @@ def quotient(a, pa, b, p):
                   + W2 * (value(c - X2 * hw, p) + value(c + X2 * hw, p)))
 
 
-@kernel
+@step_kernel
 def quotient_slope(a, b, q, p):
     """∂q/∂b for q = ``quotient``(a, P(a), b, p), by the same rule: the exact derivative
     of the computed q (Newton's Jacobian)."""

@@ -64,13 +64,15 @@ def add_beam_term(u, out, k, h, scale, by_mass):
 
 
 @step_kernel
-def accel(u, a, s, k, system, rod, floor, beam):
+def accel(u, a, s, k, system, rod, floor, beam, bound=True):
     """Explicit acceleration a = M⁻¹(stretch + floor [+ bending if ``beam``]) + g.
 
     Fills ``a`` (and the segment stresses ``s``, curvatures ``k``).  Returns
     ``(status, value, min_strain, floor_force, omega2)``: ``status``/``value`` flag a
     non-admissible or non-finite state, ``omega2`` bounds the largest squared frequency of
-    the explicit part (Gershgorin on M⁻¹K: 4 max f'/h² + 2|σ_b'|/h [+ 16γ/h⁴]).
+    the explicit part (Gershgorin on M⁻¹K: 4 max f'/h² + 2|σ_b'|/h [+ 16γ/h⁴]); with
+    ``bound=False`` (a scheme whose step does not need it) it is 0 and no derivative is
+    evaluated.
     """
     n = system.n
     h = system.h
@@ -95,8 +97,11 @@ def accel(u, a, s, k, system, rod, floor, beam):
     if not u0 > lower(floor):
         return BAD_FLOOR, u0, emin, 0.0, np.inf
     fl = value(u0, floor)
-    fd = abs(deriv(u0, floor))
-    fpmax = max_deriv(u, ih, emin, emax, rod)   # the largest f' over the segments
+    fd = 0.0
+    fpmax = 0.0
+    if bound:
+        fd = abs(deriv(u0, floor))
+        fpmax = max_deriv(u, ih, emin, emax, rod)   # the largest f' over the segments
     if bad or not math.isfinite(fl + fpmax + fd):
         return NON_FINITE, fl + fpmax, emin, fl, np.inf
     ie = 2.0 * ih
@@ -107,7 +112,8 @@ def accel(u, a, s, k, system, rod, floor, beam):
     omega2 = 4.0 * fpmax * ih * ih + 2.0 * fd * ih
     if beam and system.gamma > 0.0:
         add_beam_term(u, a, k, h, -system.gamma, True)
-        omega2 += 16.0 * system.gamma * ih * ih * ih * ih
+        if bound:
+            omega2 += 16.0 * system.gamma * ih * ih * ih * ih
     return OK, 0.0, emin, fl, omega2
 
 
@@ -158,7 +164,7 @@ def worst_segment(u, h):
     return best
 
 
-@kernel
+@step_kernel
 def energies(u, v, k, system, rod, floor):
     """``(kinetic, stretch, bend, floor, gravity, min_strain, cm_height, cm_velocity)``."""
     n = system.n

@@ -14,7 +14,7 @@ from llvmlite import ir
 from numba import types
 from numba.extending import intrinsic, overload
 
-from .._jit import JIT_OPTIONS
+from .._jit import STEP_JIT_OPTIONS
 
 __all__ = ["nan_min", "nan_max"]
 
@@ -58,13 +58,13 @@ _minimum = _llvm_binary("llvm.minimum")
 _maximum = _llvm_binary("llvm.maximum")
 
 
-@overload(nan_min, jit_options=JIT_OPTIONS)
+@overload(nan_min, jit_options=STEP_JIT_OPTIONS)
 def _nan_min_ov(a, b):
     if isinstance(a, types.Float) and isinstance(b, types.Float):
         return lambda a, b: _minimum(a, b)
 
 
-@overload(nan_max, jit_options=JIT_OPTIONS)
+@overload(nan_max, jit_options=STEP_JIT_OPTIONS)
 def _nan_max_ov(a, b):
     if isinstance(a, types.Float) and isinstance(b, types.Float):
         return lambda a, b: _maximum(a, b)

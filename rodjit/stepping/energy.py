@@ -27,11 +27,12 @@ differentiated consistently) converges.  Iterates are kept admissible and the re
 decreasing by backtracking; no convergence in ``max_newton`` iterations returns
 NO_CONVERGENCE (the loop retries a shorter step).
 
-Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ (Newton's start)
-and v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
+Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ and
+v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
 and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
-step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1 returns
-INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in [0.2, 5]×).
+step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1
+returns INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in
+[0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
 Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
 tiny there) and ``rtol`` that of the flight: raise atol to stop resolving every micro-contact.
@@ -49,9 +50,9 @@ from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
 from ..kernels.discrete_gradient import quotient, quotient_slope
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term)
-from ..model.laws import deriv, lower, primitive
+from ..model.laws import deriv, lower
 from .schemes import register_scheme
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 
 __all__ = ["Energy", "initial", "step", "WORK_ROWS", "GAP_CONTROL"]
 
@@ -72,24 +73,23 @@ EPS = 2.220446049250313e-16
 S = 0         # segment stresses (accel)
 K = 1         # curvatures
 E1 = 2        # strains of uⁿ
-P1 = 3        # f̂(strains of uⁿ)
-AD = 4        # ȧⁿ, the time derivative of the acceleration
-DP = 5        # predictor increment u_p − uⁿ
-R = 6         # Newton residual
-J0 = 7        # Jacobian diagonals (i,i), (i,i+1), (i,i+2)
-J1 = 8
-J2 = 9
-L1 = 10       # factor (L1 also the Thomas scratch)
-L2 = 11
-DINV = 12
-DEL = 13      # Newton update
-DT = 14       # line-search trial increment
-SC = 15       # magnitude of the residual's terms (rounding scale)
-UB = 16       # midpoint uⁿ + d/2 for the bending term
-D = 17        # Newton iterate d
-Q = 18        # quotients of the last evaluation (segments; node 0's at index N)
-QP = 19       # their slopes at the last Jacobian
-WORK_ROWS = 20
+AD = 3        # ȧⁿ, the time derivative of the acceleration
+DP = 4        # predictor increment u_p − uⁿ
+R = 5         # Newton residual
+J0 = 6        # Jacobian diagonals (i,i), (i,i+1), (i,i+2)
+J1 = 7
+J2 = 8
+L1 = 9         # factor (L1 also the Thomas scratch)
+L2 = 10
+DINV = 11
+DEL = 12      # Newton update
+DT = 13       # line-search trial increment
+SC = 14       # magnitude of the residual's terms (rounding scale)
+UB = 15       # midpoint uⁿ + d/2 for the bending term
+D = 16        # Newton iterate d
+Q = 17        # quotients of the last evaluation (segments; node 0's at index N)
+QP = 18       # their slopes at the last Jacobian
+WORK_ROWS = 19
 
 
 class Energy(NamedTuple):
@@ -105,28 +105,68 @@ def _build(tc):
     return Energy(float(tc.rtol), float(tc.atol), NEWTON_TOL, MAX_NEWTON)
 
 
-@kernel
+@step_kernel
 def _mass(i, n, h):
     return h if 0 < i < n else 0.5 * h
 
 
-@kernel
-def full_accel(system, rod, floor, u, v, a, s, k):
+@step_kernel
+def _inv_mass(i, n, ih):
+    """1/m_i from ih = 1/h: 2/h at the ends is 2·(1/h) exactly, so this is 1/_mass bit for
+    bit, without a division."""
+    return ih if 0 < i < n else 2.0 * ih
+
+
+# the range of errors where the step factor SAFETY·err^(−1/3) is not clamped
+ERR_FAC_MAX = (SAFETY / FAC_MAX) ** 3
+ERR_FAC_MIN = (SAFETY / FAC_MIN) ** 3
+
+
+@step_kernel
+def _step_factor(err):
+    """SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX] (the next step over this one).
+
+    err^(−1/3) by Newton's iteration y ← y(4 − x y³)/3 on x = err·8^k ∈ [1, 8), from the
+    least-squares quadratic of x^(−1/3) on [1, 8] (7 % off at worst): three iterations
+    leave < 1e-7 relative, far below what a step-size heuristic needs, and cost less than
+    the libm cbrt call they replace (~8 % of an N = 5 step).  Plain arithmetic: the same
+    bits everywhere."""
+    if not err > ERR_FAC_MAX:      # also err = 0
+        return FAC_MAX
+    if err >= ERR_FAC_MIN:
+        return FAC_MIN
+    x = err
+    scale = 1.0
+    while x < 1.0:
+        x *= 8.0
+        scale *= 2.0
+    while x >= 8.0:
+        x *= 0.125
+        scale *= 0.5
+    y = 1.07144173 + x * (-0.15170626 + x * 0.01044221)
+    for _ in range(3):
+        y = y * (4.0 - x * y * y * y) * (1.0 / 3.0)
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * scale * y))
+
+
+@step_kernel
+def full_accel(system, rod, floor, u, v, a, s, k, bound):
     """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
-    ``accel``'s ``(status, value, min_strain, floor_force, omega2)``."""
-    res = accel(u, a, s, k, system, rod, floor, True)
+    ``accel``'s ``(status, value, min_strain, floor_force, omega2)`` (omega2 = 0 unless
+    ``bound``: only the first step's proposal uses it)."""
+    res = accel(u, a, s, k, system, rod, floor, True, bound)
     if res[0] == OK and system.mu > 0.0:
         n = system.n
-        h = system.h
-        c = system.mu / h
+        ih = 1.0 / system.h
+        c = system.mu * ih
         for i in range(n):
             t = c * (v[i + 1] - v[i])
-            a[i] += t / _mass(i, n, h)
-            a[i + 1] -= t / _mass(i + 1, n, h)
+            a[i] += t * _inv_mass(i, n, ih)
+            a[i + 1] -= t * _inv_mass(i + 1, n, ih)
     return res
 
 
-@kernel
+@step_kernel
 def jerk(system, rod, floor, u, v, a, out, k):
     """ȧ = M⁻¹(−H(u)v − μKa), the time derivative of the acceleration along the motion
     (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself)."""
@@ -134,21 +174,23 @@ def jerk(system, rod, floor, u, v, a, out, k):
     h = system.h
     ih = 1.0 / h
     mu = system.mu
-    for i in range(n + 1):
-        out[i] = 0.0
+    # out_i = t_i − t_{i−1} with the segment terms t (no zeroing pass: LLVM makes it a
+    # memset call, which costs more than the whole loop for a short rod)
+    t_prev = 0.0
     for i in range(n):
         e = (u[i + 1] - u[i]) * ih - 1.0
         t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
-        out[i] += t
-        out[i + 1] -= t
+        out[i] = t - t_prev
+        t_prev = t
+    out[n] = -t_prev
     out[0] += deriv(u[0], floor) * v[0]
     if system.gamma > 0.0:
         add_beam_term(v, out, k, h, -system.gamma, False)
     for i in range(n + 1):
-        out[i] /= _mass(i, n, h)
+        out[i] *= _inv_mass(i, n, ih)
 
 
-@kernel
+@step_kernel
 def _error_rate(scheme, u, ad):
     """max_i |ȧ_i|/12 / (atol + rtol|u_i|): the predicted u error per dt³."""
     r = 0.0
@@ -157,32 +199,36 @@ def _error_rate(scheme, u, ad):
     return r
 
 
-@kernel
+@step_kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state; ``(status, value, min_strain, floor_force,
     dt_suggest)``.  The first step: the accuracy estimate from ȧ, at most the explicit limit
     2/ω (the controller grows it from there)."""
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K])
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
     if status != OK:
         return status, val, emin, fl, 0.0
     jerk(system, rod, floor, u, v, a, work[AD], work[K])
     dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
     rate = _error_rate(scheme, u, work[AD])
     if rate > 0.0:
-        dt = min(dt, 0.5 * rate ** (-1.0 / 3.0))
+        dt = min(dt, 0.5 / np.cbrt(rate))
     return OK, 0.0, emin, fl, dt
 
 
-@kernel
-def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
-    """Residual F(d) (row R) and its rounding scale (row SC); leaves u² = uⁿ + d in ``u2``
-    and the quotients in row Q (segments, then node 0's at index n) for ``_jacobian``.
+@step_kernel
+def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
+    """Residual F(d) (row R); leaves u² = uⁿ + d in ``u2`` and the quotients in row Q
+    (segments, then node 0's at index n).  With ``jac`` it also assembles the Jacobian at
+    d (what ``_jacobian`` does, in the same pass: the evaluation that starts a Newton
+    iteration needs it), without it the residual's rounding scale (the evaluations that
+    may end the iteration need that).
 
-    Returns ``(status, |F|, |scale|)`` in the norm |x|² = Σ x_i²/m_i; status is BAD_STRAIN,
-    BAD_FLOOR or NON_FINITE for an iterate outside the admissible set.  The scale sums the
-    magnitudes of the residual's terms, plus the stress change that the rounding of u² in a
-    strain causes (slopes from the last Jacobian), so 64 ε_mach × scale is the residual's
-    rounding level.
+    Returns ``(status, |F|², |scale|²)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 with
+    ``jac``); status is BAD_STRAIN, BAD_FLOOR or NON_FINITE for an iterate outside the
+    admissible set.  The scale sums the magnitudes of the residual's terms, plus the stress
+    change that the rounding of u² in a strain causes (slopes from the last Jacobian), so
+    64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
+    takes the terms of segments i − 1 (carried over) and i.
     """
     n = system.n
     h = system.h
@@ -190,61 +236,123 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work):
     r = work[R]
     sc = work[SC]
     e1 = work[E1]
-    p1 = work[P1]
     qs = work[Q]
     qps = work[QP]
+    j0 = work[J0]
+    j1 = work[J1]
     c2 = 0.5 * dt * dt
     cv = 0.5 * dt * system.mu * ih
     g = system.g
     lo = lower(rod)
     for i in range(n + 1):
-        m = _mass(i, n, h)
         u2[i] = u[i] + d[i]
-        r[i] = m * (d[i] - dt * v[i]) - c2 * m * g
-        sc[i] = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
-    for i in range(n):
-        e2 = (u2[i + 1] - u2[i]) * ih - 1.0
-        if not e2 > lo:
-            return (BAD_STRAIN if math.isfinite(e2) else NON_FINITE), 0.0, 0.0
-        q = quotient(e1[i], p1[i], e2, rod)
-        qs[i] = q
-        tq = c2 * q
-        tv = cv * (d[i + 1] - d[i])
-        r[i + 1] += tq + tv
-        r[i] -= tq + tv
-        at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
-        sc[i] += at
-        sc[i + 1] += at
     if not u2[0] > lower(floor):
         return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
-    qb = quotient(u[0], primitive(u[0], floor), u2[0], floor)
+    qb = quotient(u[0], np.nan, u2[0], floor)
     qs[n] = qb
-    r[0] -= c2 * qb
-    sc[0] += c2 * abs(qb)
-    if system.gamma > 0.0:
+    beam = system.gamma > 0.0
+    cb = c2 * system.gamma
+    if beam:   # the bending terms first, into rows R and SC
         ub = work[UB]
         for i in range(n + 1):
             ub[i] = u[i] + 0.5 * d[i]
-        cb = c2 * system.gamma
+            r[i] = 0.0
+            sc[i] = 0.0
         add_beam_term(ub, r, work[K], h, cb, False)
-        kk = work[K]
-        for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
-            t = abs(cb * kk[i]) * ih
-            sc[i - 1] += t
-            sc[i] += 2.0 * t
-            sc[i + 1] += t
+        if not jac:
+            kk = work[K]
+            for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
+                t = abs(cb * kk[i]) * ih
+                sc[i - 1] += t
+                sc[i] += 2.0 * t
+                sc[i + 1] += t
     rn = 0.0
     sn = 0.0
+    t_prev = 0.0      # segment i − 1: its force term, scale term and Jacobian coupling
+    a_prev = 0.0
+    c_prev = 0.0
+    bad = False
+    nonfinite = False
     for i in range(n + 1):
-        im = 1.0 / _mass(i, n, h)
-        rn += r[i] * r[i] * im
-        sn += sc[i] * sc[i] * im
+        m = _mass(i, n, h)
+        ri = m * (d[i] - dt * v[i]) - c2 * m * g
+        if beam:
+            ri += r[i]
+        ri += t_prev
+        si = 0.0
+        ji = 0.0
+        if jac:
+            ji = m + c_prev
+        else:
+            si = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
+            if beam:
+                si += sc[i]
+            si += a_prev
+        if i < n:
+            e2 = (u2[i + 1] - u2[i]) * ih - 1.0
+            bad |= not e2 > lo
+            nonfinite |= not math.isfinite(e2)
+            q = quotient(e1[i], np.nan, e2, rod)   # P(εⁿ) only if the exact quotient is used
+            qs[i] = q
+            tq = c2 * q
+            tv = cv * (d[i + 1] - d[i])
+            t = tq + tv
+            ri -= t
+            t_prev = t
+            if jac:
+                qp = quotient_slope(e1[i], e2, q, rod)
+                qps[i] = qp
+                c = c2 * qp * ih + cv
+                ji += c
+                j1[i] = -c
+                c_prev = c
+            else:
+                at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
+                si += at
+                a_prev = at
+        if i == 0:
+            ri -= c2 * qb
+            if jac:
+                ji -= c2 * quotient_slope(u[0], u2[0], qb, floor)
+            else:
+                si += c2 * abs(qb)
+        r[i] = ri
+        if jac:
+            j0[i] = ji
+        im = _inv_mass(i, n, ih)
+        rn += ri * ri * im
+        sn += si * si * im
+    if bad:
+        return (NON_FINITE if nonfinite else BAD_STRAIN), 0.0, 0.0
+    if jac:
+        j1[n] = 0.0
+        if beam:
+            _add_bending_jacobian(system, work, c2, ih)
     if not math.isfinite(rn + sn):
         return NON_FINITE, 0.0, 0.0
-    return OK, math.sqrt(rn), math.sqrt(sn)
+    return OK, rn, sn
 
 
-@kernel
+@step_kernel
+def _add_bending_jacobian(system, work, c2, ih):
+    """Rows J0–J2 += c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²."""
+    n = system.n
+    j0 = work[J0]
+    j1 = work[J1]
+    j2 = work[J2]
+    for i in range(n + 1):
+        j2[i] = 0.0
+    w = 0.5 * c2 * system.gamma * ih * ih * ih
+    for i in range(1, n):
+        j0[i - 1] += w
+        j0[i] += 4.0 * w
+        j0[i + 1] += w
+        j1[i - 1] -= 2.0 * w
+        j1[i] -= 2.0 * w
+        j2[i - 1] += w
+
+
+@step_kernel
 def _jacobian(system, rod, floor, u, d, u2, dt, work):
     """Jacobian of F at the last evaluated iterate (rows J0–J2; slopes kept in row QP):
     M + dt²/2 (Σ_i q_i'/h (e_{i+1} − e_i)(e_{i+1} − e_i)ᵀ − q_b' e_0e_0ᵀ + γB/2) + dt μ/2 K,
@@ -259,34 +367,22 @@ def _jacobian(system, rod, floor, u, d, u2, dt, work):
     qps = work[QP]
     c2 = 0.5 * dt * dt
     cv = 0.5 * dt * system.mu * ih
-    for i in range(n + 1):
-        j0[i] = _mass(i, n, h)
-        j1[i] = 0.0
-    for i in range(n):
+    j0[0] = _mass(0, n, h)
+    for i in range(n):   # each entry written once: no zeroing pass (a memset call)
         e2 = (u2[i + 1] - u2[i]) * ih - 1.0
         qp = quotient_slope(e1[i], e2, qs[i], rod)
         qps[i] = qp
         c = c2 * qp * ih + cv
         j0[i] += c
-        j0[i + 1] += c
-        j1[i] -= c
+        j0[i + 1] = _mass(i + 1, n, h) + c
+        j1[i] = -c
+    j1[n] = 0.0
     j0[0] -= c2 * quotient_slope(u[0], u2[0], qs[n], floor)
     if system.gamma > 0.0:
-        # c2 γ/2 B, B = h CᵀC with curvature rows (1, −2, 1)/h²
-        j2 = work[J2]
-        for i in range(n + 1):
-            j2[i] = 0.0
-        w = 0.5 * c2 * system.gamma * ih * ih * ih
-        for i in range(1, n):
-            j0[i - 1] += w
-            j0[i] += 4.0 * w
-            j0[i + 1] += w
-            j1[i - 1] -= 2.0 * w
-            j1[i] -= 2.0 * w
-            j2[i - 1] += w
+        _add_bending_jacobian(system, work, c2, ih)
 
 
-@kernel
+@step_kernel
 def _newton_update(system, work):
     """δ = −J⁻¹F with the banded solvers (tridiagonal for γ = 0, else pentadiagonal)."""
     rhs = work[DEL]
@@ -300,34 +396,39 @@ def _newton_update(system, work):
         sym_tridiag_solve(work[J0], work[J1], rhs, rhs, work[L1])
 
 
-@kernel
+@step_kernel
 def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
-    """Solve F(d) = 0 from the (admissible) start value in row D; leaves d in row D and
-    uⁿ + d in ``u2``.  Returns ``(status, value)``: OK, or NO_CONVERGENCE with the last
-    update size in ``value``.
+    """Solve F(d) = 0 from the start value in row D; leaves d in row D and uⁿ + d in
+    ``u2``.  Returns ``(status, value)``: OK, NO_CONVERGENCE with the last update size in
+    ``value``, or the first evaluation's BAD_STRAIN, BAD_FLOOR or NON_FINITE if the start
+    is not admissible (row D then unchanged).
 
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
     terms), or when the update is at most newton_tol × |d|∞: that update is applied and
     leaves a residual O(update²) by quadratic convergence.  Each update is backtracked
-    until the iterate is admissible and the residual drops (Armijo).
+    until the iterate is admissible and the residual drops (Armijo).  The start value is
+    always updated once (the Taylor predictor is never a root to rounding, so its residual
+    is not tested): its evaluation assembles the first Jacobian instead.  Norms are
+    compared squared.
     """
     n1 = u.size
     d = work[D]
     dl = work[DEL]
     dtr = work[DT]
-    qps = work[QP]
-    for i in range(n1):
-        qps[i] = 0.0
-    status, rn, sn = _evaluate(system, rod, floor, u, v, d, u2, dt, work)
+    status, rn2, sn2 = _evaluate(system, rod, floor, u, v, d, u2, dt, work, True)
     if status != OK:
         return status, 0.0
+    have_jacobian = True
+    rounding2 = (64.0 * EPS) ** 2
     last = np.inf
     for it in range(scheme.max_newton + 1):
-        if rn <= 64.0 * EPS * sn:
+        if it > 0 and rn2 <= rounding2 * sn2:
             return OK, 0.0
         if it == scheme.max_newton:
             break
-        _jacobian(system, rod, floor, u, d, u2, dt, work)
+        if not have_jacobian:
+            _jacobian(system, rod, floor, u, d, u2, dt, work)
+        have_jacobian = False
         _newton_update(system, work)
         sstats[0] += 1
         dmax = 0.0
@@ -341,14 +442,15 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         small = dmax <= scheme.newton_tol * dref
         alpha = 1.0
         accepted = False
-        rt = 0.0
-        st_ = 0.0
+        rt2 = 0.0
+        st2 = 0.0
         for _ in range(MAX_BACKTRACK):
             for i in range(n1):
                 dtr[i] = d[i] + alpha * dl[i]
-            status, rt, st_ = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work)
-            if status == OK and (small or rt <= (1.0 - ARMIJO * alpha) * rn
-                                 or rt <= 64.0 * EPS * st_):
+            status, rt2, st2 = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work, False)
+            armijo = 1.0 - ARMIJO * alpha
+            if status == OK and (small or rt2 <= armijo * armijo * rn2
+                                 or rt2 <= rounding2 * st2):
                 accepted = True
                 break
             alpha *= 0.5
@@ -356,15 +458,15 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             break
         for i in range(n1):
             d[i] = dtr[i]
-        rn = rt
-        sn = st_
+        rn2 = rt2
+        sn2 = st2
         if small and alpha == 1.0:
             return OK, 0.0
     sstats[1] += 1
     return NO_CONVERGENCE, last
 
 
-@kernel
+@step_kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
@@ -377,35 +479,29 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     ih = 1.0 / h
     n1 = n + 1
     e1 = work[E1]
-    p1 = work[P1]
     dp = work[DP]
     ad = work[AD]
     d = work[D]
     jerk(system, rod, floor, u, v, a, ad, work[K])
     for i in range(n):
-        e = (u[i + 1] - u[i]) * ih - 1.0
-        e1[i] = e
-        p1[i] = primitive(e, rod)
-    # predictor (error estimate and Newton's start), pulled back into the admissible set
+        e1[i] = (u[i + 1] - u[i]) * ih - 1.0
+    # the Taylor predictor dp (error estimate); Newton's start is dp + dt³ȧ/4, the step's
+    # own leading-order deviation from it (module docstring), pulled back toward uⁿ
+    # (halved) while it is outside the admissible set (the first residual evaluation
+    # reports that, before Newton changes anything)
     hdt2 = 0.5 * dt * dt
+    c3 = 0.5 * dt * hdt2          # dt³/4
     for i in range(n1):
         dp[i] = dt * v[i] + hdt2 * a[i]
-        d[i] = dp[i]
-    lo = lower(rod)
-    lo_b = lower(floor)
+        d[i] = dp[i] + c3 * ad[i]
     alpha = 1.0
     for _ in range(60):
-        ok = u[0] + d[0] > lo_b
-        for i in range(n):
-            if not (((u[i + 1] + d[i + 1]) - (u[i] + d[i])) * ih - 1.0 > lo):
-                ok = False
-                break
-        if ok:
+        status, val = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+        if status != BAD_STRAIN and status != BAD_FLOOR:
             break
         alpha *= 0.5
         for i in range(n1):
-            d[i] = alpha * dp[i]
-    status, val = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+            d[i] = alpha * (dp[i] + c3 * ad[i])
     if status != OK:
         return status, val, 0.0, 0.0, 0.0, 0.0, 0.0
     # vⁿ⁺¹ from the increment itself: 2(u2 − u)/dt would amplify the rounding of u2 by 1/dt
@@ -413,20 +509,21 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     for i in range(n1):
         u2[i] = u[i] + d[i]
         v2[i] = idt2 * d[i] - v[i]
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K])
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K], False)
     if status != OK:
         return status, val, emin, fl, 0.0, 0.0, 0.0
-    # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²
+    # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
+    # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node
     err = 0.0
     w = 0.0
     for i in range(n1):
-        eu = (d[i] - dp[i]) / 3.0
-        vp = v[i] + dt * a[i] + hdt2 * ad[i]
-        ev = (v2[i] - vp) / 3.0
+        eu = abs(d[i] - dp[i])
+        ev = abs(v2[i] - (v[i] + dt * a[i] + hdt2 * ad[i]))
         su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
         sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
-        err = max(err, abs(eu) / su, abs(ev) / sv)
+        err = max(err, max(eu * sv, ev * su) / (su * sv))
         w += _mass(i, n, h) * v2[i]
+    err /= 3.0
     diss = 0.0
     if system.mu > 0.0:
         for i in range(n):
@@ -435,9 +532,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         diss *= dt * system.mu * ih
     if not math.isfinite(err):
         return NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0
-    fac = FAC_MAX
-    if err > 0.0:
-        fac = min(FAC_MAX, max(FAC_MIN, SAFETY * err ** (-1.0 / 3.0)))
+    fac = _step_factor(err)
     if err > 1.0:
         return INACCURATE, err, emin, fl, dt * fac, w, diss
     return OK, 0.0, emin, fl, dt * fac, w, diss

@@ -11,7 +11,6 @@ steps accepted as it is (a scheme then returns a valid state with INACCURATE).
 """
 import numpy as np
 
-from ..kernels.borrow import borrow
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
 from ..model.laws import lower, value
 from . import layout as L
@@ -51,14 +50,14 @@ def _next_target(clock, count):
     return target
 
 
-@kernel
+@step_kernel
 def _skip_past(clock, count, kidx, dtidx, t):
     """Advance the output index to the first grid time after t (+ tolerance)."""
     while clock[L.T0] + count[kidx] * clock[dtidx] <= t + clock[L.TOL]:
         count[kidx] += 1
 
 
-@kernel
+@step_kernel
 def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
           snap_t, snap_step, snap_u, snap_v, diag):
     """Write the snapshot and/or diagnostics row due at time t."""
@@ -67,8 +66,9 @@ def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
         j = count[L.N_SNAP]
         snap_t[j] = t
         snap_step[j] = step_no
-        snap_u[j, :] = cur[0]
-        snap_v[j, :] = cur[1]
+        for i in range(cur.shape[1]):   # element loops: a slice copy would allocate
+            snap_u[j, i] = cur[0, i]
+            snap_v[j, i] = cur[1, i]
         count[L.N_SNAP] += 1
         _skip_past(clock, count, L.K_SNAP, L.SNAP_DT, t)
     if clock[L.DIAG_DT] > 0.0 and clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT] <= t + tol:
@@ -129,23 +129,6 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
 
     Returns layout.DONE, FULL, PAUSED or FAILED.
     """
-    # Unowned views of the arguments: no atomic reference counting on every step (the
-    # views and calls below would cost ~30 atomic pairs per step; see kernels.borrow).
-    state = borrow(state)
-    trial = borrow(trial)
-    work = borrow(work)
-    sstats = borrow(sstats)
-    clock = borrow(clock)
-    count = borrow(count)
-    ev = borrow(ev)
-    snap_t = borrow(snap_t)
-    snap_step = borrow(snap_step)
-    snap_u = borrow(snap_u)
-    snap_v = borrow(snap_v)
-    diag = borrow(diag)
-    episodes = borrow(episodes)
-    bounces = borrow(bounces)
-    fail = borrow(fail)
     cur = state
     nxt = trial
     swapped = False
@@ -260,5 +243,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
     clock[L.W] = w
     clock[L.EMIN] = emin_cur
     if swapped:
-        state[:, :] = cur
+        for r in range(state.shape[0]):
+            for i in range(state.shape[1]):
+                state[r, i] = cur[r, i]
     return code

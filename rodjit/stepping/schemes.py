@@ -20,7 +20,7 @@ from typing import NamedTuple
 from numba.extending import overload
 
 from . import semi_implicit, verlet
-from .._jit import JIT_OPTIONS
+from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
 
 __all__ = ["Verlet", "SemiImplicit", "make_scheme", "register_scheme", "initial", "step",
            "SCHEME_STATS"]
@@ -86,7 +86,7 @@ def _initial_ov(scheme, system, rod, floor, u, v, a, work):
         scheme, system, rod, floor, u, v, a, work)
 
 
-@overload(step, jit_options=JIT_OPTIONS)
+@overload(step, jit_options=STEP_JIT_OPTIONS)   # inlined into the loop, like the step
 def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     impl = _module_for(scheme).step
     return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(

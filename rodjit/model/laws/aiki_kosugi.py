@@ -10,7 +10,7 @@ from typing import NamedTuple
 
 
 from .base import Law, register
-from ..._jit import kernel
+from ..._jit import step_kernel
 
 
 class AikiKosugiRod(NamedTuple):
@@ -26,7 +26,7 @@ class AikiKosugiFloor(NamedTuple):
     beta: float
 
 
-@kernel
+@step_kernel
 def rod_value(e, p):
     # κ/2 (ε + 1/2 − 1/(2q³)) with q = 1+ε, written as κ ε (2q³ + q² + q + 1) / (4q³)
     q = 1.0 + e
@@ -35,14 +35,14 @@ def rod_value(e, p):
     return p.kappa * e * (2.0 * q3 + q2 + q + 1.0) / (4.0 * q3)
 
 
-@kernel
+@step_kernel
 def rod_deriv(e, p):
     q = 1.0 + e
     q2 = q * q
     return 0.5 * p.kappa * (1.0 + 1.5 / (q2 * q2))
 
 
-@kernel
+@step_kernel
 def rod_deriv_max(lo, hi, p):
     # f' = κ/2 (1 + 3/(2q⁴)) decreases in ε, so its largest value on [lo, hi] is at lo.
     # This holds for the floating-point evaluation too (each operation in rod_deriv is
@@ -51,7 +51,7 @@ def rod_deriv_max(lo, hi, p):
     return rod_deriv(lo, p)
 
 
-@kernel
+@step_kernel
 def rod_primitive(e, p):
     # κ/2 (ε²/2 + ε/2 + 1/(4q²) − 1/4) = κ ε² (2q² + 2q + 1) / (8q²)  (≥ 0, exact near 0)
     q = 1.0 + e
@@ -59,31 +59,33 @@ def rod_primitive(e, p):
     return p.kappa * e * e * (2.0 * q2 + 2.0 * q + 1.0) / (8.0 * q2)
 
 
-@kernel
+@step_kernel
 def rod_lower(p):
     return -1.0
 
 
-@kernel
+@step_kernel
 def floor_value(h, p):
     # κ_b (r³ − 1), r = β/(h+β); r³ − 1 = (r − 1)(r² + r + 1) and r − 1 = −h/(h+β)
     if h > 0.0:
         return 0.0
-    s = h + p.beta
-    r = p.beta / s
-    return -p.kappa_b * (h / s) * (r * r + r + 1.0)
+    inv = 1.0 / (h + p.beta)     # one division (the floor is evaluated several times a step)
+    r = p.beta * inv
+    return -p.kappa_b * (h * inv) * (r * r + r + 1.0)
 
 
-@kernel
+@step_kernel
 def floor_deriv(h, p):
     if h > 0.0:
         return 0.0
-    r = p.beta / (h + p.beta)
-    r2 = r * r
-    return -3.0 * p.kappa_b * r2 * r2 / p.beta
+    # −3κ_b r⁴/β = −3κ_b β³/(h+β)⁴: one division
+    s = h + p.beta
+    s2 = s * s
+    b = p.beta
+    return -3.0 * p.kappa_b * (b * b * b) / (s2 * s2)
 
 
-@kernel
+@step_kernel
 def floor_primitive(h, p):
     # κ_b (−β³/(2(h+β)²) − h + β/2) = −κ_b h² (2h + 3β) / (2(h+β)²)   (≤ 0)
     if h > 0.0:
@@ -92,7 +94,7 @@ def floor_primitive(h, p):
     return -p.kappa_b * h * h * (2.0 * h + 3.0 * p.beta) / (2.0 * s * s)
 
 
-@kernel
+@step_kernel
 def floor_lower(p):
     return -p.beta
 

@@ -14,7 +14,7 @@ from typing import Any, Callable
 from numba.extending import overload
 
 from . import registered
-from ..._jit import JIT_OPTIONS, kernel
+from ..._jit import STEP_JIT_OPTIONS
 
 __all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower",
            "max_deriv"]
@@ -151,31 +151,31 @@ def max_deriv(u, ih, lo, hi, p):
     return m
 
 
-@overload(value, jit_options=JIT_OPTIONS)
+@overload(value, jit_options=STEP_JIT_OPTIONS)
 def _value_ov(x, p):
     impl = _law_for_type(p).value
     return lambda x, p: impl(x, p)
 
 
-@overload(deriv, jit_options=JIT_OPTIONS)
+@overload(deriv, jit_options=STEP_JIT_OPTIONS)
 def _deriv_ov(x, p):
     impl = _law_for_type(p).deriv
     return lambda x, p: impl(x, p)
 
 
-@overload(primitive, jit_options=JIT_OPTIONS)
+@overload(primitive, jit_options=STEP_JIT_OPTIONS)
 def _primitive_ov(x, p):
     impl = _law_for_type(p).primitive
     return lambda x, p: impl(x, p)
 
 
-@overload(lower, jit_options=JIT_OPTIONS)
+@overload(lower, jit_options=STEP_JIT_OPTIONS)
 def _lower_ov(p):
     impl = _law_for_type(p).lower
     return lambda p: impl(p)
 
 
-@overload(max_deriv, jit_options=JIT_OPTIONS)
+@overload(max_deriv, jit_options=STEP_JIT_OPTIONS)
 def _max_deriv_ov(u, ih, lo, hi, p):
     law = _law_for_type(p)
     if law.deriv_max is not None:
