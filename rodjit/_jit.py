@@ -3,6 +3,9 @@
 ``error_model="numpy"``: a division by zero gives inf/nan (which the admissibility checks
 reject) instead of raising inside compiled code, and keeps loops vectorisable.
 ``cache=True``: compiled code is stored on disk, so later processes start warm.
+``nogil=True``: a compiled call releases the GIL, so the run file is written by another
+thread while the loop computes (``driver.pipeline``); it changes only the Python entry
+wrapper, not the compiled loop.
 Stress laws written by users should use ``kernel`` too.
 
 Numba invalidates a cached function only when *its own* file changes, not when a function
@@ -19,7 +22,7 @@ import numba
 from numba.core import caching
 from numba.core.cpu import CPUTargetOptions
 
-JIT_OPTIONS = {"cache": True, "error_model": "numpy"}
+JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True}
 
 kernel = numba.njit(**JIT_OPTIONS)
 
