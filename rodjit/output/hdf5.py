@@ -402,7 +402,7 @@ class RunWriter(Sink):
         one stays valid, and a resume cuts the tables back to it."""
         for table in self.tables.values():
             table.flush()
-        if any(run.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE)):
+        if not run.drained:
             self.file.flush()
             return
         ck = run.checkpoint()
