@@ -201,8 +201,11 @@ class Run:
 
     def start(self, sink: Sink | None) -> None:
         """Compile (or load from cache) the kernels, then evaluate the initial state; its
-        outputs (at t0) are drained into ``sink``, or stay in the buffers if it is None."""
+        outputs (at t0) are drained into ``sink``, or stay in the buffers if it is None.
+        A run resumed from a checkpoint only compiles."""
         if self.count[L.STARTED]:
+            if not self._warm:
+                self.warm_up()
             return
         t0 = time.perf_counter()
         code = start(*self._args(), self.state, self.work, self.clock, self.count, self.ev,

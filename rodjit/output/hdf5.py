@@ -19,7 +19,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from ..driver.run import Sink
+from ..driver.run import Run, Sink
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS
 
@@ -397,21 +397,25 @@ class RunWriter(Sink):
         self.tables["bounces"].append([cols[c] for c in TABLES["bounces"]])
 
     def save(self, run) -> None:
-        """Write buffered rows and a checkpoint of ``run`` matching them.  A run stopped in
-        the middle of a drain (an error while draining) gets no new checkpoint: the last
-        one stays valid, and a resume cuts the tables back to it."""
+        """Write buffered rows and a checkpoint of ``run`` matching them.  A run that is not
+        ``drained`` (an error while draining) gets no new checkpoint: the last one stays
+        valid, and a resume cuts the tables back to it."""
         for table in self.tables.values():
             table.flush()
         if not run.drained:
             self.file.flush()
             return
-        ck = run.checkpoint()
+        self._commit(run.checkpoint(), self.compile_time_before + run.compile_time)
+
+    def _commit(self, ck: dict, compile_time: float) -> None:
+        """Checkpoint ``ck`` into the idle slot with the current table lengths (rows already
+        written), flush, flip ``current``, flush."""
         slot = 1 if self.current == 0 else 0
         g = self.file[f"checkpoint/slot{slot}"]
         for name in _CK_ARRAYS:
             g[name][...] = ck[name]
         g["run_time"][()] = float(ck["run_time"])
-        g["compile_time"][()] = self.compile_time_before + run.compile_time
+        g["compile_time"][()] = compile_time
         g["lengths"][...] = np.array([t.length for t in self.tables.values()], np.int64)
         self.file.flush()
         self.file["checkpoint/current"][()] = slot
@@ -458,15 +462,18 @@ def _history(f: h5py.File, entry: str) -> list[str]:
     return [str(s) for s in f.attrs.get("history", [])] + [f"{_now()} {entry}"]
 
 
-def create_run_file(path, config, run, *, command: str) -> RunWriter:
-    """A new run file for ``run`` (not yet started) in SWMR mode, with a first checkpoint."""
+def create_run_file(path, config, start, *, command: str) -> RunWriter:
+    """A new run file in SWMR mode whose first checkpoint is ``start``: a Run not started
+    yet, or the ``checkpoint()`` of one (taken before it started, so the run may already
+    be computing)."""
+    ck = start.checkpoint() if isinstance(start, Run) else start
     f = _open_for_writing(path, "w")
     try:
-        _build_layout(f, config, run.checkpoint(),
+        _build_layout(f, config, ck,
                       {"command": command, "history": [f"{_now()} created by: {command}"]})
         f.swmr_mode = True
         writer = RunWriter(f)
-        writer.save(run)
+        writer._commit(ck, float(ck["compile_time"]))
     except BaseException:
         f.close()
         raise
