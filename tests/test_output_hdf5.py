@@ -17,10 +17,14 @@ def _mid_episode_t_end():
     return 0.5 * (res.episodes["t_start"][i] + res.episodes["t_end"][i])
 
 
-@pytest.mark.parametrize("t_end", [1.0, "mid-episode"])
-def test_file_equals_simulate_bit_for_bit(tmp_path, t_end):
+@pytest.mark.parametrize("t_end, over", [
+    (1.0, {}), ("mid-episode", {}),
+    (0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3}),   # many whole chunks of u, v
+    (0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3, "output.compression": "gzip"}),
+], ids=["default", "mid-episode", "N200", "N200-gzip"])
+def test_file_equals_simulate_bit_for_bit(tmp_path, t_end, over):
     t_end = _mid_episode_t_end() if t_end == "mid-episode" else t_end
-    cfg = rodjit.Config().override({"time.t_end": t_end})
+    cfg = rodjit.Config().override({"time.t_end": t_end, **over})
     mem = rodjit.simulate(cfg)
     rodjit.run_to_file(cfg, tmp_path / "r.h5")
     disk = rodjit.load_file(tmp_path / "r.h5")
@@ -128,33 +132,6 @@ def test_checkpoint_slots_alternate_and_stay_valid(tmp_path, small_config):
     finally:
         writer.close(run, "completed")
     assert final_state(tmp_path / "r.h5")["clock"][L.T] == 1.0
-
-
-def test_table_writes_in_chunk_blocks_and_reopens(tmp_path):
-    with h5py.File(tmp_path / "t.h5", "w", libver="latest") as f:
-        g = f.create_group("g")
-        for name in ("a", "b"):
-            g.create_dataset(name, shape=(0, 2), maxshape=(None, 2), chunks=(4, 2), dtype="f8")
-        table = hdf5._Table(g, ("a", "b"))
-        rows = np.arange(22, dtype=float).reshape(11, 2)
-        table.append((rows[:3], -rows[:3]))
-        assert g["a"].shape[0] == 0 and table.length == 3     # waiting for a full chunk
-        table.append((rows[3:10], -rows[3:10]))
-        assert g["a"].shape[0] == 8                            # two full chunks written
-        table.flush()
-        assert g["a"].shape[0] == 10                           # partial chunk written, kept
-        reopened = hdf5._Table(g, ("a", "b"))
-        assert reopened.start == 8 and reopened.fill == 2
-        reopened.append((rows[10:], -rows[10:]))
-        reopened.flush()
-        assert np.array_equal(g["a"][()], rows) and np.array_equal(g["b"][()], -rows)
-        more = np.arange(100, 118, dtype=float).reshape(9, 2)
-        reopened.append((more[:1], -more[:1]))       # completes the chunk at rows 8..11
-        assert g["a"].shape[0] == 12 and reopened.fill == 0
-        reopened.append((more[1:], -more[1:]))       # two whole chunks go straight through
-        assert g["a"].shape[0] == 20 and reopened.fill == 0
-        assert np.array_equal(g["a"][()], np.vstack([rows, more]))
-        assert np.array_equal(g["b"][()], -np.vstack([rows, more]))
 
 
 def test_not_a_run_file(tmp_path):

@@ -22,6 +22,7 @@ import numpy as np
 from ..driver.run import Run, Sink
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS
+from .table import Table
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "RunWriter", "NotARunFile",
            "FileBusy", "open_file", "check_run_file", "read_config", "read_checkpoint",
@@ -239,9 +240,9 @@ def _filters(compression: str) -> dict:
     return {}
 
 
-def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
+def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> dict[str, list]:
     """Create every group, dataset, dimension scale and attribute of an empty run file
-    (everything must exist before SWMR writing starts)."""
+    (everything must exist before SWMR writing starts); return each table's datasets."""
     from .. import __version__
 
     n1 = config.rod.N + 1
@@ -274,11 +275,14 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
     sx = snap.create_dataset("x", data=x)
     sx.make_scale("x")
     sx.attrs["description"] = _DESCRIPTIONS["snapshots/x"]
-    column(snap, "step", (), rows, np.int64).dims[0].attach_scale(t)
+    step = column(snap, "step", (), rows, np.int64)
+    step.dims[0].attach_scale(t)
+    tables = {"snapshots": [t, step]}
     for name in ("u", "v"):
         ds = column(snap, name, (n1,), rows)
         ds.dims[0].attach_scale(t)
         ds.dims[1].attach_scale(sx)
+        tables["snapshots"].append(ds)
 
     for group, chunk in (("diagnostics", COLUMN_CHUNK_ROWS), ("episodes", EVENT_CHUNK_ROWS),
                          ("bounces", EVENT_CHUNK_ROWS)):
@@ -286,10 +290,13 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
         names = TABLES[group]
         scale = column(g, names[0], (), chunk)
         scale.make_scale(names[0])
+        tables[group] = [scale]
         for name in names[1:]:
             dtype = (np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
                      else np.float64)
-            column(g, name, (), chunk, dtype).dims[0].attach_scale(scale)
+            ds = column(g, name, (), chunk, dtype)
+            ds.dims[0].attach_scale(scale)
+            tables[group].append(ds)
 
     ckg = f.create_group("checkpoint")
     ckg.attrs["description"] = ("two slots written alternately; 'current' names the valid "
@@ -303,65 +310,7 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
             g.create_dataset(name, data=np.float64(0.0))
         g.create_dataset("lengths", data=np.zeros(len(TABLES), np.int64)).attrs["names"] = \
             _CK_NAMES["lengths"]
-
-
-class _Table:
-    """The datasets of one group, growing together along axis 0 in chunk-sized blocks.
-
-    Rows wait in a buffer of one chunk per column: a full buffer is written once, a partial
-    one is written (and kept) at each flush.  Memory stays at one chunk per column.
-    """
-
-    def __init__(self, group: h5py.Group, names):
-        self.ds = [group[name] for name in names]
-        n = min(d.shape[0] for d in self.ds)
-        self.cap = self.ds[0].chunks[0]
-        self.start = n - n % self.cap           # first row held in the buffer
-        self.fill = n - self.start
-        self.buf = [np.zeros((self.cap,) + d.shape[1:], d.dtype) for d in self.ds]
-        if self.fill:
-            for b, d in zip(self.buf, self.ds):
-                b[:self.fill] = d[self.start:n]
-        self.written = n                        # rows present in the datasets
-
-    @property
-    def length(self) -> int:
-        return self.start + self.fill
-
-    def append(self, cols) -> None:
-        k = len(cols[0])
-        i = 0
-        while i < k:
-            if self.fill == 0 and k - i >= self.cap:   # whole chunks: write them directly
-                m = (k - i) // self.cap * self.cap
-                end = self.start + m
-                for d, c in zip(self.ds, cols):
-                    d.resize(end, axis=0)
-                    d[self.start:end] = c[i:i + m]
-                self.start = self.written = end
-                i += m
-                continue
-            m = min(k - i, self.cap - self.fill)
-            for b, c in zip(self.buf, cols):
-                b[self.fill:self.fill + m] = c[i:i + m]
-            self.fill += m
-            i += m
-            if self.fill == self.cap:
-                self._write()
-                self.start += self.cap
-                self.fill = 0
-
-    def _write(self) -> None:
-        end = self.start + self.fill
-        for d, b in zip(self.ds, self.buf):
-            if d.shape[0] != end:
-                d.resize(end, axis=0)
-            d[self.start:end] = b[:self.fill]
-        self.written = end
-
-    def flush(self) -> None:
-        if self.written != self.length:
-            self._write()
+    return tables
 
 
 class RunWriter(Sink):
@@ -372,11 +321,18 @@ class RunWriter(Sink):
     process dies, the current slot is complete and matches rows present on disk.
     """
 
-    def __init__(self, f: h5py.File):
+    def __init__(self, f: h5py.File, tables=None):
+        """``tables``: the datasets of a file just laid out (else looked up in ``f``)."""
         self.file = f
-        self.tables = {name: _Table(f[name], cols) for name, cols in TABLES.items()}
-        self.current = int(f["checkpoint/current"][()])
-        self.compile_time_before = (float(f[f"checkpoint/slot{self.current}/compile_time"][()])
+        self.tables = {name: Table(f[name] if tables is None else None, cols,
+                                   None if tables is None else tables[name])
+                       for name, cols in TABLES.items()}
+        ckg = f["checkpoint"]
+        self._current = ckg["current"]
+        self._slots = [{name: ckg[f"slot{i}"][name] for name in _CK_ARRAYS + _CK_SCALARS
+                        + ("lengths",)} for i in (0, 1)]
+        self.current = int(self._current[()])
+        self.compile_time_before = (float(self._slots[self.current]["compile_time"][()])
                                     if self.current in (0, 1) else 0.0)
 
     # Sink interface: drained blocks of the compiled loop
@@ -411,14 +367,14 @@ class RunWriter(Sink):
         """Checkpoint ``ck`` into the idle slot with the current table lengths (rows already
         written), flush, flip ``current``, flush."""
         slot = 1 if self.current == 0 else 0
-        g = self.file[f"checkpoint/slot{slot}"]
+        g = self._slots[slot]
         for name in _CK_ARRAYS:
             g[name][...] = ck[name]
         g["run_time"][()] = float(ck["run_time"])
         g["compile_time"][()] = compile_time
         g["lengths"][...] = np.array([t.length for t in self.tables.values()], np.int64)
         self.file.flush()
-        self.file["checkpoint/current"][()] = slot
+        self._current[()] = slot
         self.file.flush()
         self.current = slot
 
@@ -469,10 +425,10 @@ def create_run_file(path, config, start, *, command: str) -> RunWriter:
     ck = start.checkpoint() if isinstance(start, Run) else start
     f = _open_for_writing(path, "w")
     try:
-        _build_layout(f, config, ck,
-                      {"command": command, "history": [f"{_now()} created by: {command}"]})
+        tables = _build_layout(f, config, ck, {"command": command,
+                                               "history": [f"{_now()} created by: {command}"]})
         f.swmr_mode = True
-        writer = RunWriter(f)
+        writer = RunWriter(f, tables)
         writer._commit(ck, float(ck["compile_time"]))
     except BaseException:
         f.close()

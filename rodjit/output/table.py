@@ -1,0 +1,87 @@
+"""A table of the run file: the datasets of one group, growing together along axis 0 in
+chunk-sized blocks.
+
+Rows wait in a buffer of one chunk per column: a full chunk is written once, a partial one
+is written (and kept) at each flush.  Memory stays at one chunk per column.  Without
+compression a whole chunk goes to the file as it is (``write_direct_chunk``: one write, no
+pass through HDF5's chunk cache, so closing the file has no backlog of cached chunks to
+write); compressed chunks take HDF5's filter pipeline.
+"""
+from __future__ import annotations
+
+import h5py
+import numpy as np
+
+__all__ = ["Table"]
+
+
+class Table:
+    """``append`` rows (one array per column), ``flush`` the partial chunk; ``length`` rows
+    so far, ``written`` of them in the datasets."""
+
+    def __init__(self, group: h5py.Group | None, names=(), datasets=None):
+        """The columns ``names`` of ``group``, or the given empty ``datasets`` of a file
+        just laid out (no lookups)."""
+        self.ds = list(datasets) if datasets is not None else [group[name] for name in names]
+        self.rows = [d.shape[1:] for d in self.ds]
+        n = 0 if datasets is not None else min(d.shape[0] for d in self.ds)
+        self.cap = self.ds[0].chunks[0]
+        self.direct = all(d.id.get_create_plist().get_nfilters() == 0 for d in self.ds)
+        self.start = n - n % self.cap           # first row held in the buffer
+        self.fill = n - self.start
+        self.buf = [np.zeros((self.cap,) + row, d.dtype) for d, row in zip(self.ds, self.rows)]
+        if self.fill:
+            for b, d in zip(self.buf, self.ds):
+                b[:self.fill] = d[self.start:n]
+        self.written = n                        # rows present in the datasets
+
+    @property
+    def length(self) -> int:
+        return self.start + self.fill
+
+    def append(self, cols) -> None:
+        k = len(cols[0])
+        i = 0
+        while i < k:
+            if self.fill == 0 and k - i >= self.cap:   # whole chunks: write them directly
+                m = (k - i) // self.cap * self.cap
+                self._put([c[i:i + m] for c in cols], m)
+                self.start += m
+                i += m
+                continue
+            m = min(k - i, self.cap - self.fill)
+            for b, c in zip(self.buf, cols):
+                b[self.fill:self.fill + m] = c[i:i + m]
+            self.fill += m
+            i += m
+            if self.fill == self.cap:
+                self._put(self.buf, self.cap)
+                self.start += self.cap
+                self.fill = 0
+
+    def flush(self) -> None:
+        """Write the rows not in the datasets yet (the partial chunk)."""
+        if self.written != self.length:
+            end = self.length
+            self._resize(end)
+            for d, b in zip(self.ds, self.buf):
+                d[self.start:end] = b[:self.fill]
+            self.written = end
+
+    def _resize(self, n: int) -> None:
+        for d, row in zip(self.ds, self.rows):
+            d.id.set_extent((n,) + row)
+
+    def _put(self, cols, m: int) -> None:
+        """Write ``m`` rows (whole chunks) of ``cols`` at ``start``."""
+        end = self.start + m
+        self._resize(end)
+        for d, b, c in zip(self.ds, self.buf, cols):
+            if not self.direct:
+                d[self.start:end] = c[:m]
+                continue
+            c = np.ascontiguousarray(c[:m], dtype=b.dtype)
+            zeros = (0,) * (c.ndim - 1)
+            for a in range(0, m, self.cap):
+                d.id.write_direct_chunk((self.start + a,) + zeros, c[a:a + self.cap])
+        self.written = end
