@@ -53,7 +53,7 @@ class WriterClock:
         from rodjit.output import hdf5
 
         self.total = 0.0
-        for owner, name in ((files.hdf5, "create_run_file"), (files, "summarize"),
+        for owner, name in ((files.hdf5, "create_run_file"), (files, "closed_summary"),
                             (hdf5.RunWriter, "snapshots"), (hdf5.RunWriter, "diagnostics"),
                             (hdf5.RunWriter, "episodes"), (hdf5.RunWriter, "bounces"),
                             (hdf5.RunWriter, "save"), (hdf5.RunWriter, "close")):

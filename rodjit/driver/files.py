@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from ..output import hdf5
-from ..output.summary import RunSummary, summarize
+from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
 from .run import Run, SimulationError
@@ -182,7 +182,7 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
                      f"resumed at t = {t!r} by: {command}"))
         if finish_only:
             writer.close(run, "completed")
-            return summarize(path)
+            return closed_summary(writer)
         return _drive(run, lambda: writer, path, progress, flush_interval, stop)
 
 
@@ -242,7 +242,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
             calls.close()
     except SimulationError as exc:
         open_once().close(run, "failed", str(exc))
-        exc.summary = summarize(path)
+        exc.summary = closed_summary(writer)
         raise
     except BaseException as exc:
         if not opened:
@@ -260,7 +260,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
         message = (f"interrupted by {name} at t = {run.t:.9g}; continue with: "
                    f"rodjit run --resume {path}")
     writer.close(run, status, message)
-    summary = summarize(path)
+    summary = closed_summary(writer)
     if status == "interrupted":
         raise RunInterrupted(message, stop.signum, summary)
     return summary

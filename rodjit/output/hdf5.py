@@ -22,6 +22,7 @@ import numpy as np
 from ..driver.run import Run, Sink
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS
+from .extremes import Extremes
 from .table import Table
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "RunWriter", "NotARunFile",
@@ -85,6 +86,8 @@ EV_NAMES = _names(L.EV_SIZE, {
     L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
     L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
     L.REL_MIN_EPS: "min_strain_at_release"})
+_EXTREME_COLUMNS = tuple(L.DIAG_COLUMNS.index(c) for c in Extremes.COLUMNS)
+_SUMMARY_ATTRS = ("rodjit_version", "created", "command", "history")
 _CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")
 _CK_SCALARS = ("run_time", "compile_time")
 _CK_NAMES = {"state": ("u", "v", "a"), "clock": CLOCK_NAMES, "count": COUNT_NAMES,
@@ -318,12 +321,17 @@ class RunWriter(Sink):
 
     ``save`` writes the buffered rows and a checkpoint that records the table lengths, with
     an HDF5 flush before and after flipping ``/checkpoint/current``: whatever moment the
-    process dies, the current slot is complete and matches rows present on disk.
+    process dies, the current slot is complete and matches rows present on disk.  The
+    writer also keeps what the end-of-run summary needs (``summary.closed_summary``), so
+    the file is not read back.
     """
 
-    def __init__(self, f: h5py.File, tables=None):
-        """``tables``: the datasets of a file just laid out (else looked up in ``f``)."""
+    def __init__(self, f: h5py.File, path, config, checkpoint: dict, tables=None):
+        """``checkpoint``: the file's valid one (``read_checkpoint``; none yet: a dict with
+        ``compile_time`` only); ``tables``: the datasets of a file just laid out."""
         self.file = f
+        self.path = str(path)
+        self.config = config
         self.tables = {name: Table(f[name] if tables is None else None, cols,
                                    None if tables is None else tables[name])
                        for name, cols in TABLES.items()}
@@ -332,8 +340,12 @@ class RunWriter(Sink):
         self._slots = [{name: ckg[f"slot{i}"][name] for name in _CK_ARRAYS + _CK_SCALARS
                         + ("lengths",)} for i in (0, 1)]
         self.current = int(self._current[()])
-        self.compile_time_before = (float(self._slots[self.current]["compile_time"][()])
-                                    if self.current in (0, 1) else 0.0)
+        self.checkpoint = checkpoint
+        self.compile_time_before = float(checkpoint["compile_time"])
+        self.extremes = Extremes()
+        if tables is None:
+            self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
+        self.final = None        # what closing leaves in the file (status, bounces, ...)
 
     # Sink interface: drained blocks of the compiled loop
     def snapshots(self, t, step, u, v):
@@ -341,6 +353,7 @@ class RunWriter(Sink):
 
     def diagnostics(self, rows):
         self.tables["diagnostics"].append(list(rows.T))
+        self.extremes.update(*(rows[:, j] for j in _EXTREME_COLUMNS))
 
     def episodes(self, rows):
         self.tables["episodes"].append(list(rows.T))
@@ -372,11 +385,15 @@ class RunWriter(Sink):
             g[name][...] = ck[name]
         g["run_time"][()] = float(ck["run_time"])
         g["compile_time"][()] = compile_time
-        g["lengths"][...] = np.array([t.length for t in self.tables.values()], np.int64)
+        lengths = [t.length for t in self.tables.values()]
+        g["lengths"][...] = np.array(lengths, np.int64)
         self.file.flush()
         self._current[()] = slot
         self.file.flush()
         self.current = slot
+        self.checkpoint = {name: ck[name] for name in _CK_ARRAYS}
+        self.checkpoint.update(run_time=float(ck["run_time"]), compile_time=compile_time,
+                               lengths=dict(zip(TABLES, lengths)))
 
     def close(self, run, status: str, message: str = "") -> None:
         """Final checkpoint, then the provisional row of the bounce still open (listed but
@@ -391,6 +408,12 @@ class RunWriter(Sink):
                 self.tables["bounces"].flush()
         self.file.attrs["status"] = status
         self.file.attrs["message"] = message
+        bounces = self.tables["bounces"]
+        self.final = {
+            "status": status, "message": message,
+            "counts": {name: t.written for name, t in self.tables.items()},
+            "bounces": {c: d[:bounces.written] for c, d in zip(TABLES["bounces"], bounces.ds)},
+            "attrs": {k: self.file.attrs[k] for k in _SUMMARY_ATTRS if k in self.file.attrs}}
         self.file.close()
 
     def abandon(self, status: str, message: str) -> None:
@@ -428,7 +451,7 @@ def create_run_file(path, config, start, *, command: str) -> RunWriter:
         tables = _build_layout(f, config, ck, {"command": command,
                                                "history": [f"{_now()} created by: {command}"]})
         f.swmr_mode = True
-        writer = RunWriter(f, tables)
+        writer = RunWriter(f, path, config, {"compile_time": 0.0}, tables)
         writer._commit(ck, float(ck["compile_time"]))
     except BaseException:
         f.close()
@@ -442,7 +465,8 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     mark it running, then switch to SWMR writing."""
     f = _open_for_writing(path, "r+")
     try:
-        lengths = read_checkpoint(f)["lengths"]
+        ck = read_checkpoint(f)
+        lengths = ck["lengths"]
         for name, cols in TABLES.items():
             for col in cols:
                 ds = f[name][col]
@@ -456,7 +480,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         for key, value in _writer_attrs().items():
             f.attrs[key] = value
         f.swmr_mode = True
-        return RunWriter(f)
+        return RunWriter(f, path, read_config(f), ck)
     except BaseException:
         f.close()
         raise

@@ -1,7 +1,8 @@
 """What a run file says about its run, in a few numbers: the end-of-run report and ``info``.
 
-Everything is read back from the file (diagnostics in blocks), so the same summary serves a
-run that just finished, a resumed one, and a file someone else wrote.
+``summarize`` reads it back from any file (diagnostics in blocks), also one being written
+or one someone else wrote; ``closed_summary`` builds the same summary, number for number,
+from what a writer kept while writing the file it just closed, without reading it back.
 """
 from __future__ import annotations
 
@@ -12,10 +13,9 @@ import numpy as np
 
 from ..stepping import layout as L
 from . import hdf5
+from .extremes import Extremes
 
-__all__ = ["RunSummary", "summarize"]
-
-BLOCK_ROWS = 1 << 16
+__all__ = ["RunSummary", "summarize", "closed_summary"]
 
 
 @dataclass
@@ -105,38 +105,46 @@ def summarize(path) -> RunSummary:
     """Read the summary of the run file at ``path`` (also while it is being written)."""
     with hdf5.open_file(path) as f:
         hdf5.check_run_file(f, path)
-        config = hdf5.read_config(f)
-        ck = hdf5.read_checkpoint(f)
-        clock, count = ck["clock"], ck["count"]
         counts = {name: min(f[name][c].shape[0] for c in cols)
                   for name, cols in hdf5.TABLES.items()}
-        bounces = hdf5.read_table(f, "bounces")
-        e0 = float(clock[L.E0])
-        err, kmax, smin, umin = 0.0, 0.0, math.inf, math.inf
-        g = f["diagnostics"]
-        for i in range(0, counts["diagnostics"], BLOCK_ROWS):
-            sel = slice(i, min(i + BLOCK_ROWS, counts["diagnostics"]))
-            err = max(err, float(np.max(np.abs(g["energy_total"][sel] + g["dissipated"][sel]
-                                               - e0))))
-            kmax = max(kmax, float(np.max(g["energy_kinetic"][sel])))
-            smin = min(smin, float(np.min(g["min_strain"][sel])))
-            umin = min(umin, float(np.min(g["u_bottom"][sel])))
-        if bounces["min_strain"].size:
-            smin = min(smin, float(np.nanmin(bounces["min_strain"])))
-            umin = min(umin, float(np.nanmin(bounces["min_u0"])))
-        steps = int(count[L.STEP])
-        run_time = ck["run_time"]
+        extremes = Extremes()
+        extremes.read(f["diagnostics"], counts["diagnostics"])
         status = str(f.attrs["status"])
-        return RunSummary(
-            path=str(path), status=status, message=str(f.attrs["message"]), config=config,
-            t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
-            energy0=e0, energy_error=err / max(abs(e0), kmax, 1e-300),
-            min_strain=smin if math.isfinite(smin) else math.nan,
-            min_u0=umin if math.isfinite(umin) else math.inf,
-            steps=steps, rejected_steps=int(count[L.REJECTED]),
-            compile_time=ck["compile_time"], run_time=run_time,
-            node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,
-            attrs={k: f.attrs[k] for k in ("rodjit_version", "created", "command", "history")
-                   if k in f.attrs},
-            writer_alive=hdf5.writer_alive(f) if status == "running" else None,
-        )
+        return _summary(
+            path, status, str(f.attrs["message"]), hdf5.read_config(f), hdf5.read_checkpoint(f),
+            counts, hdf5.read_table(f, "bounces"), extremes,
+            {k: f.attrs[k] for k in hdf5._SUMMARY_ATTRS if k in f.attrs},
+            hdf5.writer_alive(f) if status == "running" else None)
+
+
+def closed_summary(writer: hdf5.RunWriter) -> RunSummary:
+    """The summary of the file ``writer`` has just closed, from what it wrote: equal to
+    ``summarize(writer.path)``."""
+    fin = writer.final
+    return _summary(writer.path, fin["status"], fin["message"], writer.config,
+                    writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
+                    fin["attrs"], None)
+
+
+def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes, attrs,
+             alive) -> RunSummary:
+    clock, count = ck["clock"], ck["count"]
+    e0 = float(clock[L.E0])
+    smin, umin = extremes.strain_min, extremes.u0_min
+    if bounces["min_strain"].size:
+        smin = min(smin, float(np.nanmin(bounces["min_strain"])))
+        umin = min(umin, float(np.nanmin(bounces["min_u0"])))
+    steps = int(count[L.STEP])
+    run_time = ck["run_time"]
+    return RunSummary(
+        path=str(path), status=status, message=message, config=config,
+        t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
+        energy0=e0,
+        energy_error=extremes.energy_deviation(e0) / max(abs(e0), extremes.kinetic_max, 1e-300),
+        min_strain=smin if math.isfinite(smin) else math.nan,
+        min_u0=umin if math.isfinite(umin) else math.inf,
+        steps=steps, rejected_steps=int(count[L.REJECTED]),
+        compile_time=ck["compile_time"], run_time=run_time,
+        node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,
+        attrs=attrs, writer_alive=alive,
+    )
