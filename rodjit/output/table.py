@@ -19,12 +19,12 @@ class Table:
     """``append`` rows (one array per column), ``flush`` the partial chunk; ``length`` rows
     so far, ``written`` of them in the datasets."""
 
-    def __init__(self, group: h5py.Group | None, names=(), datasets=None):
-        """The columns ``names`` of ``group``, or the given empty ``datasets`` of a file
-        just laid out (no lookups)."""
+    def __init__(self, group: h5py.Group | None, names=(), datasets=None, empty=False):
+        """The columns ``names`` of ``group``, or the given ``datasets`` (``empty``: of a
+        file just laid out, so no need to ask their lengths)."""
         self.ds = list(datasets) if datasets is not None else [group[name] for name in names]
         self.rows = [d.shape[1:] for d in self.ds]
-        n = 0 if datasets is not None else min(d.shape[0] for d in self.ds)
+        n = 0 if empty else min(d.shape[0] for d in self.ds)
         self.cap = self.ds[0].chunks[0]
         self.direct = all(d.id.get_create_plist().get_nfilters() == 0 for d in self.ds)
         self.start = n - n % self.cap           # first row held in the buffer
@@ -60,27 +60,35 @@ class Table:
                 self.fill = 0
 
     def flush(self) -> None:
-        """Write the rows not in the datasets yet (the partial chunk)."""
-        if self.written != self.length:
+        """Write the rows not in the datasets yet (the partial chunk; directly, its unused
+        rows zeroed as HDF5 would fill them)."""
+        if self.written == self.length:
+            return
+        if not self.direct:
             end = self.length
             self._resize(end)
             for d, b in zip(self.ds, self.buf):
                 d[self.start:end] = b[:self.fill]
             self.written = end
+            return
+        for b in self.buf:
+            b[self.fill:] = 0
+        self._put(self.buf, self.fill)
 
     def _resize(self, n: int) -> None:
         for d, row in zip(self.ds, self.rows):
             d.id.set_extent((n,) + row)
 
     def _put(self, cols, m: int) -> None:
-        """Write ``m`` rows (whole chunks) of ``cols`` at ``start``."""
+        """Write ``m`` rows of ``cols`` at ``start``: whole chunks, or (directly) a last
+        partial one whose column arrays still span a whole chunk (the buffer)."""
         end = self.start + m
         self._resize(end)
         for d, b, c in zip(self.ds, self.buf, cols):
             if not self.direct:
                 d[self.start:end] = c[:m]
                 continue
-            c = np.ascontiguousarray(c[:m], dtype=b.dtype)
+            c = np.ascontiguousarray(c[:-(-m // self.cap) * self.cap], dtype=b.dtype)
             zeros = (0,) * (c.ndim - 1)
             for a in range(0, m, self.cap):
                 d.id.write_direct_chunk((self.start + a,) + zeros, c[a:a + self.cap])
