@@ -15,6 +15,7 @@ import pytest
 
 import rodjit
 import rodjit.driver.files as files
+from rodjit.driver import pipeline
 from rodjit.driver.run import Run
 from rodjit.output import hdf5
 from rodjit.stepping import layout as L
@@ -31,6 +32,13 @@ CASES = {
     "lzf": {"time.t_end": 0.5, "output.compression": "lzf"},
 }
 JIT = os.environ.get("NUMBA_DISABLE_JIT", "0") in ("", "0")
+
+
+@pytest.fixture
+def every_call_overlapped(monkeypatch):
+    """Every call in the worker thread, however short (the tests cut runs into tiny calls,
+    which would otherwise run inline)."""
+    monkeypatch.setattr(pipeline, "HANDOFF", 0.0)
 
 
 def _to_file(cfg, path, overlap, monkeypatch, **kwargs):
@@ -51,7 +59,7 @@ def _attrs(path):
                          ids=["checkpoint-every-call", "default-checkpoints"])
 @pytest.mark.parametrize("case", CASES)
 def test_pipelined_file_equals_serial_bit_for_bit(tmp_path, monkeypatch, many_calls, case,
-                                                  flush_interval):
+                                                  flush_interval, every_call_overlapped):
     cfg = rodjit.Config().override(CASES[case])
     serial = _to_file(cfg, tmp_path / "serial.h5", False, monkeypatch,
                       flush_interval=flush_interval)
@@ -64,7 +72,8 @@ def test_pipelined_file_equals_serial_bit_for_bit(tmp_path, monkeypatch, many_ca
 
 
 def test_failed_drain_mid_pipeline_keeps_the_same_rows_as_serial(tmp_path, monkeypatch,
-                                                                 many_calls):
+                                                                 many_calls,
+                                                                 every_call_overlapped):
     """A block refused at the drain (non-finite diagnostics) stops the run with nothing
     computed beyond it and no new checkpoint, pipelined or not."""
     cfg = rodjit.Config().override({"time.t_end": 1.0})
@@ -90,7 +99,8 @@ def test_failed_drain_mid_pipeline_keeps_the_same_rows_as_serial(tmp_path, monke
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
 def test_signal_while_a_block_computes_then_resume_bit_for_bit(tmp_path, monkeypatch,
-                                                               many_calls, signum):
+                                                               many_calls, signum,
+                                                               every_call_overlapped):
     """The signal comes from another thread at an arbitrary moment (a call computing, a
     block draining); the run stops at the next boundary with a final checkpoint."""
     cfg = rodjit.Config().override({"time.t_end": 1.0})
@@ -129,7 +139,8 @@ def _counter():
     return bump, wait_for
 
 
-def test_the_next_block_computes_while_the_last_is_written(tmp_path, monkeypatch, many_calls):
+def test_the_next_block_computes_while_the_last_is_written(tmp_path, monkeypatch, many_calls,
+                                                          every_call_overlapped):
     """Each drain waits until the call after it has finished: serially that never happens
     (it would time out), pipelined it does for every block but the last."""
     monkeypatch.setattr(files, "OVERLAP", True)
@@ -154,6 +165,22 @@ def test_the_next_block_computes_while_the_last_is_written(tmp_path, monkeypatch
     assert len(overlapped) > 5 and all(overlapped[:-1]) and not overlapped[-1]
     assert np.array_equal(rodjit.load_file(tmp_path / "r.h5").t,
                           rodjit.simulate(cfg).t)
+
+
+def test_tiny_calls_run_inline_and_give_the_same_file(tmp_path, monkeypatch, many_calls):
+    """Calls far shorter than a thread handoff run in the caller's thread after the first
+    one (which overlaps the file's creation); the file is the same bit for bit."""
+    cfg = rodjit.Config().override({"time.t_end": 1.0})
+    _to_file(cfg, tmp_path / "serial.h5", False, monkeypatch)
+    compute, where = Run.compute, []
+
+    def recorded(self, max_steps=None):
+        where.append(threading.current_thread() is threading.main_thread())
+        return compute(self, max_steps)
+    monkeypatch.setattr(Run, "compute", recorded)
+    _to_file(cfg, tmp_path / "piped.h5", True, monkeypatch)
+    assert where[0] is False and len(where) > 10 and all(where[1:])
+    assert_same_files(tmp_path / "piped.h5", tmp_path / "serial.h5")
 
 
 def test_the_layout_is_created_while_the_first_block_computes(tmp_path, monkeypatch):

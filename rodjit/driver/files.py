@@ -225,7 +225,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
                 save = more and time.monotonic() - last >= flush_interval
                 if more and not save:
                     calls.launch()        # the next block computes while this one is written
-                run.drain(block, writer)
+                calls.drain(block, writer)
                 if block.code == L.FAILED:
                     raise SimulationError(run.failure_message())
                 if block.code == L.DONE:
