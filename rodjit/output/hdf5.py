@@ -263,8 +263,10 @@ class _Layout(NamedTuple):
 
 
 def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
-    """Create every group, dataset, dimension scale and attribute of an empty run file
-    (everything must exist before SWMR writing starts); return the datasets written."""
+    """Create every group, dataset, dimension scale and attribute of a run file with empty
+    tables and the checkpoint ``ck`` in slot 0 (``ck["lengths"]``: the rows it matches, none
+    if absent); everything must exist before SWMR writing starts.  Return the datasets
+    written."""
     from .. import __version__
 
     n1 = config.rod.N + 1
@@ -323,19 +325,21 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
     ckg = f.create_group("checkpoint")
     ckg.attrs["description"] = ("two slots written alternately; 'current' names the valid "
                                 "one; its 'lengths' are the table rows it matches")
-    current = ckg.create_dataset("current", data=np.int64(-1))
+    current = ckg.create_dataset("current", data=np.int64(0))
+    lengths = ck.get("lengths", {})
+    first = {name: np.asarray(ck[name], np.float64) for name in _CK_SCALARS}
+    first.update({name: ck[name] for name in _CK_ARRAYS},
+                 lengths=np.array([lengths.get(name, 0) for name in TABLES], np.int64))
     slots = []
-    for slot in (0, 1):
+    for slot in (0, 1):                       # slot 1: zeros (its fill value), unwritten
         g = ckg.create_group(f"slot{slot}")
         slots.append({})
-        for name in _CK_ARRAYS:
-            ds = slots[-1][name] = g.create_dataset(name, data=np.zeros_like(ck[name]))
-            ds.attrs["names"] = _CK_NAMES[name]
-        for name in _CK_SCALARS:
-            slots[-1][name] = g.create_dataset(name, data=np.float64(0.0))
-        ds = slots[-1]["lengths"] = g.create_dataset("lengths",
-                                                     data=np.zeros(len(TABLES), np.int64))
-        ds.attrs["names"] = _CK_NAMES["lengths"]
+        for name in _CK_DATASETS:
+            value = np.asarray(first[name])
+            ds = slots[-1][name] = (g.create_dataset(name, data=value) if slot == 0 else
+                                    g.create_dataset(name, value.shape, value.dtype))
+            if name in _CK_NAMES:
+                ds.attrs["names"] = _CK_NAMES[name]
     return _Layout(tables, slots, current)
 
 
@@ -483,9 +487,9 @@ def create_run_file(path, config, start, *, command: str) -> RunWriter:
     try:
         layout = _build_layout(f, config, ck, {"command": command,
                                                "history": [f"{_now()} created by: {command}"]})
-        f.swmr_mode = True
-        writer = RunWriter(f, path, config, {"compile_time": 0.0}, layout)
-        writer._commit(ck, float(ck["compile_time"]))
+        f.swmr_mode = True             # flushes the file: the first checkpoint is on disk
+        writer = RunWriter(f, path, config, dict(ck, lengths=dict.fromkeys(TABLES, 0)),
+                           layout)
     except BaseException:
         f.close()
         raise
@@ -536,7 +540,7 @@ def recover(path) -> None:
         attrs["message"] = (f"the writing process stopped without closing the file (killed?); "
                             f"recovered at the checkpoint t = {t!r}")
         with h5py.File(tmp, "w", libver="latest") as dst:
-            _build_layout(dst, config, ck, attrs)
+            _build_layout(dst, config, ck, attrs)       # its checkpoint in slot 0
             for group, cols in TABLES.items():
                 n = ck["lengths"][group]
                 for col in cols:
@@ -545,11 +549,4 @@ def recover(path) -> None:
                     step = d.chunks[0] * 16
                     for i in range(0, n, step):
                         d[i:min(n, i + step)] = s[i:min(n, i + step)]
-            g = dst["checkpoint/slot0"]
-            for name in _CK_ARRAYS:
-                g[name][...] = ck[name]
-            for name in _CK_SCALARS:
-                g[name][()] = ck[name]
-            g["lengths"][...] = [ck["lengths"][name] for name in TABLES]
-            dst["checkpoint/current"][()] = 0
     os.replace(tmp, path)
