@@ -26,7 +26,9 @@ class Table:
         self.rows = [d.shape[1:] for d in self.ds]
         n = 0 if empty else min(d.shape[0] for d in self.ds)
         self.cap = self.ds[0].chunks[0]
-        self.direct = all(d.id.get_create_plist().get_nfilters() == 0 for d in self.ds)
+        self.direct = all(d.chunks == (self.cap,) + row and
+                          d.id.get_create_plist().get_nfilters() == 0
+                          for d, row in zip(self.ds, self.rows))   # chunks of whole rows
         self.start = n - n % self.cap           # first row held in the buffer
         self.fill = n - self.start
         self.buf = [np.zeros((self.cap,) + row, d.dtype) for d, row in zip(self.ds, self.rows)]
@@ -88,7 +90,8 @@ class Table:
             if not self.direct:
                 d[self.start:end] = c[:m]
                 continue
-            c = np.ascontiguousarray(c[:-(-m // self.cap) * self.cap], dtype=b.dtype)
+            chunks = -(-m // self.cap)            # m rows rounded up to whole chunks
+            c = np.ascontiguousarray(c[:chunks * self.cap], dtype=b.dtype)
             zeros = (0,) * (c.ndim - 1)
             for a in range(0, m, self.cap):
                 d.id.write_direct_chunk((self.start + a,) + zeros, c[a:a + self.cap])
