@@ -84,13 +84,66 @@ def test_layout_attributes_and_datasets(tmp_path):
 
 
 @pytest.mark.parametrize("compression", ["gzip", "lzf", "none"])
+def test_layout_objects_are_stored_as_h5py_stores_them(tmp_path, compression):
+    """The layout makes its attributes and most columns with low-level calls (cheaper): each
+    attribute has the type and shape h5py gives the same value, each link the encoding of
+    h5py's, and every column of a table the dtype and creation properties h5py gives it."""
+    path = tmp_path / "r.h5"
+    rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.2, "rod.N": 7,
+                                                 "output.compression": compression}), path)
+    with h5py.File(path, "r") as f, h5py.File(tmp_path / "ref.h5", "w") as ref:
+        ref.create_dataset("probe", data=0)
+        cset = ref.id.links.get_info(b"probe").cset
+        objects = [("/", f)]
+        f.visititems(lambda name, obj: objects.append((name, obj)))
+        ref.attrs["text"], ref.attrs["texts"], ref.attrs["int"] = "a", ["a", "b"], 1
+        as_h5py = {kind: ref.attrs.get_id(kind).get_type() for kind in ("text", "int")}
+        assert ref.attrs.get_id("texts").get_type() == as_h5py["text"]
+        for name, obj in objects:
+            for key in obj.attrs:
+                if key in ("DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME"):
+                    continue                       # written by HDF5's dimension scale API
+                value, attr = obj.attrs[key], obj.attrs.get_id(key)
+                kind = "int" if isinstance(value, np.integer) else "text"
+                assert attr.get_type() == as_h5py[kind], (name, key)
+                assert attr.shape == (() if kind == "int" or isinstance(value, str)
+                                      else (len(value),)), (name, key)
+                if key in ("history", "names"):
+                    assert attr.shape == (len(value),) and all(isinstance(v, str) for v in value)
+            if name != "/":
+                parent = f[name.rsplit("/", 1)[0]] if "/" in name else f
+                info = parent.id.links.get_info(name.rsplit("/", 1)[-1].encode())
+                assert info.cset == cset, name
+        for group, cols in hdf5.TABLES.items():
+            for c in cols:
+                ds = f[group][c]
+                made = ref.create_dataset(f"{group}/{c}", shape=(0,) + ds.shape[1:],
+                                          maxshape=(None,) + ds.shape[1:], chunks=ds.chunks,
+                                          dtype=ds.dtype, compression=ds.compression,
+                                          compression_opts=ds.compression_opts,
+                                          shuffle=ds.shuffle)
+                assert _creation(ds) == _creation(made), (group, c)
+                assert ds.id.get_type() == made.id.get_type(), (group, c)
+
+
+def _creation(ds):
+    """A dataset's creation properties that matter: chunks, filters and their parameters,
+    fill and allocation times, time tracking."""
+    p = ds.id.get_create_plist()
+    return (p.get_chunk(), [p.get_filter(i)[:3] for i in range(p.get_nfilters())],
+            p.get_fill_time(), p.get_alloc_time(), p.get_obj_track_times(), p.get_layout())
+
+
+@pytest.mark.parametrize("compression", ["gzip", "lzf", "none"])
 def test_compression(tmp_path, compression):
     cfg = rodjit.Config().override({"time.t_end": 0.3, "output.compression": compression})
     rodjit.run_to_file(cfg, tmp_path / "r.h5")
     with h5py.File(tmp_path / "r.h5", "r") as f:
         expected = None if compression == "none" else compression
-        assert f["snapshots/u"].compression == expected
-        assert f["diagnostics/energy_total"].compression == expected
+        for group, cols in hdf5.TABLES.items():
+            for c in cols:
+                assert f[group][c].compression == expected, (group, c)
+                assert f[group][c].shuffle == (expected is not None), (group, c)
     assert rodjit.load_file(tmp_path / "r.h5").u.shape == (61, 6)
 
 

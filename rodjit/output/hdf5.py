@@ -19,7 +19,7 @@ from typing import NamedTuple
 
 import h5py
 import numpy as np
-from h5py import h5s
+from h5py import h5a, h5d, h5p, h5s, h5t
 
 from ..driver.run import Run, Sink
 from ..stepping import layout as L
@@ -277,19 +277,25 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
             **_writer_attrs()}
     base.update(attrs)
     for key, value in base.items():
-        f.attrs[key] = value
+        _attr(f, key, value)
     filters = _filters(config.output.compression)
 
     grid = f.create_group("grid")
     gx = grid.create_dataset("x", data=x)
     gx.make_scale("x")
 
-    def column(group, name, row_shape, chunk_rows, dtype=np.float64):
-        ds = group.create_dataset(name, shape=(0,) + row_shape, maxshape=(None,) + row_shape,
-                                  chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
+    def column(group, name, row_shape, chunk_rows, dtype=np.float64, like=None):
+        """A growing column; ``like``: a column of the same group, shape and dtype whose
+        creation properties it shares."""
+        if like is not None:
+            ds = _like(like, group, name)
+        else:
+            ds = group.create_dataset(name, shape=(0,) + row_shape,
+                                      maxshape=(None,) + row_shape,
+                                      chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
         text = _DESCRIPTIONS.get(f"{group.name[1:]}/{name}")
         if text:
-            ds.attrs["description"] = text
+            _attr(ds, "description", text)
         return ds
 
     snap = f.create_group("snapshots")
@@ -298,12 +304,12 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
     t.make_scale("t")
     sx = snap.create_dataset("x", data=x)
     sx.make_scale("x")
-    sx.attrs["description"] = _DESCRIPTIONS["snapshots/x"]
+    _attr(sx, "description", _DESCRIPTIONS["snapshots/x"])
     step = column(snap, "step", (), rows, np.int64)
     step.dims[0].attach_scale(t)
     tables = {"snapshots": [t, step]}
     for name in ("u", "v"):
-        ds = column(snap, name, (n1,), rows)
+        ds = column(snap, name, (n1,), rows, like=tables["snapshots"][-1] if name == "v" else None)
         ds.dims[0].attach_scale(t)
         ds.dims[1].attach_scale(sx)
         tables["snapshots"].append(ds)
@@ -318,13 +324,13 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
         for name in names[1:]:
             dtype = (np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
                      else np.float64)
-            ds = column(g, name, (), chunk, dtype)
+            ds = column(g, name, (), chunk, dtype, like=scale if dtype is np.float64 else None)
             ds.dims[0].attach_scale(scale)
             tables[group].append(ds)
 
     ckg = f.create_group("checkpoint")
-    ckg.attrs["description"] = ("two slots written alternately; 'current' names the valid "
-                                "one; its 'lengths' are the table rows it matches")
+    _attr(ckg, "description", "two slots written alternately; 'current' names the valid "
+                              "one; its 'lengths' are the table rows it matches")
     current = ckg.create_dataset("current", data=np.int64(0))
     lengths = ck.get("lengths", {})
     first = {name: np.asarray(ck[name], np.float64) for name in _CK_SCALARS}
@@ -339,8 +345,34 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
             ds = slots[-1][name] = (g.create_dataset(name, data=value) if slot == 0 else
                                     g.create_dataset(name, value.shape, value.dtype))
             if name in _CK_NAMES:
-                ds.attrs["names"] = _CK_NAMES[name]
+                _attr(ds, "names", _CK_NAMES[name])
     return _Layout(tables, slots, current)
+
+
+# Creating ~50 datasets and ~35 attributes through h5py's high-level calls costs ~8 ms, more
+# than streaming thousands of snapshots; these two make the same objects at a third of the
+# price (h5py's checks for an existing attribute or dataset are moot in a new file).
+_STR = h5py.string_dtype()
+_LINKS = h5p.create(h5p.LINK_CREATE)       # as h5py creates links with ASCII names
+_LINKS.set_create_intermediate_group(True)
+
+
+def _attr(obj, name: str, value) -> None:
+    """A new attribute, stored as ``obj.attrs[name] = value`` stores it: str and sequences
+    of str as variable-length UTF-8 strings, numbers as their NumPy type."""
+    arr = np.asarray(value)
+    if arr.dtype.kind in "OU":
+        arr = np.asarray(value, dtype=_STR)
+    space = h5s.create_simple(arr.shape) if arr.ndim else h5s.create(h5s.SCALAR)
+    h5a.create(obj.id, name.encode(), h5t.py_create(arr.dtype, logical=True), space).write(arr)
+
+
+def _like(proto: h5py.Dataset, group: h5py.Group, name: str) -> h5py.Dataset:
+    """A new dataset in ``group`` with the dtype, shape, maxshape and creation properties
+    (chunks, filters) of ``proto``."""
+    return h5py.Dataset(h5d.create(group.id, name.encode(), proto.id.get_type(),
+                                   proto.id.get_space(), dcpl=proto.id.get_create_plist(),
+                                   lcpl=_LINKS))
 
 
 def _put(ds: h5py.Dataset, value) -> None:
