@@ -116,7 +116,8 @@ def main():
                                      lambda: run_file(snaps, path)], args.repeat)
         size = path.stat().st_size / 2**20
         clock = WriterClock()
-        writer = [min(x) for x in zip(*(clock.measure(snaps, path) for _ in range(args.repeat)))]
+        writer = [min(x) for x in
+                  zip(*(clock.measure(snaps, path) for _ in range(args.repeat)))]
         tiny = snaps.override({"time.t_end": 1e-3})
         fixed = min(clock.measure(tiny, path)[1] for _ in range(args.repeat))
     (t_none, c_none, s_none), (t_land, c_land, s_land), (t_ser, c_ser, _), \
@@ -129,7 +130,8 @@ def main():
             ("streamed to HDF5, serial calls", t_ser, c_ser, s_file),
             ("streamed to HDF5 (run_to_file)", t_file, c_file, s_file))
     for label, t, c, n in rows:
-        print(f"  {label:<40}{t:8.3f} s {c:8.3f} s  {n:9d} steps  {100 * (t / t_none - 1):+6.1f}%")
+        print(f"  {label:<40}{t:8.3f} s {c:8.3f} s  {n:9d} steps  "
+              f"{100 * (t / t_none - 1):+6.1f}%")
     print(f"time inside the HDF5 writer: {writer[0]:.3f} s wall, {writer[1]:.3f} s CPU = "
           f"{100 * writer[1] / t_none:.1f}% of the no-output run (summary included)")
     print(f"fixed cost of a file (a run of 1e-3 s, 2 snapshots): {1e3 * fixed:.1f} ms CPU; "

@@ -12,7 +12,7 @@ def test_table_writes_in_chunk_blocks_and_reopens(tmp_path):
         g = f.create_group("g")
         for name in ("a", "b"):
             g.create_dataset(name, shape=(0, 2), maxshape=(None, 2), chunks=(4, 2), dtype="f8")
-        table = Table(g, ("a", "b"))
+        table = Table.of([g["a"], g["b"]])
         rows = np.arange(22, dtype=float).reshape(11, 2)
         table.append((rows[:3], -rows[:3]))
         assert g["a"].shape[0] == 0 and table.length == 3     # waiting for a full chunk
@@ -20,7 +20,7 @@ def test_table_writes_in_chunk_blocks_and_reopens(tmp_path):
         assert g["a"].shape[0] == 8                            # two full chunks written
         table.flush()
         assert g["a"].shape[0] == 10                           # partial chunk written, kept
-        reopened = Table(g, ("a", "b"))
+        reopened = Table.of([g["a"], g["b"]])
         assert reopened.start == 8 and reopened.fill == 2
         reopened.append((rows[10:], -rows[10:]))
         reopened.flush()
@@ -53,7 +53,7 @@ def test_every_dtype_and_strided_columns_survive_direct_and_filtered_writes(tmp_
             g.create_dataset(name, shape=(0,) + row, maxshape=(None,) + row, chunks=(64,) + row,
                              dtype=dtype, compression=compression)
         f.swmr_mode = True
-        table = Table(g, list(spec))
+        table = Table.of(g[name] for name in spec)
         assert table.direct == (compression is None)
         i = 0
         while i < n:

@@ -221,7 +221,8 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
                         progress(run)
                 else:                     # stopped before the first call
                     block = run.take()
-                more = block.code in (L.PAUSED, L.FULL) and block.finite and stop.signum is None
+                more = (block.code in (L.PAUSED, L.FULL) and block.finite
+                        and stop.signum is None)
                 save = more and time.monotonic() - last >= flush_interval
                 if more and not save:
                     calls.launch()        # the next block computes while this one is written

@@ -247,7 +247,7 @@ def _filters(compression: str) -> dict:
 
 
 class _Layout(NamedTuple):
-    """The datasets a writer writes: each table's columns, the checkpoint slots, current."""
+    """What a writer writes: each table, the checkpoint slots' datasets, current."""
 
     tables: dict
     slots: list
@@ -257,7 +257,7 @@ class _Layout(NamedTuple):
     def of(cls, f: h5py.File) -> "_Layout":
         """Looked up in an existing run file."""
         ckg = f["checkpoint"]
-        return cls({name: [f[name][c] for c in cols] for name, cols in TABLES.items()},
+        return cls({name: Table.of(f[name][c] for c in cols) for name, cols in TABLES.items()},
                    [{name: ckg[f"slot{i}"][name] for name in _CK_DATASETS} for i in (0, 1)],
                    ckg["current"])
 
@@ -307,12 +307,14 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
     _attr(sx, "description", _DESCRIPTIONS["snapshots/x"])
     step = column(snap, "step", (), rows, np.int64)
     step.dims[0].attach_scale(t)
-    tables = {"snapshots": [t, step]}
+    columns = {"snapshots": [t, step]}
     for name in ("u", "v"):
-        ds = column(snap, name, (n1,), rows, like=tables["snapshots"][-1] if name == "v" else None)
+        ds = column(snap, name, (n1,), rows, like=columns["snapshots"][-1] if name == "v" else None)
         ds.dims[0].attach_scale(t)
         ds.dims[1].attach_scale(sx)
-        tables["snapshots"].append(ds)
+        columns["snapshots"].append(ds)
+    shapes = {"snapshots": ((rows, [(), (), (n1,), (n1,)],
+                             [np.float64, np.int64, np.float64, np.float64]))}
 
     for group, chunk in (("diagnostics", COLUMN_CHUNK_ROWS), ("episodes", EVENT_CHUNK_ROWS),
                          ("bounces", EVENT_CHUNK_ROWS)):
@@ -320,13 +322,16 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
         names = TABLES[group]
         scale = column(g, names[0], (), chunk)
         scale.make_scale(names[0])
-        tables[group] = [scale]
-        for name in names[1:]:
-            dtype = (np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
-                     else np.float64)
+        columns[group] = [scale]
+        dtypes = [np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
+                  else np.float64 for name in names]
+        for name, dtype in zip(names[1:], dtypes[1:]):
             ds = column(g, name, (), chunk, dtype, like=scale if dtype is np.float64 else None)
             ds.dims[0].attach_scale(scale)
-            tables[group].append(ds)
+            columns[group].append(ds)
+        shapes[group] = (chunk, [()] * len(names), dtypes)
+    tables = {name: Table(columns[name], cap=shapes[name][0], rows=shapes[name][1],
+                          dtypes=shapes[name][2], direct=not filters) for name in TABLES}
 
     ckg = f.create_group("checkpoint")
     _attr(ckg, "description", "two slots written alternately; 'current' names the valid "
@@ -398,8 +403,7 @@ class RunWriter(Sink):
         self.config = config
         new = layout is not None
         layout = layout or _Layout.of(f)
-        self.tables = {name: Table(None, datasets=layout.tables[name], empty=new)
-                       for name in TABLES}
+        self.tables = layout.tables
         self._current = layout.current
         self._slots = layout.slots
         self.current = int(self._current[()])

@@ -19,23 +19,32 @@ class Table:
     """``append`` rows (one array per column), ``flush`` the partial chunk; ``length`` rows
     so far, ``written`` of them in the datasets."""
 
-    def __init__(self, group: h5py.Group | None, names=(), datasets=None, empty=False):
-        """The columns ``names`` of ``group``, or the given ``datasets`` (``empty``: of a
-        file just laid out, so no need to ask their lengths)."""
-        self.ds = list(datasets) if datasets is not None else [group[name] for name in names]
-        self.rows = [d.shape[1:] for d in self.ds]
-        n = 0 if empty else min(d.shape[0] for d in self.ds)
-        self.cap = self.ds[0].chunks[0]
-        self.direct = all(d.chunks == (self.cap,) + row and
-                          d.id.get_create_plist().get_nfilters() == 0
-                          for d, row in zip(self.ds, self.rows))   # chunks of whole rows
-        self.start = n - n % self.cap           # first row held in the buffer
-        self.fill = n - self.start
-        self.buf = [np.zeros((self.cap,) + row, d.dtype) for d, row in zip(self.ds, self.rows)]
+    def __init__(self, datasets, *, cap: int, rows, dtypes, direct: bool, length: int = 0):
+        """Columns ``datasets`` (chunks of ``cap`` rows; ``rows``, ``dtypes``: each column's
+        row shape and dtype; ``direct``: whole chunks may go straight to the file) holding
+        ``length`` rows.  ``Table.of`` asks the datasets themselves."""
+        self.ds = list(datasets)
+        self.rows = list(rows)
+        self.cap = cap
+        self.direct = direct
+        self.start = length - length % cap      # first row held in the buffer
+        self.fill = length - self.start
+        self.buf = [np.zeros((cap,) + row, dtype) for row, dtype in zip(self.rows, dtypes)]
         if self.fill:
             for b, d in zip(self.buf, self.ds):
-                b[:self.fill] = d[self.start:n]
-        self.written = n                        # rows present in the datasets
+                b[:self.fill] = d[self.start:length]
+        self.written = length                   # rows present in the datasets
+
+    @classmethod
+    def of(cls, datasets) -> "Table":
+        """The table of existing columns, cut to the rows present in all of them."""
+        datasets = list(datasets)
+        rows = [d.shape[1:] for d in datasets]
+        cap = datasets[0].chunks[0]
+        direct = all(d.chunks == (cap,) + row and d.id.get_create_plist().get_nfilters() == 0
+                     for d, row in zip(datasets, rows))       # unfiltered chunks of whole rows
+        return cls(datasets, cap=cap, rows=rows, dtypes=[d.dtype for d in datasets],
+                   direct=direct, length=min(d.shape[0] for d in datasets))
 
     @property
     def length(self) -> int:
