@@ -381,8 +381,9 @@ def _like(proto: h5py.Dataset, group: h5py.Group, name: str) -> h5py.Dataset:
 
 
 def _put(ds: h5py.Dataset, value) -> None:
-    """Overwrite a whole small dataset (low-level: a tenth of ``ds[...] = value``'s cost)."""
-    ds.id.write(h5s.ALL, h5s.ALL, np.ascontiguousarray(value, dtype=ds.dtype))
+    """Overwrite a whole small dataset (low-level: a tenth of ``ds[...] = value``'s cost;
+    HDF5 converts the value's type to the dataset's)."""
+    ds.id.write(h5s.ALL, h5s.ALL, np.ascontiguousarray(value))
 
 
 class RunWriter(Sink):
@@ -479,14 +480,15 @@ class RunWriter(Sink):
             if pending is not None:
                 self.bounces(pending[0][None, :], [pending[1]])
                 self.tables["bounces"].flush()
-        self.file.attrs["status"] = status
-        self.file.attrs["message"] = message
+        attrs = self.file.attrs              # (each .attrs looks the root group up)
+        attrs["status"] = status
+        attrs["message"] = message
         self.final = {
             "status": status, "message": message,
             "counts": {name: t.written for name, t in self.tables.items()},
             "bounces": {c: np.concatenate(rows)[:self.tables["bounces"].written]
                         for c, rows in zip(TABLES["bounces"], self._bounces)},
-            "attrs": {k: self.file.attrs[k] for k in _SUMMARY_ATTRS if k in self.file.attrs}}
+            "attrs": {k: attrs[k] for k in _SUMMARY_ATTRS if k in attrs}}
         self.file.close()
 
     def abandon(self, status: str, message: str) -> None:
