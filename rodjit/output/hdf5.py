@@ -397,8 +397,8 @@ class RunWriter(Sink):
     """
 
     def __init__(self, f: h5py.File, path, config, checkpoint: dict, layout=None):
-        """``checkpoint``: the file's valid one (``read_checkpoint``; none yet: a dict with
-        ``compile_time`` only); ``layout``: that of a file just laid out (empty tables)."""
+        """``checkpoint``: the file's valid one, as ``read_checkpoint`` gives it; ``layout``:
+        that of a file just laid out (empty tables), else it is looked up."""
         self.file = f
         self.path = str(path)
         self.config = config
@@ -436,8 +436,8 @@ class RunWriter(Sink):
                         else np.asarray(is_open, bool))
         cols = [cols[c] for c in TABLES["bounces"]]
         self.tables["bounces"].append(cols)
-        for rows, c in zip(self._bounces, cols):
-            rows.append(np.array(c, dtype=rows[0].dtype))
+        for kept, c in zip(self._bounces, cols):
+            kept.append(np.array(c, dtype=kept[0].dtype))
 
     def save(self, run) -> None:
         """Write buffered rows and a checkpoint of ``run`` matching them.  A run that is not
@@ -486,8 +486,8 @@ class RunWriter(Sink):
         self.final = {
             "status": status, "message": message,
             "counts": {name: t.written for name, t in self.tables.items()},
-            "bounces": {c: np.concatenate(rows)[:self.tables["bounces"].written]
-                        for c, rows in zip(TABLES["bounces"], self._bounces)},
+            "bounces": {c: np.concatenate(kept)[:self.tables["bounces"].written]
+                        for c, kept in zip(TABLES["bounces"], self._bounces)},
             "attrs": {k: attrs[k] for k in _SUMMARY_ATTRS if k in attrs}}
         self.file.close()
 
