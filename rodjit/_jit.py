@@ -12,6 +12,9 @@ step).  rodjit's kernels never allocate and never keep an array beyond the call:
 in arrays their caller owns for the whole call, so there is nothing to count.  Numba
 refuses to compile an allocation, or the return of a new array, under this option, so
 that guarantee is checked at compile time.
+``nogil=True``: a compiled call releases the GIL, so the run file is written by another
+thread while the loop computes (``driver.pipeline``); it changes only the Python entry
+wrapper, not the compiled loop.
 Stress laws written by users should use ``kernel`` too (and so must not allocate).
 
 Numba invalidates a cached function only when *its own* file changes, not when a function
@@ -31,7 +34,7 @@ from numba.core.cpu import CPUTargetOptions
 # ``_nrt`` is an option of Numba's CPU target (Numba compiles its own allocation-free
 # helpers with it); a Numba without it compiles the kernels with reference counting
 _CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
-JIT_OPTIONS = {"cache": True, "error_model": "numpy",
+JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
                **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
 
 kernel = numba.njit(**JIT_OPTIONS)

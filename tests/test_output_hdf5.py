@@ -17,10 +17,14 @@ def _mid_episode_t_end():
     return 0.5 * (res.episodes["t_start"][i] + res.episodes["t_end"][i])
 
 
-@pytest.mark.parametrize("t_end", [1.0, "mid-episode"])
-def test_file_equals_simulate_bit_for_bit(tmp_path, t_end):
+@pytest.mark.parametrize("t_end, over", [
+    (1.0, {}), ("mid-episode", {}),
+    (0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3}),   # many whole chunks of u, v
+    (0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3, "output.compression": "gzip"}),
+], ids=["default", "mid-episode", "N200", "N200-gzip"])
+def test_file_equals_simulate_bit_for_bit(tmp_path, t_end, over):
     t_end = _mid_episode_t_end() if t_end == "mid-episode" else t_end
-    cfg = rodjit.Config().override({"time.t_end": t_end})
+    cfg = rodjit.Config().override({"time.t_end": t_end, **over})
     mem = rodjit.simulate(cfg)
     rodjit.run_to_file(cfg, tmp_path / "r.h5")
     disk = rodjit.load_file(tmp_path / "r.h5")
@@ -80,13 +84,66 @@ def test_layout_attributes_and_datasets(tmp_path):
 
 
 @pytest.mark.parametrize("compression", ["gzip", "lzf", "none"])
+def test_layout_objects_are_stored_as_h5py_stores_them(tmp_path, compression):
+    """The layout makes its attributes and most columns with low-level calls (cheaper): each
+    attribute has the type and shape h5py gives the same value, each link the encoding of
+    h5py's, and every column of a table the dtype and creation properties h5py gives it."""
+    path = tmp_path / "r.h5"
+    rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.2, "rod.N": 7,
+                                                 "output.compression": compression}), path)
+    with h5py.File(path, "r") as f, h5py.File(tmp_path / "ref.h5", "w") as ref:
+        ref.create_dataset("probe", data=0)
+        cset = ref.id.links.get_info(b"probe").cset
+        objects = [("/", f)]
+        f.visititems(lambda name, obj: objects.append((name, obj)))
+        ref.attrs["text"], ref.attrs["texts"], ref.attrs["int"] = "a", ["a", "b"], 1
+        as_h5py = {kind: ref.attrs.get_id(kind).get_type() for kind in ("text", "int")}
+        assert ref.attrs.get_id("texts").get_type() == as_h5py["text"]
+        for name, obj in objects:
+            for key in obj.attrs:
+                if key in ("DIMENSION_LIST", "REFERENCE_LIST", "CLASS", "NAME"):
+                    continue                       # written by HDF5's dimension scale API
+                value, attr = obj.attrs[key], obj.attrs.get_id(key)
+                kind = "int" if isinstance(value, np.integer) else "text"
+                assert attr.get_type() == as_h5py[kind], (name, key)
+                assert attr.shape == (() if kind == "int" or isinstance(value, str)
+                                      else (len(value),)), (name, key)
+                if key in ("history", "names"):
+                    assert attr.shape == (len(value),) and all(isinstance(v, str) for v in value)
+            if name != "/":
+                parent = f[name.rsplit("/", 1)[0]] if "/" in name else f
+                info = parent.id.links.get_info(name.rsplit("/", 1)[-1].encode())
+                assert info.cset == cset, name
+        for group, cols in hdf5.TABLES.items():
+            for c in cols:
+                ds = f[group][c]
+                made = ref.create_dataset(f"{group}/{c}", shape=(0,) + ds.shape[1:],
+                                          maxshape=(None,) + ds.shape[1:], chunks=ds.chunks,
+                                          dtype=ds.dtype, compression=ds.compression,
+                                          compression_opts=ds.compression_opts,
+                                          shuffle=ds.shuffle)
+                assert _creation(ds) == _creation(made), (group, c)
+                assert ds.id.get_type() == made.id.get_type(), (group, c)
+
+
+def _creation(ds):
+    """A dataset's creation properties that matter: chunks, filters and their parameters,
+    fill and allocation times, time tracking."""
+    p = ds.id.get_create_plist()
+    return (p.get_chunk(), [p.get_filter(i)[:3] for i in range(p.get_nfilters())],
+            p.get_fill_time(), p.get_alloc_time(), p.get_obj_track_times(), p.get_layout())
+
+
+@pytest.mark.parametrize("compression", ["gzip", "lzf", "none"])
 def test_compression(tmp_path, compression):
     cfg = rodjit.Config().override({"time.t_end": 0.3, "output.compression": compression})
     rodjit.run_to_file(cfg, tmp_path / "r.h5")
     with h5py.File(tmp_path / "r.h5", "r") as f:
         expected = None if compression == "none" else compression
-        assert f["snapshots/u"].compression == expected
-        assert f["diagnostics/energy_total"].compression == expected
+        for group, cols in hdf5.TABLES.items():
+            for c in cols:
+                assert f[group][c].compression == expected, (group, c)
+                assert f[group][c].shuffle == (expected is not None), (group, c)
     assert rodjit.load_file(tmp_path / "r.h5").u.shape == (61, 6)
 
 
@@ -128,33 +185,6 @@ def test_checkpoint_slots_alternate_and_stay_valid(tmp_path, small_config):
     finally:
         writer.close(run, "completed")
     assert final_state(tmp_path / "r.h5")["clock"][L.T] == 1.0
-
-
-def test_table_writes_in_chunk_blocks_and_reopens(tmp_path):
-    with h5py.File(tmp_path / "t.h5", "w", libver="latest") as f:
-        g = f.create_group("g")
-        for name in ("a", "b"):
-            g.create_dataset(name, shape=(0, 2), maxshape=(None, 2), chunks=(4, 2), dtype="f8")
-        table = hdf5._Table(g, ("a", "b"))
-        rows = np.arange(22, dtype=float).reshape(11, 2)
-        table.append((rows[:3], -rows[:3]))
-        assert g["a"].shape[0] == 0 and table.length == 3     # waiting for a full chunk
-        table.append((rows[3:10], -rows[3:10]))
-        assert g["a"].shape[0] == 8                            # two full chunks written
-        table.flush()
-        assert g["a"].shape[0] == 10                           # partial chunk written, kept
-        reopened = hdf5._Table(g, ("a", "b"))
-        assert reopened.start == 8 and reopened.fill == 2
-        reopened.append((rows[10:], -rows[10:]))
-        reopened.flush()
-        assert np.array_equal(g["a"][()], rows) and np.array_equal(g["b"][()], -rows)
-        more = np.arange(100, 118, dtype=float).reshape(9, 2)
-        reopened.append((more[:1], -more[:1]))       # completes the chunk at rows 8..11
-        assert g["a"].shape[0] == 12 and reopened.fill == 0
-        reopened.append((more[1:], -more[1:]))       # two whole chunks go straight through
-        assert g["a"].shape[0] == 20 and reopened.fill == 0
-        assert np.array_equal(g["a"][()], np.vstack([rows, more]))
-        assert np.array_equal(g["b"][()], -np.vstack([rows, more]))
 
 
 def test_not_a_run_file(tmp_path):

@@ -3,7 +3,9 @@
 The command line is a thin layer over these two functions (so is ``sweep --save-runs``).
 They validate everything before touching the disk, checkpoint at least every
 ``flush_interval`` seconds of wall time and at every stop, and turn SIGINT/SIGTERM into a
-clean stop between two compiled calls.
+clean stop between two compiled calls.  With ``OVERLAP`` the compiled calls run in a worker
+thread (``driver.pipeline``): each block is written while the next one computes, and a new
+file's layout is created while the first one does.
 """
 from __future__ import annotations
 
@@ -15,13 +17,15 @@ import time
 from pathlib import Path
 
 from ..output import hdf5
-from ..output.summary import RunSummary, summarize
+from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
+from .pipeline import Inline, Pipeline
 from .run import Run, SimulationError
 
 __all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists"]
 
 FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
+OVERLAP = True         # compute the next block in a worker thread while writing the last
 
 
 class RunInterrupted(RuntimeError):
@@ -122,9 +126,10 @@ def run_to_file(config, path, *, overwrite: bool = False,
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
+    first = run.checkpoint()     # the file's first checkpoint: the run before it starts
     with _StopFlag(handle_signals) as stop:
-        writer = hdf5.create_run_file(path, config, run, command=command)
-        return _drive(run, writer, path, progress, flush_interval, stop)
+        return _drive(run, lambda: hdf5.create_run_file(path, config, first, command=command),
+                      path, progress, flush_interval, stop)
 
 
 def resume_file(path, *, t_end: float | None = None, command: str | None = None,
@@ -177,8 +182,8 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
                      f"resumed at t = {t!r} by: {command}"))
         if finish_only:
             writer.close(run, "completed")
-            return summarize(path)
-        return _drive(run, writer, path, progress, flush_interval, stop)
+            return closed_summary(writer)
+        return _drive(run, lambda: writer, path, progress, flush_interval, stop)
 
 
 def _check_interval(flush_interval) -> None:
@@ -187,33 +192,68 @@ def _check_interval(flush_interval) -> None:
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
 
 
-def _drive(run: Run, writer: hdf5.RunWriter, path: Path, progress, flush_interval: float,
+def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
            stop: _StopFlag) -> RunSummary:
-    """Advance ``run`` into ``writer`` until done, failed or stopped; close the file."""
+    """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
+    returns (called once the first compiled call is under way); close the file."""
+    calls = (Pipeline if OVERLAP else Inline)(run)
+    writer = None
+    opened = False
+
+    def open_once():                      # the file, also when a run stops before it opens
+        nonlocal writer, opened
+        if not opened:
+            opened = True
+            writer = open_writer()
+        return writer
+
     try:
-        run.start(writer)
-        last = time.monotonic()
-        while True:
-            if stop.signum is not None:
-                status = "interrupted"
-                break
-            code = run.advance(writer)
-            if progress is not None:
-                progress(run)
-            if code == L.DONE:
-                status = "completed"
-                break
-            now = time.monotonic()
-            if now - last >= flush_interval:
-                writer.save(run)
-                last = now
+        try:
+            run.start(None)               # compile; the outputs at t0 wait in the buffers
+            if stop.signum is None:
+                calls.launch()
+            writer = open_once()
+            last = time.monotonic()
+            while True:
+                if calls.busy:
+                    block = calls.wait()
+                    if progress is not None:
+                        progress(run)
+                else:                     # stopped before the first call
+                    block = run.take()
+                more = (block.code in (L.PAUSED, L.FULL) and block.finite
+                        and stop.signum is None)
+                save = more and time.monotonic() - last >= flush_interval
+                if more and not save:
+                    calls.launch()        # the next block computes while this one is written
+                calls.drain(block, writer)
+                if block.code == L.FAILED:
+                    raise SimulationError(run.failure_message())
+                if block.code == L.DONE:
+                    status = "completed"
+                    break
+                if not more:
+                    status = "interrupted"
+                    break
+                if save:                  # nothing in flight: every computed row is written
+                    writer.save(run)
+                    last = time.monotonic()
+                    calls.launch()
+        finally:
+            calls.close()
     except SimulationError as exc:
-        writer.close(run, "failed", str(exc))
-        exc.summary = summarize(path)
+        open_once().close(run, "failed", str(exc))
+        exc.summary = closed_summary(writer)
         raise
     except BaseException as exc:
-        kind = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
-        writer.abandon(kind, f"{type(exc).__name__}: {exc}; the last checkpoint is kept")
+        if not opened:
+            try:
+                open_once()
+            except Exception:
+                pass              # the original error is the one to report
+        if writer is not None:
+            kind = "interrupted" if isinstance(exc, KeyboardInterrupt) else "failed"
+            writer.abandon(kind, f"{type(exc).__name__}: {exc}; the last checkpoint is kept")
         raise
     message = ""
     if status == "interrupted":
@@ -221,7 +261,7 @@ def _drive(run: Run, writer: hdf5.RunWriter, path: Path, progress, flush_interva
         message = (f"interrupted by {name} at t = {run.t:.9g}; continue with: "
                    f"rodjit run --resume {path}")
     writer.close(run, status, message)
-    summary = summarize(path)
+    summary = closed_summary(writer)
     if status == "interrupted":
         raise RunInterrupted(message, stop.signum, summary)
     return summary

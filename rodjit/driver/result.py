@@ -47,11 +47,11 @@ class Result:
         """max |E(t) + dissipated(t) − E(0)| / scale over the diagnostics samples, scale =
         max(|E(0)|, max kinetic energy): the drift at μ = 0, the balance error at μ > 0
         (NaN without diagnostics samples)."""
-        from ..output.measures import RunMeasures
+        from ..output.extremes import Extremes
 
-        m = RunMeasures(self.energy0)
-        m.add_diagnostics(self.diagnostics)
-        return m.energy_error
+        ext = Extremes()
+        ext.update(*(self.diagnostics[c] for c in Extremes.COLUMNS))
+        return ext.energy_error(self.energy0)
 
 
 class MemorySink(Sink):

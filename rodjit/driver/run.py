@@ -3,6 +3,11 @@
 ``Run`` owns no output: each call drains the loop's buffers into a *sink* (in memory for
 ``simulate``, an HDF5 file for the command line).  ``checkpoint``/``from_checkpoint`` save
 and restore everything the stepper needs, so a resumed run continues bit for bit.
+
+``advance`` is one call and its drain.  The two halves exist apart for ``driver.pipeline``:
+``compute`` (the compiled call), ``take`` (the filled rows as a ``Block``, switching the
+loop to a spare set of buffers) and ``drain`` (the block into a sink), so a block can drain
+while the next one computes.
 """
 from __future__ import annotations
 
@@ -19,7 +24,7 @@ from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, gap_control, make_scheme, work_rows
 
-__all__ = ["Run", "SimulationError", "Sink"]
+__all__ = ["Block", "Run", "SimulationError", "Sink"]
 
 GAP_MAX = 0.5     # cap of the barrier-gap fraction (time.cfl sets it below that)
 GROWTH = 1.5      # per-step growth limit of the proposed step
@@ -57,6 +62,24 @@ def _capacity(n1: int) -> int:
     return int(min(1024, max(1, 2**21 // n1)))
 
 
+_BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
+
+
+class Block:
+    """The rows compiled calls left in one set of output buffers (views of them), and the
+    return code of the last call; ``Run.drain`` hands them to a sink."""
+
+    def __init__(self, run, code: int):
+        c = run.count
+        k = int(c[L.N_SNAP])
+        self.code = code
+        self.snapshots = (run.snap_t[:k], run.snap_step[:k], run.snap_u[:k], run.snap_v[:k])
+        self.diagnostics = run.diag[:int(c[L.N_DIAG])]
+        self.episodes = run.episodes[:int(c[L.N_EP])]
+        self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
+        self.finite = bool(np.all(np.isfinite(self.diagnostics)))
+
+
 class Run:
     """One simulation: build it from a config (or a checkpoint), ``start``, then ``advance``
     until it returns ``layout.DONE``."""
@@ -92,18 +115,29 @@ class Run:
         self.clock[L.SNAP_DT] = out.snapshot_interval
         self.clock[L.DIAG_DT] = out.diagnostics_interval
         self._set_tolerance()
-        cap = snapshot_capacity or _capacity(n1)
-        self.snap_t = np.zeros(cap)
-        self.snap_step = np.zeros(cap, dtype=np.int64)
-        self.snap_u = np.zeros((cap, n1))
-        self.snap_v = np.zeros((cap, n1))
-        self.diag = np.zeros((diag_capacity, len(L.DIAG_COLUMNS)))
-        self.episodes = np.zeros((event_capacity, len(L.EPISODE_COLUMNS)))
-        self.bounces = np.zeros((event_capacity, len(L.BOUNCE_COLUMNS)))
+        self._shapes = (snapshot_capacity or _capacity(n1), n1, diag_capacity, event_capacity)
+        (self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
+         self.bounces) = self._buffers()
+        self._spare = None          # a second set of buffers (``double_buffer``)
+        self._undrained = 0         # blocks taken but not drained yet
         self.max_steps = max(1, NODE_STEPS_PER_CALL // n1)
         self.compile_time = 0.0
         self.run_time = 0.0
         self._warm = False
+
+    def _buffers(self) -> tuple[np.ndarray, ...]:
+        """A set of empty output buffers, in the order of ``_BUFFERS``."""
+        cap, n1, diag_capacity, event_capacity = self._shapes
+        return (np.zeros(cap), np.zeros(cap, dtype=np.int64), np.zeros((cap, n1)),
+                np.zeros((cap, n1)), np.zeros((diag_capacity, len(L.DIAG_COLUMNS))),
+                np.zeros((event_capacity, len(L.EPISODE_COLUMNS))),
+                np.zeros((event_capacity, len(L.BOUNCE_COLUMNS))))
+
+    def double_buffer(self) -> None:
+        """Give the loop a second set of output buffers: ``take`` then switches to the other
+        set, so the block it returns stays intact while the next call fills the other."""
+        if self._spare is None:
+            self._spare = self._buffers()
 
     # ---- properties --------------------------------------------------------------------
     @property
@@ -135,6 +169,12 @@ class Run:
         return float(self.clock[L.E0])
 
     @property
+    def drained(self) -> bool:
+        """Every row computed so far has gone to the sink: the state a checkpoint matches."""
+        return self._undrained == 0 and not any(
+            self.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE))
+
+    @property
     def u(self) -> np.ndarray:
         return self.state[0]
 
@@ -159,9 +199,13 @@ class Run:
     def _args(self):
         return (self.scheme, self.ctrl, self.system, self.rod, self.floor)
 
-    def start(self, sink: Sink) -> None:
-        """Compile (or load from cache) the kernels, then evaluate the initial state."""
+    def start(self, sink: Sink | None) -> None:
+        """Compile (or load from cache) the kernels, then evaluate the initial state; its
+        outputs (at t0) are drained into ``sink``, or stay in the buffers if it is None.
+        A run resumed from a checkpoint only compiles."""
         if self.count[L.STARTED]:
+            if not self._warm:
+                self.warm_up()
             return
         t0 = time.perf_counter()
         code = start(*self._args(), self.state, self.work, self.clock, self.count, self.ev,
@@ -171,7 +215,8 @@ class Run:
         self.warm_up()
         if code == L.FAILED:
             raise SimulationError(self.failure_message())
-        self._drain(sink)
+        if sink is not None:
+            self.drain(self.take(), sink)
 
     def warm_up(self) -> None:
         """Compile ``advance`` without stepping, so its compile time is measured apart."""
@@ -194,35 +239,52 @@ class Run:
         """
         if not self.count[L.STARTED]:
             self.start(sink)
+        code = self.compute(max_steps)
+        self.drain(self.take(code), sink)
+        if code == L.FAILED:
+            raise SimulationError(self.failure_message())
+        return code
+
+    def compute(self, max_steps: int | None = None) -> int:
+        """One compiled call into the current buffers, without draining; returns its code
+        (layout.FAILED included).  Needs ``start``; releases the GIL while it runs."""
         if not self._warm:
             self.warm_up()
         t0 = time.perf_counter()
         code = self._call(self.max_steps if max_steps is None else max_steps)
         self.run_time += time.perf_counter() - t0
-        self._drain(sink)
-        if code == L.FAILED:
-            raise SimulationError(self.failure_message())
         return code
 
-    def _drain(self, sink: Sink) -> None:
+    def take(self, code: int = L.PAUSED) -> Block:
+        """The rows in the buffers as a Block (``code``: that of the call that filled them);
+        the loop starts the next block empty, in the spare buffers if there are any."""
+        block = Block(self, code)
         c = self.count
-        if c[L.N_SNAP]:
-            k = c[L.N_SNAP]
-            sink.snapshots(self.snap_t[:k], self.snap_step[:k], self.snap_u[:k], self.snap_v[:k])
-            c[L.N_SNAP] = 0
-        if c[L.N_DIAG]:
-            rows = self.diag[:c[L.N_DIAG]]
-            if not np.all(np.isfinite(rows)):
+        c[L.N_SNAP] = c[L.N_DIAG] = c[L.N_EP] = c[L.N_BOUNCE] = 0
+        if self._spare is not None:
+            current = tuple(getattr(self, name) for name in _BUFFERS)
+            for name, array in zip(_BUFFERS, self._spare):
+                setattr(self, name, array)
+            self._spare = current
+        self._undrained += 1
+        return block
+
+    def drain(self, block: Block, sink: Sink) -> None:
+        """Hand ``block`` to ``sink``: snapshots, diagnostics (refused, with SimulationError,
+        if any value is not finite), episodes, bounces.  The run stays not ``drained`` if
+        this raises."""
+        if block.snapshots[0].size:
+            sink.snapshots(*block.snapshots)
+        if block.diagnostics.shape[0]:
+            if not block.finite:
                 raise SimulationError("a non-finite diagnostic value was computed; refusing "
                                       "to write it")
-            sink.diagnostics(rows)
-            c[L.N_DIAG] = 0
-        if c[L.N_EP]:
-            sink.episodes(self.episodes[:c[L.N_EP]])
-            c[L.N_EP] = 0
-        if c[L.N_BOUNCE]:
-            sink.bounces(self.bounces[:c[L.N_BOUNCE]])
-            c[L.N_BOUNCE] = 0
+            sink.diagnostics(block.diagnostics)
+        if block.episodes.shape[0]:
+            sink.episodes(block.episodes)
+        if block.bounces.shape[0]:
+            sink.bounces(block.bounces)
+        self._undrained -= 1
 
     def pending_bounce(self):
         """``(row, open)`` for the bounce still collecting episodes at this time, or None.
@@ -287,7 +349,7 @@ class Run:
     _CHECKPOINT_ARRAYS = ("state", "clock", "count", "ev", "sstats")
 
     def checkpoint(self) -> dict[str, np.ndarray]:
-        """Copies of everything needed to continue (the output buffers are drained)."""
+        """Copies of everything needed to continue (taken when the run is ``drained``)."""
         ck = {name: getattr(self, name).copy() for name in self._CHECKPOINT_ARRAYS}
         ck["compile_time"] = np.float64(self.compile_time)
         ck["run_time"] = np.float64(self.run_time)

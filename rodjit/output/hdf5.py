@@ -15,13 +15,17 @@ import datetime
 import os
 import socket
 from pathlib import Path
+from typing import NamedTuple
 
 import h5py
 import numpy as np
+from h5py import h5a, h5d, h5p, h5s, h5t
 
-from ..driver.run import Sink
+from ..driver.run import Run, Sink
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS
+from .extremes import Extremes
+from .table import Table
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "RunWriter", "NotARunFile",
            "FileBusy", "open_file", "check_run_file", "read_config", "read_checkpoint",
@@ -84,8 +88,11 @@ EV_NAMES = _names(L.EV_SIZE, {
     L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
     L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
     L.REL_MIN_EPS: "min_strain_at_release"})
+_EXTREME_COLUMNS = tuple(L.DIAG_COLUMNS.index(c) for c in Extremes.COLUMNS)
+_SUMMARY_ATTRS = ("rodjit_version", "created", "command", "history")
 _CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")
 _CK_SCALARS = ("run_time", "compile_time")
+_CK_DATASETS = _CK_ARRAYS + _CK_SCALARS + ("lengths",)
 _CK_NAMES = {"state": ("u", "v", "a"), "clock": CLOCK_NAMES, "count": COUNT_NAMES,
              "ev": EV_NAMES, "sstats": SCHEME_STATS or ("unused",),
              "lengths": tuple(TABLES)}
@@ -239,9 +246,27 @@ def _filters(compression: str) -> dict:
     return {}
 
 
-def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
-    """Create every group, dataset, dimension scale and attribute of an empty run file
-    (everything must exist before SWMR writing starts)."""
+class _Layout(NamedTuple):
+    """What a writer writes: each table, the checkpoint slots' datasets, current."""
+
+    tables: dict
+    slots: list
+    current: h5py.Dataset
+
+    @classmethod
+    def of(cls, f: h5py.File) -> "_Layout":
+        """Looked up in an existing run file."""
+        ckg = f["checkpoint"]
+        return cls({name: Table.of(f[name][c] for c in cols) for name, cols in TABLES.items()},
+                   [{name: ckg[f"slot{i}"][name] for name in _CK_DATASETS} for i in (0, 1)],
+                   ckg["current"])
+
+
+def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> _Layout:
+    """Create every group, dataset, dimension scale and attribute of a run file with empty
+    tables and the checkpoint ``ck`` in slot 0 (``ck["lengths"]``: the rows it matches, none
+    if absent); everything must exist before SWMR writing starts.  Return the datasets
+    written."""
     from .. import __version__
 
     n1 = config.rod.N + 1
@@ -252,19 +277,25 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
             **_writer_attrs()}
     base.update(attrs)
     for key, value in base.items():
-        f.attrs[key] = value
+        _attr(f, key, value)
     filters = _filters(config.output.compression)
 
     grid = f.create_group("grid")
     gx = grid.create_dataset("x", data=x)
     gx.make_scale("x")
 
-    def column(group, name, row_shape, chunk_rows, dtype=np.float64):
-        ds = group.create_dataset(name, shape=(0,) + row_shape, maxshape=(None,) + row_shape,
-                                  chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
+    def column(group, name, row_shape, chunk_rows, dtype=np.float64, like=None):
+        """A growing column; ``like``: a column of the same group, shape and dtype whose
+        creation properties it shares."""
+        if like is not None:
+            ds = _like(like, group, name)
+        else:
+            ds = group.create_dataset(name, shape=(0,) + row_shape,
+                                      maxshape=(None,) + row_shape,
+                                      chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
         text = _DESCRIPTIONS.get(f"{group.name[1:]}/{name}")
         if text:
-            ds.attrs["description"] = text
+            _attr(ds, "description", text)
         return ds
 
     snap = f.create_group("snapshots")
@@ -273,12 +304,17 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
     t.make_scale("t")
     sx = snap.create_dataset("x", data=x)
     sx.make_scale("x")
-    sx.attrs["description"] = _DESCRIPTIONS["snapshots/x"]
-    column(snap, "step", (), rows, np.int64).dims[0].attach_scale(t)
+    _attr(sx, "description", _DESCRIPTIONS["snapshots/x"])
+    step = column(snap, "step", (), rows, np.int64)
+    step.dims[0].attach_scale(t)
+    columns = {"snapshots": [t, step]}
     for name in ("u", "v"):
-        ds = column(snap, name, (n1,), rows)
+        ds = column(snap, name, (n1,), rows, like=columns["snapshots"][-1] if name == "v" else None)
         ds.dims[0].attach_scale(t)
         ds.dims[1].attach_scale(sx)
+        columns["snapshots"].append(ds)
+    shapes = {"snapshots": ((rows, [(), (), (n1,), (n1,)],
+                             [np.float64, np.int64, np.float64, np.float64]))}
 
     for group, chunk in (("diagnostics", COLUMN_CHUNK_ROWS), ("episodes", EVENT_CHUNK_ROWS),
                          ("bounces", EVENT_CHUNK_ROWS)):
@@ -286,82 +322,68 @@ def _build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> None:
         names = TABLES[group]
         scale = column(g, names[0], (), chunk)
         scale.make_scale(names[0])
-        for name in names[1:]:
-            dtype = (np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
-                     else np.float64)
-            column(g, name, (), chunk, dtype).dims[0].attach_scale(scale)
+        columns[group] = [scale]
+        dtypes = [np.int64 if name in _INT_COLUMNS else bool if name in _BOOL_COLUMNS
+                  else np.float64 for name in names]
+        for name, dtype in zip(names[1:], dtypes[1:]):
+            ds = column(g, name, (), chunk, dtype, like=scale if dtype is np.float64 else None)
+            ds.dims[0].attach_scale(scale)
+            columns[group].append(ds)
+        shapes[group] = (chunk, [()] * len(names), dtypes)
+    tables = {name: Table(columns[name], cap=shapes[name][0], rows=shapes[name][1],
+                          dtypes=shapes[name][2], direct=not filters) for name in TABLES}
 
     ckg = f.create_group("checkpoint")
-    ckg.attrs["description"] = ("two slots written alternately; 'current' names the valid "
-                                "one; its 'lengths' are the table rows it matches")
-    ckg.create_dataset("current", data=np.int64(-1))
-    for slot in (0, 1):
+    _attr(ckg, "description", "two slots written alternately; 'current' names the valid "
+                              "one; its 'lengths' are the table rows it matches")
+    current = ckg.create_dataset("current", data=np.int64(0))
+    lengths = ck.get("lengths", {})
+    first = {name: np.asarray(ck[name], np.float64) for name in _CK_SCALARS}
+    first.update({name: ck[name] for name in _CK_ARRAYS},
+                 lengths=np.array([lengths.get(name, 0) for name in TABLES], np.int64))
+    slots = []
+    for slot in (0, 1):                       # slot 1: zeros (its fill value), unwritten
         g = ckg.create_group(f"slot{slot}")
-        for name in _CK_ARRAYS:
-            g.create_dataset(name, data=np.zeros_like(ck[name])).attrs["names"] = _CK_NAMES[name]
-        for name in _CK_SCALARS:
-            g.create_dataset(name, data=np.float64(0.0))
-        g.create_dataset("lengths", data=np.zeros(len(TABLES), np.int64)).attrs["names"] = \
-            _CK_NAMES["lengths"]
+        slots.append({})
+        for name in _CK_DATASETS:
+            value = np.asarray(first[name])
+            ds = slots[-1][name] = (g.create_dataset(name, data=value) if slot == 0 else
+                                    g.create_dataset(name, value.shape, value.dtype))
+            if name in _CK_NAMES:
+                _attr(ds, "names", _CK_NAMES[name])
+    return _Layout(tables, slots, current)
 
 
-class _Table:
-    """The datasets of one group, growing together along axis 0 in chunk-sized blocks.
+# Creating ~50 datasets and ~35 attributes through h5py's high-level calls costs ~8 ms, more
+# than streaming thousands of snapshots; these two make the same objects at a third of the
+# price (h5py's checks for an existing attribute or dataset are moot in a new file).
+_STR = h5py.string_dtype()
+_LINKS = h5p.create(h5p.LINK_CREATE)       # as h5py creates links with ASCII names
+_LINKS.set_create_intermediate_group(True)
 
-    Rows wait in a buffer of one chunk per column: a full buffer is written once, a partial
-    one is written (and kept) at each flush.  Memory stays at one chunk per column.
-    """
 
-    def __init__(self, group: h5py.Group, names):
-        self.ds = [group[name] for name in names]
-        n = min(d.shape[0] for d in self.ds)
-        self.cap = self.ds[0].chunks[0]
-        self.start = n - n % self.cap           # first row held in the buffer
-        self.fill = n - self.start
-        self.buf = [np.zeros((self.cap,) + d.shape[1:], d.dtype) for d in self.ds]
-        if self.fill:
-            for b, d in zip(self.buf, self.ds):
-                b[:self.fill] = d[self.start:n]
-        self.written = n                        # rows present in the datasets
+def _attr(obj, name: str, value) -> None:
+    """A new attribute, stored as ``obj.attrs[name] = value`` stores it: str and sequences
+    of str as variable-length UTF-8 strings, numbers as their NumPy type."""
+    arr = np.asarray(value)
+    if arr.dtype.kind in "OU":
+        arr = np.asarray(value, dtype=_STR)
+    space = h5s.create_simple(arr.shape) if arr.ndim else h5s.create(h5s.SCALAR)
+    h5a.create(obj.id, name.encode(), h5t.py_create(arr.dtype, logical=True), space).write(arr)
 
-    @property
-    def length(self) -> int:
-        return self.start + self.fill
 
-    def append(self, cols) -> None:
-        k = len(cols[0])
-        i = 0
-        while i < k:
-            if self.fill == 0 and k - i >= self.cap:   # whole chunks: write them directly
-                m = (k - i) // self.cap * self.cap
-                end = self.start + m
-                for d, c in zip(self.ds, cols):
-                    d.resize(end, axis=0)
-                    d[self.start:end] = c[i:i + m]
-                self.start = self.written = end
-                i += m
-                continue
-            m = min(k - i, self.cap - self.fill)
-            for b, c in zip(self.buf, cols):
-                b[self.fill:self.fill + m] = c[i:i + m]
-            self.fill += m
-            i += m
-            if self.fill == self.cap:
-                self._write()
-                self.start += self.cap
-                self.fill = 0
+def _like(proto: h5py.Dataset, group: h5py.Group, name: str) -> h5py.Dataset:
+    """A new dataset in ``group`` with the dtype, shape, maxshape and creation properties
+    (chunks, filters) of ``proto``."""
+    return h5py.Dataset(h5d.create(group.id, name.encode(), proto.id.get_type(),
+                                   proto.id.get_space(), dcpl=proto.id.get_create_plist(),
+                                   lcpl=_LINKS))
 
-    def _write(self) -> None:
-        end = self.start + self.fill
-        for d, b in zip(self.ds, self.buf):
-            if d.shape[0] != end:
-                d.resize(end, axis=0)
-            d[self.start:end] = b[:self.fill]
-        self.written = end
 
-    def flush(self) -> None:
-        if self.written != self.length:
-            self._write()
+def _put(ds: h5py.Dataset, value) -> None:
+    """Overwrite a whole small dataset (low-level: a tenth of ``ds[...] = value``'s cost;
+    HDF5 converts the value's type to the dataset's)."""
+    ds.id.write(h5s.ALL, h5s.ALL, np.ascontiguousarray(value))
 
 
 class RunWriter(Sink):
@@ -369,15 +391,32 @@ class RunWriter(Sink):
 
     ``save`` writes the buffered rows and a checkpoint that records the table lengths, with
     an HDF5 flush before and after flipping ``/checkpoint/current``: whatever moment the
-    process dies, the current slot is complete and matches rows present on disk.
+    process dies, the current slot is complete and matches rows present on disk.  The
+    writer also keeps what the end-of-run summary needs (``summary.closed_summary``), so
+    the file is not read back.
     """
 
-    def __init__(self, f: h5py.File):
+    def __init__(self, f: h5py.File, path, config, checkpoint: dict, layout=None):
+        """``checkpoint``: the file's valid one, as ``read_checkpoint`` gives it; ``layout``:
+        that of a file just laid out (empty tables), else it is looked up."""
         self.file = f
-        self.tables = {name: _Table(f[name], cols) for name, cols in TABLES.items()}
-        self.current = int(f["checkpoint/current"][()])
-        self.compile_time_before = (float(f[f"checkpoint/slot{self.current}/compile_time"][()])
-                                    if self.current in (0, 1) else 0.0)
+        self.path = str(path)
+        self.config = config
+        new = layout is not None
+        layout = layout or _Layout.of(f)
+        self.tables = layout.tables
+        self._current = layout.current
+        self._slots = layout.slots
+        self.current = int(self._current[()])
+        self.checkpoint = checkpoint
+        self.compile_time_before = float(checkpoint["compile_time"])
+        self.extremes = Extremes()
+        b = self.tables["bounces"]       # every bounce row, kept for the summary
+        self._bounces = [[np.zeros(0, buf.dtype) if new else d[:b.length]]
+                         for d, buf in zip(b.ds, b.buf)]
+        if not new:
+            self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
+        self.final = None        # what closing leaves in the file (status, bounces, ...)
 
     # Sink interface: drained blocks of the compiled loop
     def snapshots(self, t, step, u, v):
@@ -385,6 +424,7 @@ class RunWriter(Sink):
 
     def diagnostics(self, rows):
         self.tables["diagnostics"].append(list(rows.T))
+        self.extremes.update(*(rows[:, j] for j in _EXTREME_COLUMNS))
 
     def episodes(self, rows):
         self.tables["episodes"].append(list(rows.T))
@@ -394,29 +434,40 @@ class RunWriter(Sink):
         cols["n_episodes"] = cols["n_episodes"].astype(np.int64)
         cols["open"] = (np.zeros(rows.shape[0], bool) if is_open is None
                         else np.asarray(is_open, bool))
-        self.tables["bounces"].append([cols[c] for c in TABLES["bounces"]])
+        cols = [cols[c] for c in TABLES["bounces"]]
+        self.tables["bounces"].append(cols)
+        for kept, c in zip(self._bounces, cols):
+            kept.append(np.array(c, dtype=kept[0].dtype))
 
     def save(self, run) -> None:
-        """Write buffered rows and a checkpoint of ``run`` matching them.  A run stopped in
-        the middle of a drain (an error while draining) gets no new checkpoint: the last
-        one stays valid, and a resume cuts the tables back to it."""
+        """Write buffered rows and a checkpoint of ``run`` matching them.  A run that is not
+        ``drained`` (an error while draining) gets no new checkpoint: the last one stays
+        valid, and a resume cuts the tables back to it."""
         for table in self.tables.values():
             table.flush()
-        if any(run.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE)):
+        if not run.drained:
             self.file.flush()
             return
-        ck = run.checkpoint()
+        self._commit(run.checkpoint(), self.compile_time_before + run.compile_time)
+
+    def _commit(self, ck: dict, compile_time: float) -> None:
+        """Checkpoint ``ck`` into the idle slot with the current table lengths (rows already
+        written), flush, flip ``current``, flush."""
         slot = 1 if self.current == 0 else 0
-        g = self.file[f"checkpoint/slot{slot}"]
+        g = self._slots[slot]
         for name in _CK_ARRAYS:
-            g[name][...] = ck[name]
-        g["run_time"][()] = float(ck["run_time"])
-        g["compile_time"][()] = self.compile_time_before + run.compile_time
-        g["lengths"][...] = np.array([t.length for t in self.tables.values()], np.int64)
+            _put(g[name], ck[name])
+        _put(g["run_time"], float(ck["run_time"]))
+        _put(g["compile_time"], compile_time)
+        lengths = [t.length for t in self.tables.values()]
+        _put(g["lengths"], lengths)
         self.file.flush()
-        self.file["checkpoint/current"][()] = slot
+        _put(self._current, slot)
         self.file.flush()
         self.current = slot
+        self.checkpoint = {name: ck[name] for name in _CK_ARRAYS}
+        self.checkpoint.update(run_time=float(ck["run_time"]), compile_time=compile_time,
+                               lengths=dict(zip(TABLES, lengths)))
 
     def close(self, run, status: str, message: str = "") -> None:
         """Final checkpoint, then the provisional row of the bounce still open (listed but
@@ -429,8 +480,15 @@ class RunWriter(Sink):
             if pending is not None:
                 self.bounces(pending[0][None, :], [pending[1]])
                 self.tables["bounces"].flush()
-        self.file.attrs["status"] = status
-        self.file.attrs["message"] = message
+        attrs = self.file.attrs              # (each .attrs looks the root group up)
+        attrs["status"] = status
+        attrs["message"] = message
+        self.final = {
+            "status": status, "message": message,
+            "counts": {name: t.written for name, t in self.tables.items()},
+            "bounces": {c: np.concatenate(kept)[:self.tables["bounces"].written]
+                        for c, kept in zip(TABLES["bounces"], self._bounces)},
+            "attrs": {k: attrs[k] for k in _SUMMARY_ATTRS if k in attrs}}
         self.file.close()
 
     def abandon(self, status: str, message: str) -> None:
@@ -458,15 +516,18 @@ def _history(f: h5py.File, entry: str) -> list[str]:
     return [str(s) for s in f.attrs.get("history", [])] + [f"{_now()} {entry}"]
 
 
-def create_run_file(path, config, run, *, command: str) -> RunWriter:
-    """A new run file for ``run`` (not yet started) in SWMR mode, with a first checkpoint."""
+def create_run_file(path, config, start, *, command: str) -> RunWriter:
+    """A new run file in SWMR mode whose first checkpoint is ``start``: a Run not started
+    yet, or the ``checkpoint()`` of one (taken before it started, so the run may already
+    be computing)."""
+    ck = start.checkpoint() if isinstance(start, Run) else start
     f = _open_for_writing(path, "w")
     try:
-        _build_layout(f, config, run.checkpoint(),
-                      {"command": command, "history": [f"{_now()} created by: {command}"]})
-        f.swmr_mode = True
-        writer = RunWriter(f)
-        writer.save(run)
+        layout = _build_layout(f, config, ck, {"command": command,
+                                               "history": [f"{_now()} created by: {command}"]})
+        f.swmr_mode = True             # flushes the file: the first checkpoint is on disk
+        writer = RunWriter(f, path, config, dict(ck, lengths=dict.fromkeys(TABLES, 0)),
+                           layout)
     except BaseException:
         f.close()
         raise
@@ -479,7 +540,8 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     mark it running, then switch to SWMR writing."""
     f = _open_for_writing(path, "r+")
     try:
-        lengths = read_checkpoint(f)["lengths"]
+        ck = read_checkpoint(f)
+        lengths = ck["lengths"]
         for name, cols in TABLES.items():
             for col in cols:
                 ds = f[name][col]
@@ -493,7 +555,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         for key, value in _writer_attrs().items():
             f.attrs[key] = value
         f.swmr_mode = True
-        return RunWriter(f)
+        return RunWriter(f, path, read_config(f), ck)
     except BaseException:
         f.close()
         raise
@@ -516,7 +578,7 @@ def recover(path) -> None:
         attrs["message"] = (f"the writing process stopped without closing the file (killed?); "
                             f"recovered at the checkpoint t = {t!r}")
         with h5py.File(tmp, "w", libver="latest") as dst:
-            _build_layout(dst, config, ck, attrs)
+            _build_layout(dst, config, ck, attrs)       # its checkpoint in slot 0
             for group, cols in TABLES.items():
                 n = ck["lengths"][group]
                 for col in cols:
@@ -525,11 +587,4 @@ def recover(path) -> None:
                     step = d.chunks[0] * 16
                     for i in range(0, n, step):
                         d[i:min(n, i + step)] = s[i:min(n, i + step)]
-            g = dst["checkpoint/slot0"]
-            for name in _CK_ARRAYS:
-                g[name][...] = ck[name]
-            for name in _CK_SCALARS:
-                g[name][()] = ck[name]
-            g["lengths"][...] = [ck["lengths"][name] for name in TABLES]
-            dst["checkpoint/current"][()] = 0
     os.replace(tmp, path)

@@ -1,24 +1,20 @@
 """What a run file says about its run, in a few numbers: the end-of-run report and ``info``.
 
-Everything is read back from the file (diagnostics in blocks), so the same summary serves a
-run that just finished, a resumed one, and a file someone else wrote.
+``summarize`` reads it back from any file (diagnostics in blocks), also one being written
+or one someone else wrote; ``closed_summary`` builds the same summary, number for number,
+from what a writer kept while writing the file it just closed, without reading it back.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
 
 from ..stepping import layout as L
 from . import hdf5
-from .measures import RunMeasures
+from .extremes import Extremes
 
-__all__ = ["RunSummary", "summarize"]
-
-BLOCK_ROWS = 1 << 16
-MEASURED = ("energy_total", "dissipated", "energy_kinetic", "min_strain", "u_bottom",
-            "floor_force")
+__all__ = ["RunSummary", "summarize", "closed_summary"]
 
 
 @dataclass
@@ -46,7 +42,6 @@ class RunSummary:
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
     writer_alive: bool | None = None
-    measures: RunMeasures | None = None
 
     @property
     def n_bounces(self) -> int:
@@ -115,32 +110,43 @@ def summarize(path) -> RunSummary:
     """Read the summary of the run file at ``path`` (also while it is being written)."""
     with hdf5.open_file(path) as f:
         hdf5.check_run_file(f, path)
-        config = hdf5.read_config(f)
-        ck = hdf5.read_checkpoint(f)
-        clock, count = ck["clock"], ck["count"]
         counts = {name: min(f[name][c].shape[0] for c in cols)
                   for name, cols in hdf5.TABLES.items()}
-        bounces = hdf5.read_table(f, "bounces")
-        e0 = float(clock[L.E0])
-        measures = RunMeasures(e0)
-        g = f["diagnostics"]
-        for i in range(0, counts["diagnostics"], BLOCK_ROWS):
-            sel = slice(i, min(i + BLOCK_ROWS, counts["diagnostics"]))
-            measures.add_diagnostics({c: g[c][sel] for c in MEASURED})
-        measures.add_bounces(bounces)
-        steps = int(count[L.STEP])
-        run_time = ck["run_time"]
+        extremes = Extremes()
+        extremes.read(f["diagnostics"], counts["diagnostics"])
         status = str(f.attrs["status"])
-        return RunSummary(
-            path=str(path), status=status, message=str(f.attrs["message"]), config=config,
-            t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
-            energy0=e0, energy_error=measures.energy_error, min_strain=measures.min_strain,
-            min_u0=math.inf if math.isnan(measures.min_u0) else measures.min_u0,
-            max_floor_force=measures.max_floor_force, measures=measures,
-            steps=steps, rejected_steps=int(count[L.REJECTED]),
-            compile_time=ck["compile_time"], run_time=run_time,
-            node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,
-            attrs={k: f.attrs[k] for k in ("rodjit_version", "created", "command", "history")
-                   if k in f.attrs},
-            writer_alive=hdf5.writer_alive(f) if status == "running" else None,
-        )
+        return _summary(
+            path, status, str(f.attrs["message"]), hdf5.read_config(f), hdf5.read_checkpoint(f),
+            counts, hdf5.read_table(f, "bounces"), extremes,
+            {k: f.attrs[k] for k in hdf5._SUMMARY_ATTRS if k in f.attrs},
+            hdf5.writer_alive(f) if status == "running" else None)
+
+
+def closed_summary(writer: hdf5.RunWriter) -> RunSummary:
+    """The summary of the file ``writer`` has just closed, from what it wrote: equal to
+    ``summarize(writer.path)``."""
+    fin = writer.final
+    return _summary(writer.path, fin["status"], fin["message"], writer.config,
+                    writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
+                    fin["attrs"], None)
+
+
+def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes, attrs,
+             alive) -> RunSummary:
+    clock, count = ck["clock"], ck["count"]
+    e0 = float(clock[L.E0])
+    ext = extremes.with_bounces(bounces)
+    steps = int(count[L.STEP])
+    run_time = ck["run_time"]
+    return RunSummary(
+        path=str(path), status=status, message=message, config=config,
+        t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
+        energy0=e0, energy_error=ext.energy_error(e0),
+        min_strain=ext.strain_min if math.isfinite(ext.strain_min) else math.nan,
+        min_u0=ext.u0_min if math.isfinite(ext.u0_min) else math.inf,
+        max_floor_force=ext.force_max if math.isfinite(ext.force_max) else math.nan,
+        steps=steps, rejected_steps=int(count[L.REJECTED]),
+        compile_time=ck["compile_time"], run_time=run_time,
+        node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,
+        attrs=attrs, writer_alive=alive,
+    )

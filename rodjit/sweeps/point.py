@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..driver.run import Run, SimulationError, Sink
-from ..output.measures import RunMeasures
+from ..output.extremes import Extremes
 from ..stepping import layout as L
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "died",
@@ -111,18 +111,16 @@ def law_modules(config) -> tuple[str, ...]:
 
 
 class _PointSink(Sink):
-    """Keeps what a summary row needs: running measures and the bounce rows."""
+    """Keeps what a summary row needs: running extremes and the bounce rows."""
 
-    def __init__(self, run: Run):
-        self.run = run
-        self.measures: RunMeasures | None = None
+    _COLUMNS = tuple(L.DIAG_COLUMNS.index(c) for c in Extremes.COLUMNS)
+
+    def __init__(self):
+        self.extremes = Extremes()
         self.rows: list[np.ndarray] = []
-        self._diag = {name: j for j, name in enumerate(L.DIAG_COLUMNS)}
 
     def diagnostics(self, rows):
-        if self.measures is None:   # E0 is set by the compiled start, before the first drain
-            self.measures = RunMeasures(self.run.energy0)
-        self.measures.add_diagnostics({name: rows[:, j] for name, j in self._diag.items()})
+        self.extremes.update(*(rows[:, j] for j in self._COLUMNS))
 
     def bounces(self, rows):
         self.rows.append(rows.copy())
@@ -158,7 +156,7 @@ def _bounce_values(bounces: dict) -> dict:
 
 def _run_in_memory(config) -> tuple[dict, dict]:
     run = Run(config)
-    sink = _PointSink(run)
+    sink = _PointSink()
     status, message = "completed", ""
     try:
         run.start(sink)
@@ -166,18 +164,18 @@ def _run_in_memory(config) -> tuple[dict, dict]:
             pass
     except SimulationError as exc:
         status, message = "failed", str(exc)
-    if sink.measures is None:                      # no diagnostics were sampled
-        sink.measures = RunMeasures(run.energy0)
     bounces = _bounce_table(sink, run)
-    sink.measures.add_bounces(bounces)
-    m = sink.measures
-    values = {"status": status, "message": message, "min_u0": m.min_u0,
-              "max_floor_force": m.max_floor_force, "min_strain": m.min_strain,
-              "energy_error": m.energy_error, "steps": run.steps,
+    ext = sink.extremes.with_bounces(bounces)
+    values = {"status": status, "message": message, "min_u0": _finite(ext.u0_min),
+              "max_floor_force": _finite(ext.force_max), "min_strain": _finite(ext.strain_min),
+              "energy_error": ext.energy_error(run.energy0), "steps": run.steps,
               "rejected_steps": run.rejected, "compile_time": run.compile_time,
-              "run_time": run.run_time,
-              "t_final": run.t, "run_file": ""}
+              "run_time": run.run_time, "t_final": run.t, "run_file": ""}
     return values, bounces
+
+
+def _finite(x: float) -> float:
+    return x if math.isfinite(x) else math.nan
 
 
 def _run_to_file(config, path: str) -> tuple[dict, dict]:
@@ -190,9 +188,9 @@ def _run_to_file(config, path: str) -> tuple[dict, dict]:
     except SimulationError as exc:
         s = exc.summary
         status, message = "failed", str(exc)
-    values = {"status": status, "message": message, "min_u0": s.measures.min_u0,
-              "max_floor_force": s.measures.max_floor_force,
-              "min_strain": s.measures.min_strain, "energy_error": s.measures.energy_error,
+    values = {"status": status, "message": message, "min_u0": _finite(s.min_u0),
+              "max_floor_force": s.max_floor_force, "min_strain": s.min_strain,
+              "energy_error": s.energy_error,
               "steps": s.steps, "rejected_steps": s.rejected_steps,
               "compile_time": s.compile_time, "run_time": s.run_time, "t_final": s.t,
               "run_file": os.path.basename(path)}
