@@ -279,3 +279,24 @@ def test_pipeline_with_jit_disabled(tmp_path):
                          capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-3000:]
     assert out.stdout.strip() == "same"
+
+
+def test_overlap_false_keeps_the_run_on_the_calling_thread(tmp_path, monkeypatch, many_calls,
+                                                           every_call_overlapped):
+    """run_to_file(overlap=False), as a sweep's workers call it, starts no thread whatever
+    the module default; overlap=True does, and both files are the same."""
+    import threading
+
+    monkeypatch.setattr(files, "OVERLAP", True)
+    cfg = rodjit.Config().override({"time.t_end": 0.3})
+    seen = {}
+
+    def progress(tag):
+        def call(run):
+            seen[tag] = max(seen.get(tag, 0), threading.active_count())
+        return call
+    base = threading.active_count()
+    rodjit.run_to_file(cfg, tmp_path / "one.h5", overlap=False, progress=progress("one"))
+    rodjit.run_to_file(cfg, tmp_path / "two.h5", overlap=True, progress=progress("two"))
+    assert seen["one"] == base and seen["two"] > base
+    assert_same_files(tmp_path / "one.h5", tmp_path / "two.h5")

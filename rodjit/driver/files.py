@@ -102,13 +102,15 @@ def _is_live_run(path) -> bool:
 
 def run_to_file(config, path, *, overwrite: bool = False,
                 command: str | None = None, progress=None, t_end: float | None = None,
-                flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True
-                ) -> RunSummary:
+                flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True,
+                overlap: bool | None = None) -> RunSummary:
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
     ``t_end`` overrides ``time.t_end``; ``progress(run)`` is called between compiled calls;
-    ``command`` is recorded in the file (default: this call).  Bad input raises ValueError
+    ``command`` is recorded in the file (default: this call); ``overlap`` (default
+    ``OVERLAP``) computes in a worker thread while writing, False keeps to one thread (the
+    file is the same bit for bit).  Bad input raises ValueError
     before anything is written.  A failure raises SimulationError and an interruption
     (SIGINT/SIGTERM, caught while ``handle_signals``) raises RunInterrupted, both after
     the file is closed with its status and a checkpoint; both carry ``summary``.
@@ -129,12 +131,12 @@ def run_to_file(config, path, *, overwrite: bool = False,
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
     with _StopFlag(handle_signals) as stop:
         return _drive(run, lambda: hdf5.create_run_file(path, config, first, command=command),
-                      path, progress, flush_interval, stop)
+                      path, progress, flush_interval, stop, overlap)
 
 
 def resume_file(path, *, t_end: float | None = None, command: str | None = None,
                 progress=None, flush_interval: float = FLUSH_INTERVAL,
-                handle_signals: bool = True) -> RunSummary:
+                handle_signals: bool = True, overlap: bool | None = None) -> RunSummary:
     """Continue the run in ``path`` from its checkpoint (to ``t_end`` if given, which also
     extends a completed run); the result equals an uninterrupted run bit for bit.
 
@@ -183,7 +185,7 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         if finish_only:
             writer.close(run, "completed")
             return closed_summary(writer)
-        return _drive(run, lambda: writer, path, progress, flush_interval, stop)
+        return _drive(run, lambda: writer, path, progress, flush_interval, stop, overlap)
 
 
 def _check_interval(flush_interval) -> None:
@@ -193,10 +195,10 @@ def _check_interval(flush_interval) -> None:
 
 
 def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
-           stop: _StopFlag) -> RunSummary:
+           stop: _StopFlag, overlap: bool | None = None) -> RunSummary:
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
     returns (called once the first compiled call is under way); close the file."""
-    calls = (Pipeline if OVERLAP else Inline)(run)
+    calls = (Pipeline if (OVERLAP if overlap is None else overlap) else Inline)(run)
     writer = None
     opened = False
 

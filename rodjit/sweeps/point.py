@@ -182,7 +182,8 @@ def _run_to_file(config, path: str) -> tuple[dict, dict]:
     from ..driver.files import run_to_file
 
     try:
-        s = run_to_file(config, path, overwrite=True, handle_signals=False,
+        # one thread: the sweep's workers already occupy every core
+        s = run_to_file(config, path, overwrite=True, handle_signals=False, overlap=False,
                         command=f"rodjit sweep point -> {path}")
         status, message = "completed", ""
     except SimulationError as exc:
