@@ -5,15 +5,17 @@ the overhead per point.
    N = 5, semi-implicit, t_end = 5 s): points per second with 1 and with 2 worker processes.
    Target: ≥ 1.8× with 2 jobs on 2 cores.
 2. The same grid on a Dask LocalCluster of 2 single-threaded worker processes against the
-   pool with 2 jobs: target overhead < 15 %.
+   pool with 2 jobs: target overhead < 15 %.  For context, also 1 worker against 1 job,
+   where a core is left for the scheduler, nannies and client, which run in this process.
 3. Small rods where the overhead dominates: 256 points (N = 5, t_end = 0.02 s, ~60 steps
    each), 1 job.  Overhead per point = (sweep time − start-up) × jobs / points − the point's
    own stepping time (``run_time``): dispatch, the point's set-up in its worker, the result's
    trip back and its HDF5 row.  Target < 20 ms.
 
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
-start-up (the workers importing rodjit, until all report ready; a LocalCluster's scheduler
-and workers) and the steady state after it, which is what points per second measure; the
+start-up (the workers importing rodjit and loading the kernels, until all report ready; a
+LocalCluster's scheduler and workers), the steady state until the last result, which is what
+points per second measure, and the teardown (stopping the workers or the cluster); the
 end-to-end ratios are printed too.  Each configuration is timed --repeat times in turns
 (best kept), so the machine's load hits every one alike.
 
@@ -45,9 +47,10 @@ def timed_sweep(base, grid, tmp, **kwargs) -> dict:
     table = rodjit.sweep(base, grid, output=path, overwrite=True, **kwargs)
     s = table.stats
     n = len(table)
-    steady = s["wall_time"] - (s["startup_time"] or 0.0)
+    steady = s["wall_time"] - (s["startup_time"] or 0.0) - s["teardown_time"]
     assert table.counts["completed"] == n, table.report()
     return {"wall": s["wall_time"], "startup": s["startup_time"] or 0.0, "steady": steady,
+            "teardown": s["teardown_time"],
             "points": n, "jobs": s["jobs"], "backend": s["backend"],
             "points_per_second": n / steady, "points_per_second_end_to_end": n / s["wall_time"],
             "point_wall_mean": float(np.mean(table["wall_time"])),
@@ -74,6 +77,7 @@ def main(argv=None):
         import distributed  # noqa: F401
         if not args.quick:
             cases["dask 2 workers"] = {"jobs": 2, "scheduler": "local"}
+            cases["dask 1 worker"] = {"jobs": 1, "scheduler": "local"}
     except ImportError:
         print("   (distributed not installed: no Dask row)")
     results = {name: [] for name in cases}
@@ -92,10 +96,10 @@ def main(argv=None):
     rows = []
     for name, r in best.items():
         rows.append([name, r["backend"], r["points"], r["startup"], r["steady"],
-                     r["points_per_second"], r["points_per_second_end_to_end"],
+                     r["teardown"], r["points_per_second"], r["points_per_second_end_to_end"],
                      1e3 * r["point_wall_mean"]])
     print(_util.table(rows, ["64-point grid", "backend", "points", "start-up [s]",
-                             "steady [s]", "points/s", "points/s end-to-end",
+                             "steady [s]", "teardown [s]", "points/s", "points/s end-to-end",
                              "point mean [ms]"]))
     print(f"   2 jobs / 1 job: {scaling:.2f}x steady state (target >= {TARGET_SCALING}x: "
           f"{'yes' if scaling >= TARGET_SCALING else 'NO'}), {scaling_e2e:.2f}x end to end "
@@ -113,6 +117,11 @@ def main(argv=None):
               f"pool {two['startup']:.2f} s)")
         out.update(dask_overhead=over, dask_overhead_end_to_end=over_e2e,
                    meets_dask_target=over < TARGET_DASK)
+        d1 = best["dask 1 worker"]
+        over1 = d1["steady"] / one["steady"] - 1
+        print(f"   (context) 1 worker each, a core left for Dask's scheduler and nannies: "
+              f"{100 * over1:+.1f}% steady state")
+        out["dask_overhead_one_worker"] = over1
     rows = []
     for name, runs in small_runs.items():
         r = best_of(runs)

@@ -120,12 +120,24 @@ def test_a_dying_worker_fails_its_point_only():
     assert np.all(table["steps"][:4] > 0)
 
 
-def test_workers_run_numba_single_threaded():
+def test_points_waiting_behind_a_dying_point_run_elsewhere():
+    """One worker, points queued two deep: each killer fails alone and the point queued
+    behind it goes to the replacement worker."""
+    table = rodjit.sweep(BASE.override(KILLER), {"rod.kappa": [13.0, 100.0],
+                                                 "rod.mu": [0.0, 1.0]}, jobs=1)
+    assert list(table["status"]) == ["failed", "failed", "completed", "completed"]
+    assert table.stats["worker_deaths"] == 2
+
+
+def test_workers_run_numba_single_threaded_with_kernels_loaded_before_the_first_point():
     before = {k: os.environ.get(k) for k in WORKER_ENV}
-    pool = ProcessPool(1)
-    results = [r for r in pool.results([PointTask(0, BASE, None, ())]) if r is not None]
+    task = PointTask(0, BASE, None, ())
+    pool = ProcessPool(1, warm=task)
+    results = [r for r in pool.results([task]) if r is not None]
     assert len(results) == 1 and results[0].status == "completed"
     assert results[0].worker["numba_threads"] == 1 and results[0].worker["pid"] != os.getpid()
+    # loading the kernels (~0.3 s from the disk cache) happened at start-up, not in the point
+    assert results[0].values["compile_time"] < 0.05 < pool.startup_time
     assert {k: os.environ.get(k) for k in WORKER_ENV} == before   # the caller's env restored
     assert pool.startup_time is not None and not pool.workers
 

@@ -192,7 +192,12 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         table.stats = _stats(0.0, 0, 0, None)
         sweep_file.finish(output, "completed")
         return table
-    executor = make_executor(scheduler, jobs)      # the last check: a cluster may be unreachable
+    t_start = time.perf_counter()
+    first = grid.config(base, todo[0])
+    # workers load the first point's kernels before they report ready, unless that means
+    # running a user's law (which could crash a worker before it has taken any point)
+    warm = PointTask(todo[0], first, None, ()) if not law_modules(first) else None
+    executor = make_executor(scheduler, jobs, warm)   # last check: a cluster may be unreachable
     if runs_dir is not None:
         runs_dir.mkdir(parents=True, exist_ok=True)
     if output is not None:
@@ -204,7 +209,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         else:
             sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
-                  flush_interval)
+                  flush_interval, t_start)
 
 
 def _check_not_live(output: Path) -> None:
@@ -221,18 +226,23 @@ def _check_not_live(output: Path) -> None:
                             f"stop it before replacing the file")
 
 
-def _stats(wall: float, ran: int, failed: int, executor) -> dict:
-    """What ``SweepTable.stats`` reports of this call."""
+def _stats(wall: float, ran: int, failed: int, executor, teardown: float = 0.0) -> dict:
+    """What ``SweepTable.stats`` reports of this call: wall time from the start of the
+    executor, of which ``startup_time`` until its workers were ready and ``teardown_time``
+    after the last result (stopping them, the last write)."""
     return {"wall_time": wall, "points_run": ran, "points_failed": failed,
             "points_per_second": ran / wall if wall > 0 else 0.0,
             "startup_time": getattr(executor, "startup_time", None),
+            "teardown_time": teardown,
             "worker_deaths": getattr(executor, "deaths", 0),
             "backend": executor.name if executor is not None else "none",
             "jobs": executor.jobs if executor is not None else 0}
 
 
 def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
-           flush_interval) -> SweepTable:
+           flush_interval, t0: float) -> SweepTable:
+    """Run ``todo`` on ``executor`` (started at ``t0``: its start-up counts in the wall
+    time) into ``table`` and its file."""
     from ..output import sweep_file
 
     grid, base, cols = table.grid, table.base, table.columns
@@ -246,8 +256,8 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
             path = str(runs_dir / grid.run_name(i)) if runs_dir is not None else None
             yield PointTask(i, cfg, path, law_modules(cfg))
 
-    t0 = time.perf_counter()
     ran = failed = 0
+    t_last = t0
     batch = []
     last = time.monotonic()
     status, message, signum = "completed", "", None
@@ -264,6 +274,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                         batch.append(result)
                     ran += 1
                     failed += result.status == "failed"
+                    t_last = time.perf_counter()
                 if progress is not None:
                     progress(SweepProgress(done0 + ran, n, int(np.sum(cols["status"] == "failed")),
                                            ran, len(todo), time.perf_counter() - t0))
@@ -288,7 +299,8 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         finally:
             results.close()
             executor.close(cancel=status != "completed")
-    table.stats = _stats(time.perf_counter() - t0, ran, failed, executor)
+    now = time.perf_counter()
+    table.stats = _stats(now - t0, ran, failed, executor, teardown=now - t_last)
     if status == "interrupted":
         name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
         message = (f"interrupted by {name} after {done0 + ran} of {n} points"

@@ -13,6 +13,7 @@ import os
 import signal
 import time
 import uuid
+from collections import deque
 from contextlib import contextmanager
 from multiprocessing.connection import wait
 
@@ -26,6 +27,12 @@ CONNECT_TIMEOUT = 10.0     # seconds to reach an existing Dask scheduler
 # one thread per worker: the workers are the parallelism (no oversubscribed cores)
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
+# The LocalCluster rodjit starts shares the cores with its workers, so its housekeeping is
+# cut: no statistical profiler sampling every worker thread every 10 ms (the tasks are
+# compiled code: the samples would say nothing), no work stealing (rodjit keeps at most two
+# points per worker, nothing to steal)
+DASK_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
+                      "distributed.scheduler.work-stealing": False}
 SCHEDULERS = ("processes", "local", "inline", "tcp://HOST:PORT")
 
 
@@ -91,12 +98,15 @@ def _die_with_parent() -> None:
         pass
 
 
-def _worker_main(conn) -> None:
-    """A pool worker: run the tasks the parent sends until it sends None or goes away."""
+def _worker_main(conn, warm) -> None:
+    """A pool worker: load the kernels of ``warm`` (a PointTask), then run the tasks the
+    parent sends until it sends None or goes away."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
     _die_with_parent()
-    from .point import worker_info
+    from .point import warm_up, worker_info
 
+    if warm is not None:
+        warm_up(warm.config, warm.laws)
     conn.send(("ready", worker_info()))
     while True:
         try:
@@ -112,28 +122,37 @@ def _worker_main(conn) -> None:
 
 
 class _Worker:
-    def __init__(self, ctx):
+    """One pool process and the points sent to it, in the order it runs them."""
+
+    def __init__(self, ctx, warm):
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker_main, args=(child,), daemon=True,
+        self.process = ctx.Process(target=_worker_main, args=(child, warm), daemon=True,
                                    name="rodjit-sweep-worker")
         with _worker_environment():
             self.process.start()
         child.close()
-        self.task: PointTask | None = None
+        self.tasks: deque[PointTask] = deque()     # the first is running, the rest wait
         self.ready = False
 
-    def assign(self, task: PointTask | None) -> None:
-        self.task = task
+    def _send(self, msg) -> None:
         try:
-            self.conn.send(task)
+            self.conn.send(msg)
         except (BrokenPipeError, OSError):
             pass       # it died; its sentinel reports it
 
+    def assign(self, task: PointTask) -> None:
+        self.tasks.append(task)
+        self._send(task)
+
+    def release(self) -> None:
+        """Tell the worker to exit after its points (it is not waited for: see ``stop``)."""
+        self._send(None)
+
     def stop(self, cancel: bool) -> None:
+        """Wait for a released worker to exit, or end it now (``cancel``); kill it if it
+        hangs."""
         if cancel:
             self.process.terminate()
-        else:
-            self.assign(None)
         self.process.join(timeout=5)
         if self.process.is_alive():
             self.process.kill()
@@ -142,16 +161,21 @@ class _Worker:
 
 
 class ProcessPool:
-    """``jobs`` worker processes (spawned: no state inherited), one point each at a time.
+    """``jobs`` worker processes (spawned: no state inherited).
 
-    Each worker imports rodjit once and loads the kernels from the disk cache at its first
-    point; a worker that dies is replaced.
+    Each worker holds ``DEPTH`` points, one running and the next already in its pipe, so
+    it never waits for the parent (which may be writing the sweep file).  A worker that
+    dies fails the point it was running; the points waiting behind it go to another
+    worker.  Each worker imports rodjit once and loads the kernels of ``warm`` (a
+    PointTask) from the disk cache before it reports ready.
     """
 
     name = "processes"
+    DEPTH = 2
 
-    def __init__(self, jobs: int):
+    def __init__(self, jobs: int, warm: PointTask | None = None):
         self.jobs = jobs
+        self.warm = warm
         self.ctx = mp.get_context("spawn")
         self.workers: list[_Worker] = []
         self.started = time.perf_counter()
@@ -159,7 +183,7 @@ class ProcessPool:
         self.deaths = 0
 
     def _spawn(self) -> _Worker:
-        w = _Worker(self.ctx)
+        w = _Worker(self.ctx, self.warm)
         self.workers.append(w)
         return w
 
@@ -170,14 +194,28 @@ class ProcessPool:
 
     def results(self, tasks):
         tasks = iter(tasks)
+        requeued: deque[PointTask] = deque()      # waiting behind a point that killed its worker
+
+        def take():
+            return requeued.popleft() if requeued else next(tasks, None)
+
+        def fill(w: _Worker) -> None:
+            while len(w.tasks) < self.DEPTH:
+                task = take()
+                if task is None:
+                    break
+                w.assign(task)
+
         busy = []
         for _ in range(self.jobs):
-            task = next(tasks, None)
+            task = take()
             if task is None:
                 break
             w = self._spawn()
             w.assign(task)
             busy.append(w)
+        for w in busy:          # a second point each only once every worker has a first
+            fill(w)
         try:
             while busy:
                 by_conn = {w.conn: w for w in busy}
@@ -197,22 +235,26 @@ class ProcessPool:
                         continue
                     if kind == "dead":
                         self.deaths += 1
-                        lost = died(w.task.index, _death_message(w.process.pid, result))
+                        lost = died(w.tasks.popleft().index,
+                                    _death_message(w.process.pid, result))
+                        requeued.extendleft(reversed(w.tasks))
+                        w.tasks.clear()
                         busy.remove(w)
                         self._retire(w, cancel=True)
-                        task = next(tasks, None)
-                        if task is not None:           # a fresh worker takes over
-                            nw = self._spawn()
-                            nw.assign(task)
-                            busy.append(nw)
+                        if requeued or len(busy) < self.jobs:
+                            task = take()
+                            if task is not None:           # a fresh worker takes over
+                                nw = self._spawn()
+                                nw.assign(task)
+                                fill(nw)
+                                busy.append(nw)
                         yield lost
                         continue
-                    task = next(tasks, None)           # keep the worker busy first
-                    if task is None:
-                        busy.remove(w)
-                        self._retire(w)
-                    else:
-                        w.assign(task)
+                    w.tasks.popleft()
+                    fill(w)                    # keep the worker busy first
+                    if not w.tasks:            # let it go; joined at close, so that its
+                        busy.remove(w)         # exit delays no other result
+                        w.release()
                     yield result
         finally:
             self.close(cancel=True)
@@ -240,8 +282,13 @@ class ProcessPool:
         return "result", msg
 
     def close(self, cancel: bool = False) -> None:
+        """Stop every worker: idle ones are released (all of them, then waited for), busy
+        ones terminated if ``cancel``, else released after their points."""
         for w in list(self.workers):
-            self._retire(w, cancel)
+            if not (cancel and w.tasks):
+                w.release()
+        for w in list(self.workers):
+            self._retire(w, cancel=bool(w.tasks))
 
 
 class DaskCluster:
@@ -250,7 +297,7 @@ class DaskCluster:
 
     name = "dask"
 
-    def __init__(self, scheduler: str, jobs: int):
+    def __init__(self, scheduler: str, jobs: int, warm: PointTask | None = None):
         try:
             import distributed
         except ImportError:
@@ -260,9 +307,12 @@ class DaskCluster:
         self.cluster = None
         self.started = time.perf_counter()
         if scheduler == "local":
-            self.cluster = distributed.LocalCluster(
-                n_workers=jobs, threads_per_worker=1, processes=True, dashboard_address=None,
-                env=dict(WORKER_ENV), silence_logs=logging.ERROR)
+            import dask
+
+            with dask.config.set(DASK_WORKER_CONFIG):     # nannies pass it to the workers
+                self.cluster = distributed.LocalCluster(
+                    n_workers=jobs, threads_per_worker=1, processes=True,
+                    dashboard_address=None, env=dict(WORKER_ENV), silence_logs=logging.ERROR)
             self.client = distributed.Client(self.cluster)
             self.name = f"dask LocalCluster ({jobs} workers)"
         else:
@@ -273,7 +323,7 @@ class DaskCluster:
             self.name = f"dask {scheduler}"
         self.jobs = max(1, sum(self.client.nthreads().values()))
         try:     # every worker imports rodjit now (and says so if it cannot)
-            self.client.run(_ready)
+            self.client.run(_ready, warm)
         except ImportError as exc:
             self.close()
             raise ValueError(f"the Dask workers cannot import rodjit ({exc}); install rodjit "
@@ -285,7 +335,6 @@ class DaskCluster:
         d = self.distributed
         tasks = iter(tasks)
         token = uuid.uuid4().hex[:8]
-        ac = d.as_completed()
 
         def submit() -> bool:
             task = next(tasks, None)
@@ -294,35 +343,36 @@ class DaskCluster:
             fut = self.client.submit(run_point, task, key=f"rodjit-point-{task.index}-{token}",
                                      pure=False)
             self._futures[fut] = task
-            ac.add(fut)
             return True
 
         # one point per worker thread in flight: Dask would otherwise assign several points
-        # to one worker, and a worker that dies would fail all of them
+        # to one worker, and a worker that dies would count against all of them (a second
+        # point in flight measured no faster here: the scheduler's own CPU is the cost)
         limit = max(self.jobs, 1)
         while len(self._futures) < limit and submit():
             pass
-        beat = time.monotonic()
+        timeouts = (TimeoutError, getattr(d, "TimeoutError", TimeoutError))
         try:
             while self._futures:
-                if not ac.has_ready():
-                    time.sleep(0.01)
-                    if time.monotonic() - beat >= HEARTBEAT:
-                        beat = time.monotonic()
-                        yield None
+                try:       # blocks until a point finishes (no polling), or the heartbeat
+                    done = d.wait(list(self._futures), timeout=HEARTBEAT,
+                                  return_when="FIRST_COMPLETED").done
+                except timeouts:
+                    yield None
                     continue
-                fut = next(ac)
-                task = self._futures.pop(fut)
-                submit()
-                try:
-                    result = fut.result()
-                except d.KilledWorker:
-                    result = died(task.index, "the Dask worker process running this point died, "
-                                              "on every attempt (KilledWorker)")
-                except Exception as exc:     # cancelled, lost, or an error outside run_point
-                    result = died(task.index, f"the Dask task failed: {type(exc).__name__}: {exc}")
-                yield result
-                fut.release()
+                for fut in done:
+                    task = self._futures.pop(fut)
+                    submit()
+                    try:
+                        result = fut.result()
+                    except d.KilledWorker:
+                        result = died(task.index, "the Dask worker process running this point "
+                                                  "died, on every attempt (KilledWorker)")
+                    except Exception as exc:   # cancelled, lost, or an error outside run_point
+                        result = died(task.index, f"the Dask task failed: "
+                                                  f"{type(exc).__name__}: {exc}")
+                    fut.release()
+                    yield result
         finally:
             self.close(cancel=True)
 
@@ -340,22 +390,26 @@ class DaskCluster:
                 self.cluster.close()
 
 
-def _ready() -> dict:
-    """Run on each Dask worker at start: import rodjit, report the worker."""
-    from .point import worker_info
+def _ready(warm: PointTask | None) -> dict:
+    """Run on each Dask worker at start: import rodjit, load the kernels of ``warm``,
+    report the worker."""
+    from .point import warm_up, worker_info
 
+    if warm is not None:
+        warm_up(warm.config, warm.laws)
     return worker_info()
 
 
-def make_executor(scheduler: str | None, jobs: int):
+def make_executor(scheduler: str | None, jobs: int, warm: PointTask | None = None):
     """The executor for ``--scheduler``: None/"processes" (the local pool), "inline",
-    "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing Dask cluster)."""
+    "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing Dask cluster); workers
+    load the kernels of ``warm`` before their first point."""
     if scheduler in (None, "processes"):
-        return ProcessPool(jobs)
+        return ProcessPool(jobs, warm)
     if scheduler == "inline":
         return Inline()
     if scheduler == "local" or "://" in scheduler:
-        return DaskCluster(scheduler, jobs)
+        return DaskCluster(scheduler, jobs, warm)
     raise ValueError(f"--scheduler {scheduler!r} is not allowed (one of: processes (default), "
                      f"local (a Dask LocalCluster), inline (this process), tcp://HOST:PORT "
                      f"(an existing Dask scheduler))")

@@ -22,7 +22,7 @@ from ..output.extremes import Extremes
 from ..stepping import layout as L
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "died",
-           "law_modules", "BOUNCE_COLUMNS"]
+           "law_modules", "BOUNCE_COLUMNS", "warm_up", "worker_info"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -216,6 +216,17 @@ def run_point(task: PointTask) -> PointResult:
         values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     values["wall_time"] = time.perf_counter() - t0
     return PointResult(task.index, values, bounces, worker_info())
+
+
+def warm_up(config, laws: tuple[str, ...] = ()) -> None:
+    """Load (or compile) the kernels ``config`` runs with, so a worker's first point does not
+    pay for it; a configuration that cannot start is left to its point to report."""
+    try:
+        for mod in laws:
+            importlib.import_module(mod)
+        Run(config).start(Sink())
+    except Exception:
+        pass
 
 
 def worker_info() -> dict:
