@@ -5,7 +5,20 @@ Exact on its quadratic energy ½vᵀMv + γ/2 uᵀBu; one pentadiagonal solve pe
 from ..kernels.banded import penta_factor, penta_solve
 from ..kernels.forces import add_beam_term
 from . import workspace as W
-from .._jit import kernel
+from .._jit import kernel, step_kernel
+
+
+@step_kernel
+def add_bending(a0, a1, a2, w, n):
+    """Add w·h³·B to the diagonals a0, a1, a2 of a symmetric pentadiagonal matrix: the
+    bands of B = h CᵀC, C the curvature rows (1, −2, 1)/h² of nodes 1..N−1."""
+    for i in range(1, n):
+        a0[i - 1] += w
+        a0[i] += 4.0 * w
+        a0[i + 1] += w
+        a1[i - 1] -= 2.0 * w
+        a1[i] -= 2.0 * w
+        a2[i - 1] += w
 
 
 @kernel
@@ -16,14 +29,7 @@ def beam_matrix(a0, a1, a2, c, h, n):
         a0[j] = h if 0 < j < n else 0.5 * h
         a1[j] = 0.0
         a2[j] = 0.0
-    w = c / (h * h * h)
-    for i in range(1, n):
-        a0[i - 1] += w
-        a0[i] += 4.0 * w
-        a0[i + 1] += w
-        a1[i - 1] -= 2.0 * w
-        a1[i] -= 2.0 * w
-        a2[i - 1] += w
+    add_bending(a0, a1, a2, c / (h * h * h), n)
 
 
 @kernel

@@ -51,6 +51,7 @@ from ..kernels.discrete_gradient import quotient, quotient_slope
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term)
 from ..model.laws import deriv, lower
+from .beam import add_bending
 from .schemes import register_scheme
 from .._jit import kernel, step_kernel
 
@@ -342,14 +343,7 @@ def _add_bending_jacobian(system, work, c2, ih):
     j2 = work[J2]
     for i in range(n + 1):
         j2[i] = 0.0
-    w = 0.5 * c2 * system.gamma * ih * ih * ih
-    for i in range(1, n):
-        j0[i - 1] += w
-        j0[i] += 4.0 * w
-        j0[i + 1] += w
-        j1[i - 1] -= 2.0 * w
-        j1[i] -= 2.0 * w
-        j2[i - 1] += w
+    add_bending(j0, j1, j2, 0.5 * c2 * system.gamma * ih * ih * ih, n)
 
 
 @step_kernel
