@@ -271,22 +271,41 @@ def test_memory_does_not_grow_with_the_number_of_points(tmp_path):
 
 def test_dask_local_cluster_of_two_workers(tmp_path, inline_table):
     distributed = pytest.importorskip("distributed")
-    import dask
 
     table = rodjit.sweep(BASE, GRID, output=tmp_path / "d.h5", scheduler="local", jobs=2)
     same_values(table, inline_table)
     assert table.stats["backend"] == "dask LocalCluster (2 workers)"
     same_values(rodjit.load_sweep(tmp_path / "d.h5"), inline_table)
-    # a failing point and a point that kills its worker: the others finish
-    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):   # no retries
-        t = rodjit.sweep(BASE.override({**FAILING, **KILLER}), KILLER_GRID, scheduler="local",
-                         jobs=2)
-    assert list(t["status"]) == ["completed", "failed", "failed", "failed"]
-    assert "fixed step time.dt" in t["message"][1]
-    for i in (2, 3):
-        assert "the Dask worker process running this point died" in t["message"][i]
+    # two points that kill their worker first: each worker holds two points, so both others
+    # start beside a killer; only the killers fail (each dies again when re-run alone)
+    t = rodjit.sweep(BASE.override({**FAILING, **KILLER}),
+                     {"rod.kappa": [13.0, 100.0], "initial.velocity": [0.0, -100.0]},
+                     scheduler="local", jobs=2)
+    assert list(t["status"]) == ["failed", "failed", "completed", "failed"]
+    assert "fixed step time.dt" in t["message"][3]
+    for i in (0, 1):
+        assert "the Dask worker process running this point died, also when it ran alone" \
+            in t["message"][i]
         assert math.isnan(t["restitution_first"][i]) and t["steps"][i] == 0
-    assert t["steps"][0] > 0
+    assert t["steps"][2] > 0 and t["steps"][3] > 0
+
+
+def test_dask_runs_short_points_several_to_a_task_and_isolates_a_killer_among_them():
+    pytest.importorskip("distributed")
+    kappas = [100.0 + i for i in range(40)]
+    kappas[25] = 13.0                      # kills its worker, inside a task of several points
+    base = BASE.override({**KILLER, "time.t_end": 0.2})
+    grid = {"rod.kappa": kappas}
+    t = rodjit.sweep(base, grid, scheduler="local", jobs=2)
+    assert t.stats["tasks"] < 40           # batched (without: 40 tasks, and re-runs)
+    assert t.stats["worker_deaths"] == 2   # in its task, then alone
+    assert [i for i in range(40) if t["status"][i] != "completed"] == [25]
+    assert "died, also when it ran alone" in t["message"][25]
+    healthy = dict(grid, **{"rod.kappa": kappas[:25] + kappas[26:]})
+    inline = rodjit.sweep(base, healthy, scheduler="inline")
+    for name in ("steps", "n_bounces", "min_u0", "energy_error"):
+        got = np.delete(np.asarray(t[name]), 25)
+        assert np.array_equal(got, np.asarray(inline[name]), equal_nan=True), name
 
 
 def test_an_existing_dask_cluster_by_address(tmp_path, inline_table, monkeypatch):

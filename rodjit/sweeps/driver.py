@@ -235,6 +235,7 @@ def _stats(wall: float, ran: int, failed: int, executor, teardown: float = 0.0) 
             "startup_time": getattr(executor, "startup_time", None),
             "teardown_time": teardown,
             "worker_deaths": getattr(executor, "deaths", 0),
+            "tasks": getattr(executor, "tasks", ran),
             "backend": executor.name if executor is not None else "none",
             "jobs": executor.jobs if executor is not None else 0}
 
@@ -261,7 +262,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     batch = []
     last = time.monotonic()
     status, message, signum = "completed", "", None
-    results = executor.results(tasks())
+    results = executor.results(tasks(), total=len(todo))
     with _StopFlag(handle_signals) as stop:
         try:
             for result in results:

@@ -2,8 +2,9 @@
 
 Every executor turns an iterator of PointTasks into an iterator of PointResults, in the
 order they finish, with ``None`` as a heartbeat (at least every HEARTBEAT seconds) so the
-caller can check for signals and flush while points run.  A worker process that dies
-yields a failed result for the point it held; the other points go on.
+caller can check for signals and flush while points run (``total``, when given, is how
+many tasks there are).  A worker process that dies yields a failed result for the point it
+held; the other points go on.
 """
 from __future__ import annotations
 
@@ -14,15 +15,18 @@ import signal
 import time
 import uuid
 from collections import deque
+from itertools import count, islice
 from contextlib import contextmanager
 from multiprocessing.connection import wait
 
-from .point import PointTask, died, run_point
+from .point import PointTask, died, run_point, run_points
 
 __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "WORKER_ENV", "SCHEDULERS",
            "default_jobs"]
 
 HEARTBEAT = 0.2
+TASK_SECONDS = 0.5   # Dask tasks of about this much work (its advice: well over 100 ms)
+MAX_BATCH = 64
 CONNECT_TIMEOUT = 10.0     # seconds to reach an existing Dask scheduler
 # one thread per worker: the workers are the parallelism (no oversubscribed cores)
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
@@ -30,9 +34,20 @@ WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_TH
 # The LocalCluster rodjit starts shares the cores with its workers, so its housekeeping is
 # cut: no statistical profiler sampling every worker thread every 10 ms (the tasks are
 # compiled code: the samples would say nothing), no work stealing (rodjit keeps at most two
-# points per worker, nothing to steal)
+# tasks per worker, nothing to steal), event-loop, system and memory monitors polled every
+# second or so instead of every 20-500 ms (an idle cluster of two workers: 1.3 % of a core
+# instead of 5.6 % here), no active memory manager (results leave the workers at once), and
+# no retries of a point whose worker died (rodjit re-runs it alone: DaskCluster.results)
 DASK_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
-                      "distributed.scheduler.work-stealing": False}
+                      "distributed.scheduler.work-stealing": False,
+                      "distributed.admin.tick.interval": "500ms",
+                      "distributed.admin.tick.cycle": "5s",
+                      "distributed.admin.system-monitor.interval": "2s",
+                      "distributed.admin.system-monitor.disk": False,
+                      "distributed.admin.system-monitor.gil.enabled": False,
+                      "distributed.worker.memory.monitor-interval": "1s",
+                      "distributed.scheduler.active-memory-manager.start": False,
+                      "distributed.scheduler.allowed-failures": 0}
 SCHEDULERS = ("processes", "local", "inline", "tcp://HOST:PORT")
 
 
@@ -77,7 +92,7 @@ class Inline:
     name = "inline"
     jobs = 1
 
-    def results(self, tasks):
+    def results(self, tasks, total: int | None = None):
         for task in tasks:
             yield run_point(task)
 
@@ -192,7 +207,7 @@ class ProcessPool:
             self.workers.remove(w)
             w.stop(cancel)
 
-    def results(self, tasks):
+    def results(self, tasks, total: int | None = None):
         tasks = iter(tasks)
         requeued: deque[PointTask] = deque()      # waiting behind a point that killed its worker
 
@@ -296,6 +311,7 @@ class DaskCluster:
     processes (``scheduler="local"``) or on an existing cluster (``tcp://HOST:PORT``)."""
 
     name = "dask"
+    depth = 2            # points in flight per worker thread
 
     def __init__(self, scheduler: str, jobs: int, warm: PointTask | None = None):
         try:
@@ -313,7 +329,7 @@ class DaskCluster:
                 self.cluster = distributed.LocalCluster(
                     n_workers=jobs, threads_per_worker=1, processes=True,
                     dashboard_address=None, env=dict(WORKER_ENV), silence_logs=logging.ERROR)
-            self.client = distributed.Client(self.cluster)
+            self.client = distributed.Client(self.cluster, direct_to_workers=True)
             self.name = f"dask LocalCluster ({jobs} workers)"
         else:
             try:
@@ -330,51 +346,103 @@ class DaskCluster:
                              f"where they run") from None
         self.startup_time = time.perf_counter() - self.started
         self._futures: dict = {}
+        self.tasks = 0             # Dask tasks submitted (a task runs one point or several)
+        self.deaths = 0            # tasks lost with their worker
 
-    def results(self, tasks):
+    def results(self, tasks, total: int | None = None):
         d = self.distributed
         tasks = iter(tasks)
         token = uuid.uuid4().hex[:8]
+        suspects: deque[PointTask] = deque()   # their worker died: each is re-run alone
+        retried: set[int] = set()
+        seq = count()
+        timing = {"sent": 0, "done": 0, "wall": 0.0}
 
-        def submit() -> bool:
-            task = next(tasks, None)
-            if task is None:
-                return False
-            fut = self.client.submit(run_point, task, key=f"rodjit-point-{task.index}-{token}",
-                                     pure=False)
-            self._futures[fut] = task
-            return True
+        def batch() -> tuple[PointTask, ...]:
+            # a task costs Dask ~5-10 ms of CPU here (scheduler, client, worker): short points
+            # go several to a task, of about TASK_SECONDS; none before a point has been timed,
+            # and small enough near the end that every worker keeps some
+            k = 1
+            if timing["done"]:
+                k = int(TASK_SECONDS * timing["done"] / max(timing["wall"], 1e-9))
+                if total is not None:
+                    k = min(k, (total - timing["sent"]) // (2 * self.depth * self.jobs))
+                k = max(1, min(k, MAX_BATCH))
+            return tuple(islice(tasks, k))
 
-        # one point per worker thread in flight: Dask would otherwise assign several points
-        # to one worker, and a worker that dies would count against all of them (a second
-        # point in flight measured no faster here: the scheduler's own CPU is the cost)
-        limit = max(self.jobs, 1)
-        while len(self._futures) < limit and submit():
-            pass
+        def submit(points: tuple[PointTask, ...]) -> None:
+            fut = self.client.submit(run_points, points, pure=False,
+                                     key=f"rodjit-points-{next(seq)}-{token}")
+            self._futures[fut] = points
+            timing["sent"] += len(points)
+            self.tasks += 1
+
+        def fill() -> None:
+            # Two tasks per worker thread: the next one waits on the worker while one runs,
+            # so no scheduler round trip (~10 ms here) stands between them.  While a point
+            # whose worker died is pending or re-running, at most one task per live worker
+            # process: then that point has a process to itself, and if it dies again it was
+            # the one that killed it.
+            while True:
+                isolating = bool(suspects) or any(p[0].index in retried
+                                                  for p in self._futures.values())
+                limit = self._live_workers() if isolating else self.depth * self.jobs
+                if len(self._futures) >= limit:
+                    return
+                points = (suspects.popleft(),) if suspects else batch()
+                if not points:
+                    return
+                submit(points)
+
+        fill()
         timeouts = (TimeoutError, getattr(d, "TimeoutError", TimeoutError))
         try:
-            while self._futures:
-                try:       # blocks until a point finishes (no polling), or the heartbeat
+            while self._futures or suspects:
+                if not self._futures:          # every worker is restarting
+                    time.sleep(HEARTBEAT)
+                    fill()
+                    yield None
+                    continue
+                try:       # blocks until a task finishes (no polling), or the heartbeat
                     done = d.wait(list(self._futures), timeout=HEARTBEAT,
                                   return_when="FIRST_COMPLETED").done
                 except timeouts:
+                    fill()
                     yield None
                     continue
                 for fut in done:
-                    task = self._futures.pop(fut)
-                    submit()
+                    points = self._futures.pop(fut)
                     try:
-                        result = fut.result()
+                        results = fut.result()
                     except d.KilledWorker:
-                        result = died(task.index, "the Dask worker process running this point "
-                                                  "died, on every attempt (KilledWorker)")
+                        self.deaths += 1
+                        fresh = [p for p in points if p.index not in retried]
+                        # it, or a point beside it, killed the worker
+                        retried.update(p.index for p in fresh)
+                        suspects.extend(fresh)
+                        results = [died(p.index, "the Dask worker process running this point "
+                                                 "died, also when it ran alone (KilledWorker)")
+                                   for p in points if p not in fresh]
                     except Exception as exc:   # cancelled, lost, or an error outside run_point
-                        result = died(task.index, f"the Dask task failed: "
-                                                  f"{type(exc).__name__}: {exc}")
+                        results = [died(p.index, f"the Dask task failed: "
+                                                 f"{type(exc).__name__}: {exc}") for p in points]
                     fut.release()
-                    yield result
+                    for r in results:
+                        if r.values["steps"]:   # timed (not a point that died)
+                            timing["done"] += 1
+                            timing["wall"] += r.values["wall_time"]
+                    fill()                     # before the parent writes the results
+                    yield from results
+                fill()
         finally:
             self.close(cancel=True)
+
+    def _live_workers(self) -> int:
+        """Worker processes the scheduler knows now (fewer while a dead one restarts)."""
+        try:
+            return len(self.client.nthreads())
+        except Exception:
+            return 1
 
     def close(self, cancel: bool = False) -> None:
         if self._futures and cancel:

@@ -21,7 +21,7 @@ from ..driver.run import Run, SimulationError, Sink
 from ..output.extremes import Extremes
 from ..stepping import layout as L
 
-__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "died",
+__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
            "law_modules", "BOUNCE_COLUMNS", "warm_up", "worker_info"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
@@ -216,6 +216,11 @@ def run_point(task: PointTask) -> PointResult:
         values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     values["wall_time"] = time.perf_counter() - t0
     return PointResult(task.index, values, bounces, worker_info())
+
+
+def run_points(points: tuple[PointTask, ...]) -> list[PointResult]:
+    """Run several points in turn (one Dask task)."""
+    return [run_point(task) for task in points]
 
 
 def warm_up(config, laws: tuple[str, ...] = ()) -> None:
