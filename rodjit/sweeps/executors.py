@@ -347,7 +347,7 @@ class DaskCluster:
         self.startup_time = time.perf_counter() - self.started
         self._futures: dict = {}
         self.tasks = 0             # Dask tasks submitted (a task runs one point or several)
-        self.deaths = 0            # tasks lost with their worker
+        self.deaths = 0            # worker processes that died running points
 
     def results(self, tasks, total: int | None = None):
         d = self.distributed
@@ -355,6 +355,7 @@ class DaskCluster:
         token = uuid.uuid4().hex[:8]
         suspects: deque[PointTask] = deque()   # their worker died: each is re-run alone
         retried: set[int] = set()
+        lost: set[str] = set()                 # addresses of the workers that died
         seq = count()
         timing = {"sent": 0, "done": 0, "wall": 0.0}
 
@@ -414,8 +415,11 @@ class DaskCluster:
                     points = self._futures.pop(fut)
                     try:
                         results = fut.result()
-                    except d.KilledWorker:
-                        self.deaths += 1
+                    except d.KilledWorker as exc:
+                        # the tasks a worker held all fail: count the worker once (a
+                        # restarted worker has a new address)
+                        lost.add(getattr(getattr(exc, "last_worker", None), "address", fut.key))
+                        self.deaths = len(lost)
                         fresh = [p for p in points if p.index not in retried]
                         # it, or a point beside it, killed the worker
                         retried.update(p.index for p in fresh)
