@@ -2,9 +2,9 @@
 
 Everything is validated before anything is written or started.  Results stream back from
 the executor in the order points finish; the parent is the only writer of the sweep file,
-which it updates in batches (at least every ``flush_interval`` seconds).  SIGINT/SIGTERM
-stop the workers, and the file keeps every finished point; ``resume=True`` runs only the
-points that are still pending or failed.
+which it updates in batches (at least every ``flush_interval`` seconds, and every
+BATCH_ROWS results).  SIGINT/SIGTERM stop the workers, and the file keeps every finished
+point; ``resume=True`` runs only the points that are still pending or failed.
 """
 from __future__ import annotations
 
@@ -28,6 +28,7 @@ __all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
 
 FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
+BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
 
 
 class SweepInterrupted(RuntimeError):
@@ -260,6 +261,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     ran = failed = 0
     t_last = t0
     batch = []
+    busy = False           # the last write found the file held by a reader
     last = time.monotonic()
     status, message, signum = "completed", "", None
     results = executor.results(tasks(), total=len(todo))
@@ -282,12 +284,14 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                 if stop.signum is not None:
                     status, signum = "interrupted", stop.signum
                     break
-                if batch and time.monotonic() - last >= flush_interval:
+                if batch and (time.monotonic() - last >= flush_interval
+                              or (len(batch) >= BATCH_ROWS and not busy)):
                     try:
                         sweep_file.write_results(output, batch, wait=BUSY_WAIT)
                         batch = []
+                        busy = False
                     except hdf5.FileBusy:   # a reader holds the file: keep them, retry later
-                        pass
+                        busy = True
                     last = time.monotonic()
         except KeyboardInterrupt:          # a second signal while stopping
             status = "interrupted"

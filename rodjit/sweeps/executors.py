@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import multiprocessing as mp
 import os
+import pickle
 import signal
 import time
 import uuid
@@ -361,13 +362,14 @@ class DaskCluster:
 
         def batch() -> tuple[PointTask, ...]:
             # a task costs Dask ~5-10 ms of CPU here (scheduler, client, worker): short points
-            # go several to a task, of about TASK_SECONDS; none before a point has been timed,
-            # and small enough near the end that every worker keeps some
+            # go several to a task, of about TASK_SECONDS; none before a point has been
+            # timed, and (guided scheduling) at most the remaining points over the tasks in
+            # flight, so the tasks shrink toward the end and the workers finish together
             k = 1
             if timing["done"]:
                 k = int(TASK_SECONDS * timing["done"] / max(timing["wall"], 1e-9))
                 if total is not None:
-                    k = min(k, (total - timing["sent"]) // (2 * self.depth * self.jobs))
+                    k = min(k, -(-(total - timing["sent"]) // (self.depth * self.jobs)))
                 k = max(1, min(k, MAX_BATCH))
             return tuple(islice(tasks, k))
 
@@ -414,7 +416,7 @@ class DaskCluster:
                 for fut in done:
                     points = self._futures.pop(fut)
                     try:
-                        results = fut.result()
+                        results = pickle.loads(fut.result())
                     except d.KilledWorker as exc:
                         # the tasks a worker held all fail: count the worker once (a
                         # restarted worker has a new address)

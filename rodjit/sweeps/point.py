@@ -10,6 +10,7 @@ from __future__ import annotations
 import importlib
 import math
 import os
+import pickle
 import socket
 import time
 from dataclasses import dataclass, field
@@ -218,9 +219,11 @@ def run_point(task: PointTask) -> PointResult:
     return PointResult(task.index, values, bounces, worker_info())
 
 
-def run_points(points: tuple[PointTask, ...]) -> list[PointResult]:
-    """Run several points in turn (one Dask task)."""
-    return [run_point(task) for task in points]
+def run_points(points: tuple[PointTask, ...]) -> bytes:
+    """Run several points in turn (one Dask task); their PointResults pickled into one
+    blob, which Dask moves as a single frame (a list of dicts of arrays would cost it a
+    size estimate and a frame per array)."""
+    return pickle.dumps([run_point(task) for task in points], protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def warm_up(config, laws: tuple[str, ...] = ()) -> None:
