@@ -308,11 +308,12 @@ class ProcessPool:
 
 
 class DaskCluster:
-    """Points as Dask tasks: on a LocalCluster of ``jobs`` single-threaded worker
-    processes (``scheduler="local"``) or on an existing cluster (``tcp://HOST:PORT``)."""
+    """Points as Dask tasks (short points several to a task): on a LocalCluster of ``jobs``
+    single-threaded worker processes (``scheduler="local"``) or on an existing cluster
+    (``tcp://HOST:PORT``)."""
 
     name = "dask"
-    depth = 2            # points in flight per worker thread
+    depth = 2            # tasks in flight per worker thread
 
     def __init__(self, scheduler: str, jobs: int, warm: PointTask | None = None):
         try:
