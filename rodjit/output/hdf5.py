@@ -28,7 +28,7 @@ from .extremes import Extremes
 from .table import Table
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "RunWriter", "NotARunFile",
-           "FileBusy", "open_file", "check_run_file", "read_config", "read_checkpoint",
+           "FileBusy", "open_file", "check_kind", "check_run_file", "read_config", "read_checkpoint",
            "read_table", "load_file", "create_run_file", "reopen_run_file", "recover",
            "writer_alive", "CLOCK_NAMES", "COUNT_NAMES", "EV_NAMES"]
 
@@ -127,18 +127,24 @@ def open_file(path) -> h5py.File:
     return h5py.File(path, "r", swmr=True)
 
 
+def check_kind(f: h5py.File, kind: str, version: int, path=None) -> None:
+    """Raise NotARunFile unless ``f`` is a rodjit ``kind`` file ("run", "sweep") of format
+    ``version``."""
+    name = str(path if path is not None else f.filename)
+    found = f.attrs.get("rodjit_kind")
+    if found is None:
+        raise NotARunFile(f"{name!r} is not a rodjit file (no 'rodjit_kind' attribute)")
+    if found != kind:
+        raise NotARunFile(f"{name!r} is a rodjit {found!r} file, not a {kind} file")
+    got = int(f.attrs.get("format_version", 0))
+    if got != version:
+        raise NotARunFile(f"{name!r} has {kind}-file format {got}; this rodjit reads format "
+                          f"{version}")
+
+
 def check_run_file(f: h5py.File, path=None) -> None:
     """Raise NotARunFile unless ``f`` is a rodjit run file of a format this version reads."""
-    name = str(path if path is not None else f.filename)
-    kind = f.attrs.get("rodjit_kind")
-    if kind is None:
-        raise NotARunFile(f"{name!r} is not a rodjit file (no 'rodjit_kind' attribute)")
-    if kind != KIND:
-        raise NotARunFile(f"{name!r} is a rodjit {kind!r} file, not a run file")
-    version = int(f.attrs.get("format_version", 0))
-    if version != FORMAT_VERSION:
-        raise NotARunFile(f"{name!r} has run-file format {version}; this rodjit reads format "
-                          f"{FORMAT_VERSION}")
+    check_kind(f, KIND, FORMAT_VERSION, path)
 
 
 def read_config(f: h5py.File):

@@ -149,16 +149,8 @@ def finish(path, status: str, message: str = "", attrs: dict | None = None) -> N
 
 # ---- reading ------------------------------------------------------------------------------
 def check_sweep_file(f: h5py.File, path=None) -> None:
-    name = str(path if path is not None else f.filename)
-    kind = f.attrs.get("rodjit_kind")
-    if kind is None:
-        raise hdf5.NotARunFile(f"{name!r} is not a rodjit file (no 'rodjit_kind' attribute)")
-    if kind != KIND:
-        raise hdf5.NotARunFile(f"{name!r} is a rodjit {kind!r} file, not a sweep file")
-    version = int(f.attrs.get("format_version", 0))
-    if version != FORMAT_VERSION:
-        raise hdf5.NotARunFile(f"{name!r} has sweep-file format {version}; this rodjit reads "
-                               f"format {FORMAT_VERSION}")
+    """Raise NotARunFile unless ``f`` is a sweep file of a format this version reads."""
+    hdf5.check_kind(f, KIND, FORMAT_VERSION, path)
 
 
 def read_header(f: h5py.File) -> dict:
