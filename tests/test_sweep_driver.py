@@ -2,6 +2,9 @@
 import math
 import os
 import signal
+import socket
+import subprocess
+import sys
 import tracemalloc
 
 import h5py
@@ -10,7 +13,7 @@ import pytest
 
 import killer_law  # noqa: F401  (registers "kill-test", which kills its worker)
 import rodjit
-from rodjit.output import sweep_file
+from rodjit.output import hdf5, sweep_file
 from rodjit.sweeps.executors import WORKER_ENV, ProcessPool
 from rodjit.sweeps.grid import Grid
 from rodjit.sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, PointTask, run_point
@@ -190,6 +193,28 @@ def test_resume_reruns_failed_points_only(tmp_path, inline_table):
     now = rodjit.load_sweep(path)["wall_time"]
     assert now[1] != walls[1] and np.array_equal(np.delete(now, 1), np.delete(walls, 1))
     assert rodjit.sweep(output=path, resume=True).stats["points_run"] == 0
+
+
+def test_a_live_sweeps_file_is_not_replaced(tmp_path):
+    """A sweep file whose writer is alive (here: a sleeping process posing as it) is
+    replaced neither by another sweep nor by a run, even with overwrite."""
+    path = tmp_path / "live.h5"
+    rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, scheduler="inline")
+    proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        with h5py.File(path, "r+") as f:
+            f.attrs.update(status="running", writer_pid=proc.pid, writer_tag="",
+                           writer_host=socket.gethostname())
+        before = path.read_bytes()
+        with pytest.raises(hdf5.FileBusy, match="being written by a running rodjit process"):
+            rodjit.sweep(BASE, {"rod.mu": [1.0]}, output=path, overwrite=True)
+        with pytest.raises(hdf5.FileBusy, match="being written by a running rodjit process"):
+            rodjit.run_to_file(BASE, path, overwrite=True)
+        assert path.read_bytes() == before
+    finally:
+        proc.kill()
+        proc.wait()
+    assert len(rodjit.sweep(BASE, {"rod.mu": [1.0]}, output=path, overwrite=True)) == 1
 
 
 def test_resume_refuses_another_grid_or_config(tmp_path):

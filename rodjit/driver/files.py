@@ -84,18 +84,18 @@ def check_output(path, overwrite: bool) -> Path:
         if not overwrite:
             raise OutputExists(f"output file {str(path)!r} already exists; pass "
                                f"overwrite=True to replace it")
-        if _is_live_run(path):
+        if _is_live(path):
             raise hdf5.FileBusy(f"output file {str(path)!r} is being written by a running "
                                 f"rodjit process; stop it before replacing the file")
     return path
 
 
-def _is_live_run(path) -> bool:
-    """True if ``path`` is a run file whose writer is still running on this host."""
+def _is_live(path) -> bool:
+    """True if ``path`` is a rodjit file (a run or a sweep) whose writer is still running
+    on this host."""
     try:
         with hdf5.open_file(path) as f:
-            return f.attrs.get("rodjit_kind") == hdf5.KIND and \
-                f.attrs.get("status") == "running" and hdf5.writer_alive(f) is True
+            return f.attrs.get("status") == "running" and hdf5.writer_alive(f) is True
     except (ValueError, OSError):
         return False
 

@@ -179,8 +179,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         grid.validate(base)
         columns = _new_columns(grid)
         if output is not None:
-            output = check_output(output, overwrite)
-            _check_not_live(output)
+            output = check_output(output, overwrite)   # also: not a live sweep's file
     todo = [i for i in range(len(grid)) if columns["status"][i] != "completed"]
     runs_dir = _prepare_runs_dir(save_runs, grid, todo, overwrite, resume)
     if command is None:
@@ -211,20 +210,6 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
             sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start)
-
-
-def _check_not_live(output: Path) -> None:
-    """Refuse to replace a sweep file whose sweep is still running."""
-    if not output.exists():
-        return
-    try:
-        with hdf5.open_file(output) as f:
-            live = (f.attrs.get("status") == "running" and hdf5.writer_alive(f) is True)
-    except (ValueError, OSError):
-        return
-    if live:
-        raise hdf5.FileBusy(f"{str(output)!r} is being written by a running rodjit process; "
-                            f"stop it before replacing the file")
 
 
 def _stats(wall: float, ran: int, failed: int, executor, teardown: float = 0.0) -> dict:
