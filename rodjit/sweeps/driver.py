@@ -19,7 +19,7 @@ import numpy as np
 
 from ..driver.files import _StopFlag, check_output
 from ..output import hdf5
-from .executors import default_jobs, make_executor
+from .executors import check_scheduler, default_jobs, make_executor
 from .grid import Grid
 from .point import SUMMARY_COLUMNS, PointTask, law_modules
 from .table import SweepTable
@@ -65,17 +65,6 @@ def _check_jobs(jobs) -> int:
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
         raise ValueError(f"jobs = {jobs!r} is out of range (a whole number >= 1)")
     return jobs
-
-
-def _check_scheduler(scheduler) -> None:
-    if scheduler is None:
-        return
-    if not isinstance(scheduler, str) or not (
-            scheduler in ("processes", "inline", "local") or scheduler.startswith("tcp://")
-            or scheduler.startswith("tls://")):
-        raise ValueError(f"scheduler = {scheduler!r} is not allowed (one of: processes "
-                         f"(default), local (a Dask LocalCluster), inline (this process), "
-                         f"tcp://HOST:PORT (an existing Dask scheduler))")
 
 
 def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
@@ -159,7 +148,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     jobs = _check_jobs(jobs)
-    _check_scheduler(scheduler)
+    check_scheduler(scheduler)
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
     attrs = {}

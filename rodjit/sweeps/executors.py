@@ -16,14 +16,14 @@ import signal
 import time
 import uuid
 from collections import deque
-from itertools import count, islice
 from contextlib import contextmanager
+from itertools import count, islice
 from multiprocessing.connection import wait
 
 from .point import PointTask, died, run_point, run_points
 
-__all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "WORKER_ENV", "SCHEDULERS",
-           "default_jobs"]
+__all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
+           "WORKER_ENV", "SCHEDULERS", "default_jobs"]
 
 HEARTBEAT = 0.2
 TASK_SECONDS = 0.5   # Dask tasks of about this much work (its advice: well over 100 ms)
@@ -475,16 +475,23 @@ def _ready(warm: PointTask | None) -> dict:
     return worker_info()
 
 
+def check_scheduler(scheduler) -> None:
+    """ValueError (one line) unless ``scheduler`` is one ``make_executor`` knows."""
+    if scheduler is None or (isinstance(scheduler, str) and (
+            scheduler in ("processes", "inline", "local") or "://" in scheduler)):
+        return
+    raise ValueError(f"scheduler = {scheduler!r} is not allowed (one of: processes "
+                     f"(default), local (a Dask LocalCluster), inline (this process), "
+                     f"tcp://HOST:PORT (an existing Dask scheduler))")
+
+
 def make_executor(scheduler: str | None, jobs: int, warm: PointTask | None = None):
-    """The executor for ``--scheduler``: None/"processes" (the local pool), "inline",
-    "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing Dask cluster); workers
-    load the kernels of ``warm`` before their first point."""
+    """The executor for ``--scheduler`` (see ``check_scheduler``): None/"processes" (the
+    local pool), "inline", "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing
+    Dask cluster); workers load the kernels of ``warm`` before their first point."""
+    check_scheduler(scheduler)
     if scheduler in (None, "processes"):
         return ProcessPool(jobs, warm)
     if scheduler == "inline":
         return Inline()
-    if scheduler == "local" or "://" in scheduler:
-        return DaskCluster(scheduler, jobs, warm)
-    raise ValueError(f"--scheduler {scheduler!r} is not allowed (one of: processes (default), "
-                     f"local (a Dask LocalCluster), inline (this process), tcp://HOST:PORT "
-                     f"(an existing Dask scheduler))")
+    return DaskCluster(scheduler, jobs, warm)
