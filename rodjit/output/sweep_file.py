@@ -18,7 +18,7 @@ import h5py
 import numpy as np
 
 from ..sweeps.grid import Grid
-from ..sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS
+from ..sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, empty_columns
 from . import hdf5
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
@@ -91,12 +91,9 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
             kind = _key_kind(grid.values[grid.keys.index(key)])
             ds = s.create_dataset(key, data=col, dtype=_DTYPES[kind], chunks=chunk)
             ds.attrs["description"] = f"swept configuration key {key}"
-        for name, (kind, text) in SUMMARY_COLUMNS.items():
-            fill = {"status": "pending"}.get(name, {"str": "", "int": 0, "float": np.nan}[kind])
-            ds = s.create_dataset(name, shape=(n,), dtype=_DTYPES[kind], chunks=chunk,
-                                  fillvalue=None if kind == "str" else fill)
-            if kind == "str" and n:
-                ds[...] = np.array([fill] * n, dtype=object)
+        for name, col in empty_columns(n).items():
+            kind, text = SUMMARY_COLUMNS[name]
+            ds = s.create_dataset(name, data=col, dtype=_DTYPES[kind], chunks=chunk)
             ds.attrs["description"] = text
         p = f.create_group("points")
         p.attrs["description"] = "per point: its bounce table (the run file's /bounces columns)"

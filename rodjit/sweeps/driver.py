@@ -21,7 +21,7 @@ from ..driver.files import _StopFlag, check_output
 from ..output import hdf5
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import Grid
-from .point import SUMMARY_COLUMNS, PointTask, law_modules
+from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules
 from .table import SweepTable
 
 __all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
@@ -70,17 +70,7 @@ def _check_jobs(jobs) -> int:
 def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
     from ..output.sweep_file import key_columns
 
-    n = len(grid)
-    cols = dict(key_columns(grid))
-    for name, (kind, _) in SUMMARY_COLUMNS.items():
-        if kind == "str":
-            cols[name] = np.array([""] * n, dtype=object)
-        elif kind == "int":
-            cols[name] = np.zeros(n, np.int64)
-        else:
-            cols[name] = np.full(n, np.nan)
-    cols["status"][:] = "pending"
-    return cols
+    return {**key_columns(grid), **empty_columns(len(grid))}
 
 
 def _prepare_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:

@@ -22,7 +22,7 @@ from ..driver.run import Run, SimulationError, Sink
 from ..output.extremes import Extremes
 from ..stepping import layout as L
 
-__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
+__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died", "empty_columns",
            "law_modules", "BOUNCE_COLUMNS", "warm_up", "worker_info"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
@@ -49,6 +49,7 @@ SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
     "run_file": ("str", "the point's run file (--save-runs), '' if none"),
 }
 _FILL = {"str": "", "int": 0, "float": math.nan}
+_NP_DTYPES = {"str": object, "int": np.int64, "float": np.float64}
 
 # the bounce table of a point: the run file's columns and dtypes
 BOUNCE_COLUMNS = L.BOUNCE_COLUMNS + ("open",)
@@ -78,9 +79,17 @@ class PointResult:
 
 
 def empty_values(status: str = "pending", message: str = "") -> dict:
+    """A summary row with nothing measured (NaN, 0, '')."""
     values = {name: _FILL[kind] for name, (kind, _) in SUMMARY_COLUMNS.items()}
     values.update(status=status, message=message)
     return values
+
+
+def empty_columns(n: int) -> dict[str, np.ndarray]:
+    """The summary columns of ``n`` points that have not run (status "pending")."""
+    row = empty_values()
+    return {name: np.full(n, row[name], dtype=_NP_DTYPES[kind])
+            for name, (kind, _) in SUMMARY_COLUMNS.items()}
 
 
 def empty_bounces() -> dict:
