@@ -358,6 +358,15 @@ def _kind(path: str) -> str:
     return kind
 
 
+def _header(kind: str, path: str, version: int, attrs, status: str) -> None:
+    """The first lines of ``rodjit info``: what the file is, who wrote it, its status."""
+    click.echo(f"rodjit {kind} file {path} (format {version}, written by rodjit "
+               f"{attrs.get('rodjit_version', '?')})")
+    click.echo(f"created   {attrs.get('created', '?')}")
+    click.echo(f"command   {attrs.get('command', '?')}")
+    click.echo(f"status    {status}")
+
+
 def info_run(path: str) -> None:
     from .output import hdf5
     from .output.summary import summarize
@@ -374,11 +383,7 @@ def info_run(path: str) -> None:
         elif s.writer_alive is False:
             status += (f" (the writing process is gone: it was killed; 'rodjit run --resume "
                        f"{path}' continues from the checkpoint at t = {s.t:.6g})")
-    click.echo(f"rodjit run file {path} (format {hdf5.FORMAT_VERSION}, written by rodjit "
-               f"{a.get('rodjit_version', '?')})")
-    click.echo(f"created   {a.get('created', '?')}")
-    click.echo(f"command   {a.get('command', '?')}")
-    click.echo(f"status    {status}")
+    _header("run", path, hdf5.FORMAT_VERSION, a, status)
     c = s.counts
     click.echo(f"rows      {c['snapshots']} snapshots, {c['diagnostics']} diagnostics, "
                f"{c['episodes']} episodes, {c['bounces']} bounces")
@@ -419,11 +424,8 @@ def info_sweep(path: str) -> None:
                    f" (its process is gone; 'rodjit sweep --resume -o {path}' continues)"
                    if alive is False else "")
     c = table.counts
-    click.echo(f"rodjit sweep file {path} (format {sweep_file.FORMAT_VERSION}, written by "
-               f"rodjit {a.get('rodjit_version', '?')})")
-    click.echo(f"created   {a.get('created', '?')}")
-    click.echo(f"command   {a.get('command', '?')}")
-    click.echo(f"status    {status}" + (f": {table.message}" if table.message else ""))
+    _header("sweep", path, sweep_file.FORMAT_VERSION, a,
+            status + (f": {table.message}" if table.message else ""))
     click.echo(f"points    {len(table)} ({c['completed']} completed, {c['failed']} failed, "
                f"{c['pending']} not run) on {a.get('scheduler', '?')}")
     click.echo("grid:")
