@@ -388,6 +388,7 @@ class DaskCluster:
             # process: then that point has a process to itself, and if it dies again it was
             # the one that killed it.
             while True:
+                # (a re-run point is always alone in its task)
                 isolating = bool(suspects) or any(p[0].index in retried
                                                   for p in self._futures.values())
                 limit = self._live_workers() if isolating else self.depth * self.jobs
@@ -440,7 +441,6 @@ class DaskCluster:
                             timing["wall"] += r.values["wall_time"]
                     fill()                     # before the parent writes the results
                     yield from results
-                fill()
         finally:
             self.close(cancel=True)
 

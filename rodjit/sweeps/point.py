@@ -3,7 +3,7 @@
 A point runs exactly the configuration ``rodjit run`` would run for it (snapshots are
 taken, so the steps land on the same output times, and discarded); only its summary and
 bounce table travel back.  With ``save_path`` the full run file is written instead, and the
-summary read back from it: the row is the same either way.
+row comes from the writer's summary of it: the row is the same either way.
 """
 from __future__ import annotations
 
