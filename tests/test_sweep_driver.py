@@ -341,7 +341,8 @@ def test_an_existing_dask_cluster_by_address(tmp_path, inline_table, monkeypatch
 
     monkeypatch.setattr(executors, "CONNECT_TIMEOUT", 1.0)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None, silence_logs=logging.ERROR) as cluster:
+                                  dashboard_address=None, silence_logs=logging.ERROR,
+                                  scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
         address = cluster.scheduler_address
         assert address.startswith("tcp://")
         table = rodjit.sweep(BASE, GRID, output=tmp_path / "d.h5", scheduler=address)

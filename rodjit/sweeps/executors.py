@@ -330,7 +330,10 @@ class DaskCluster:
             with dask.config.set(DASK_WORKER_CONFIG):     # nannies pass it to the workers
                 self.cluster = distributed.LocalCluster(
                     n_workers=jobs, threads_per_worker=1, processes=True,
-                    dashboard_address=None, env=dict(WORKER_ENV), silence_logs=logging.ERROR)
+                    dashboard_address=None, env=dict(WORKER_ENV), silence_logs=logging.ERROR,
+                    # no dashboard; the scheduler's health endpoint on any free port, not
+                    # on 8787 (which another cluster may hold: Dask then warns)
+                    scheduler_kwargs={"dashboard_address": ":0"})
             self.client = distributed.Client(self.cluster, direct_to_workers=True)
             self.name = f"dask LocalCluster ({jobs} workers)"
         else:
