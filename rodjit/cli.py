@@ -66,23 +66,16 @@ def _overrides(sets) -> dict[str, str]:
     return out
 
 
-def _command(config, output, sets, t_end, overwrite, resume, quiet) -> str:
-    """The command line as recorded in the file (canonical form of the options used)."""
-    words = ["rodjit", "run"]
-    if resume:
-        words.append("--resume")
-    if config:
-        words.append(config)
-    if output:
-        words += ["-o", output]
-    for item in sets:
-        words += ["--set", item]
-    if t_end is not None:
-        words += ["--t-end", repr(t_end)]
-    if overwrite:
-        words.append("--overwrite")
-    if quiet:
-        words.append("--quiet")
+def _command_line(verb: str, config, options, flags) -> str:
+    """The command line as recorded in a file, in canonical form: ``rodjit VERB [CONFIG]``,
+    then ``options`` ((flag, value or tuple of values); None left out), then the ``flags``
+    ((flag, on)) that are on."""
+    words = ["rodjit", verb] + ([config] if config else [])
+    for flag, value in options:
+        for v in value if isinstance(value, tuple) else (value,):
+            if v is not None:
+                words += [flag, str(v)]
+    words += [flag for flag, on in flags if on]
     return shlex.join(words)
 
 
@@ -149,7 +142,10 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
     from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
     from .driver.run import SimulationError
 
-    command = _command(config, output, sets, t_end, overwrite, resume, quiet)
+    command = _command_line(
+        "run", config, [("-o", output), ("--set", sets),
+                        ("--t-end", repr(t_end) if t_end is not None else None)],
+        [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
     progress = None if quiet or not sys.stderr.isatty() else _Progress()
     try:
         if resume:
@@ -222,24 +218,6 @@ def _duration(seconds: float) -> str:
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
-def _sweep_command(config, output, grids, sets, jobs, scheduler, save_runs, resume, overwrite,
-                   quiet) -> str:
-    words = ["rodjit", "sweep"]
-    if config:
-        words.append(config)
-    for item in grids:
-        words += ["--grid", item]
-    for item in sets:
-        words += ["--set", item]
-    for flag, value in (("-o", output), ("--jobs", jobs), ("--scheduler", scheduler),
-                        ("--save-runs", save_runs)):
-        if value is not None:
-            words += [flag, str(value)]
-    words += [flag for flag, on in (("--resume", resume), ("--overwrite", overwrite),
-                                    ("--quiet", quiet)) if on]
-    return shlex.join(words)
-
-
 @main.command("sweep")
 @click.argument("config", required=False, metavar="[CONFIG.toml | PRESET]")
 @click.option("--grid", "grids", multiple=True, metavar="KEY=VALUES",
@@ -276,8 +254,10 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     from .sweeps.grid import parse_grid_option
     from .driver.files import OutputExists
 
-    command = _sweep_command(config, output, grids, sets, jobs, scheduler, save_runs, resume,
-                             overwrite, quiet)
+    command = _command_line(
+        "sweep", config, [("--grid", grids), ("--set", sets), ("-o", output), ("--jobs", jobs),
+                          ("--scheduler", scheduler), ("--save-runs", save_runs)],
+        [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
     progress = None if quiet or not sys.stderr.isatty() else _SweepProgress()
     try:
         if resume:
