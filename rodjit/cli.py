@@ -373,17 +373,24 @@ def info_run(path: str) -> None:
     click.echo(s.report(max_bounces=None))
 
 
-def plot_run(path: str, output: str | None, kind: str) -> None:
-    from .plotting import MissingMatplotlib, plot_file
+def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
+    """``plot(path, image, kind, **options)`` into ``output`` (default FILE_KIND.png)."""
+    from .plotting import MissingMatplotlib
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
     try:
-        written = plot_file(path, out, kind)
+        written = plot(path, out, kind, **options)
     except MissingMatplotlib as exc:
         raise RunFailed(str(exc)) from None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     click.echo(f"wrote {written}")
+
+
+def plot_run(path: str, output: str | None, kind: str) -> None:
+    from .plotting import plot_file
+
+    _draw(plot_file, path, output, kind)
 
 
 def info_sweep(path: str) -> None:
@@ -421,20 +428,14 @@ def info_sweep(path: str) -> None:
 
 
 def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
-    from .plotting import MissingMatplotlib
     from .plotting.sweep import plot_sweep_file
 
-    out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
-    try:
-        written = plot_sweep_file(path, out, kind, **options)
-    except MissingMatplotlib as exc:
-        raise RunFailed(str(exc)) from None
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    click.echo(f"wrote {written}")
+    _draw(plot_sweep_file, path, output, kind, **options)
 
 
 INFO = {"run": info_run, "sweep": info_sweep}      # rodjit_kind -> info(path)
+# copies of plotting.KINDS and plotting.sweep.KINDS (tests/test_cli.py checks they agree):
+# importing those modules would load numpy, h5py and Numba before every command
 RUN_KINDS = ("heights", "energy", "bounces")
 SWEEP_KINDS = ("restitution", "heatmap")
 PLOT_KINDS = RUN_KINDS + SWEEP_KINDS

@@ -264,3 +264,13 @@ def test_sigkill_leaves_a_readable_file_that_resumes_bit_for_bit(tmp_path):
     with h5py.File(path, "r") as f:            # recovered into a clean file
         assert "recovered at the checkpoint" in f.attrs["history"][1]
         assert f.attrs["status"] == "completed"
+
+
+def test_the_cli_knows_every_kind_of_figure():
+    """rodjit.cli keeps its own copies of the figure kinds (fast start-up): they agree with
+    the plotting modules."""
+    import rodjit.cli as cli
+    from rodjit import plotting
+    from rodjit.plotting import sweep as sweep_plots
+
+    assert cli.RUN_KINDS == plotting.KINDS and cli.SWEEP_KINDS == sweep_plots.KINDS
