@@ -3,7 +3,9 @@
 q(a, b) = (P(b) − P(a))/(b − a) and ∂q/∂b for both Aiki–Kosugi laws, with arguments drawn
 where the evaluation is delicate: nearly coinciding (|b − a| down to 1e-300 relative),
 near the singularity, straddling the floor's kink at 0, and at the quadrature/exact-quotient
-switch.  The bounds are the ones derived in ``rodjit.kernels.discrete_gradient``.
+switch.  The bounds are the ones derived in ``rodjit.kernels.discrete_gradient``.  Both ways
+of evaluating are held to them: by evaluations of the law (``quotient``, what a law without
+a closed form gets) and the laws' closed forms (``difference``, what the energy step uses).
 """
 import math
 
@@ -13,9 +15,9 @@ import pytest
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
-from rodjit.kernels.discrete_gradient import (TAU, TAU2, TAU3, points, quotient,
+from rodjit.kernels.discrete_gradient import (TAU, TAU2, TAU3, difference, points, quotient,
                                               quotient_slope, uses_quadrature)
-from rodjit.model.laws import AikiKosugiFloor, AikiKosugiRod, primitive
+from rodjit.model.laws import AikiKosugiFloor, AikiKosugiRod, primitive, value
 
 EPS = np.finfo(float).eps
 ROD = AikiKosugiRod(100.0)
@@ -95,6 +97,24 @@ def check(law, a, b):
     err_qp = abs(mp.mpf(qp) - qp_ex)
     assert err_q <= 4 * (2 / TAU + 2) * EPS * cond * s_scale + 1e-300, (law, a, b, q, q_ex)
     assert err_qp <= 4 * (2 / TAU + 2) * EPS * cond * d_scale + 1e-300, (law, a, b, qp, qp_ex)
+    check_closed_form(law, a, b, q_ex, qp_ex, s_scale, d_scale, dist)
+
+
+def check_closed_form(law, a, b, q_ex, qp_ex, s_scale, d_scale, dist):
+    """The law's closed form: a few ulps of the stress scale, times the conditioning of its
+    poles (q ∝ q_a⁻²q_b⁻², ∂q/∂b ∝ q_a⁻²q_b⁻³: order ≤ 5) — well inside the bound above.
+    Across the floor's switch at 0 it is the exact quotient, with that bound's terms."""
+    p = LAWS[law][0]
+    q, qp = difference(a, b, p)
+    cond = 1 + 5 * max(abs(a), abs(b)) / dist
+    if law == "floor" and (a > 0.0) != (b > 0.0):
+        d_scale = d_scale + s_scale / abs(mp.mpf(b) - mp.mpf(a))
+        tol = 4 * (2 / TAU + 2)
+    else:
+        tol = 4
+    assert abs(mp.mpf(q) - q_ex) <= tol * EPS * cond * s_scale + 1e-300, (law, a, b, q, q_ex)
+    assert abs(mp.mpf(qp) - qp_ex) <= tol * EPS * cond * d_scale + 1e-300, (law, a, b, qp,
+                                                                            qp_ex)
 
 
 def _pair(lo, hi, lower):
@@ -186,13 +206,53 @@ def test_exact_quotient_branch_reproduces_the_primitive_difference(law):
 
 
 def test_limits_at_coinciding_arguments():
-    """b == a gives the stress and half its derivative (no 0/0)."""
-    from rodjit.model.laws import deriv, value
-    for p, x in ((ROD, 0.37), (ROD, -0.8), (FLOOR, -4e-4), (FLOOR, 3e-4)):
+    """b == a gives the stress and half its derivative (no 0/0), both ways."""
+    from rodjit.model.laws import deriv
+    for p, x in ((ROD, 0.37), (ROD, -0.8), (ROD, 0.0), (FLOOR, -4e-4), (FLOOR, 3e-4),
+                 (FLOOR, 0.0)):
         q = quotient(x, primitive(x, p), x, p)
         qp = quotient_slope(x, x, q, p)
         assert q == pytest.approx(value(x, p), rel=1e-15, abs=1e-300)
         assert qp == pytest.approx(0.5 * deriv(x, p), rel=1e-15, abs=1e-300)
+        qc, qpc = difference(x, x, p)
+        assert qc == pytest.approx(value(x, p), rel=4 * EPS, abs=1e-300)
+        assert qpc == pytest.approx(0.5 * deriv(x, p), rel=4 * EPS, abs=1e-300)
+
+
+@pytest.mark.parametrize("law", ["rod", "floor"])
+def test_closed_form_reproduces_the_primitive_difference(law):
+    """q·(b − a) = P(b) − P(a) to the rounding of the primitives: the energy identity the
+    energy step relies on, for the quotients it actually uses."""
+    p = LAWS[law][0]
+    rng = np.random.default_rng(7)
+    lo = -1.0 if law == "rod" else -FLOOR.beta
+    for _ in range(400):
+        a = lo + abs(lo) * rng.uniform(1e-3, 1.5)
+        b = a + abs(lo) * rng.choice([1e-9, 1e-5, 1e-2, 0.5]) * rng.normal()
+        if not b > lo:
+            continue
+        q, _ = difference(a, b, p)
+        dp = primitive(b, p) - primitive(a, p)
+        mag = abs(primitive(a, p)) + abs(primitive(b, p))
+        assert abs(q * (b - a) - dp) <= 8 * EPS * mag + 1e-300, (a, b)
+
+
+def test_a_law_without_a_closed_form_gets_the_evaluations():
+    """``difference`` of a law that gives none (tests/custom_law.py) is ``quotient`` and
+    ``quotient_slope``, bit for bit, compiled as in the step."""
+    import numba
+
+    import custom_law
+
+    p = custom_law.LogRod(3.0)
+
+    @numba.njit
+    def both(a, b, p):
+        return difference(a, b, p)
+
+    for a, b in ((0.2, 0.2 + 1e-9), (-0.5, 0.4), (0.1, 0.1 + 1e-3)):
+        q = quotient(a, np.nan, b, p)
+        assert both(a, b, p) == (q, quotient_slope(a, b, q, p))
 
 
 @pytest.mark.parametrize("law", ["rod", "floor"])

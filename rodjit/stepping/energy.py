@@ -47,7 +47,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
-from ..kernels.discrete_gradient import quotient, quotient_slope
+from ..kernels.discrete_gradient import difference
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term)
 from ..model.laws import deriv, lower
@@ -88,9 +88,8 @@ DT = 13       # line-search trial increment
 SC = 14       # magnitude of the residual's terms (rounding scale)
 UB = 15       # midpoint uⁿ + d/2 for the bending term
 D = 16        # Newton iterate d
-Q = 17        # quotients of the last evaluation (segments; node 0's at index N)
-QP = 18       # their slopes at the last Jacobian
-WORK_ROWS = 19
+QP = 17       # slopes of the segment quotients at the last Jacobian
+WORK_ROWS = 18
 
 
 class Energy(NamedTuple):
@@ -218,11 +217,10 @@ def initial(scheme, system, rod, floor, u, v, a, work):
 
 @step_kernel
 def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
-    """Residual F(d) (row R); leaves u² = uⁿ + d in ``u2`` and the quotients in row Q
-    (segments, then node 0's at index n).  With ``jac`` it also assembles the Jacobian at
-    d (what ``_jacobian`` does, in the same pass: the evaluation that starts a Newton
-    iteration needs it), without it the residual's rounding scale (the evaluations that
-    may end the iteration need that).
+    """Residual F(d) (row R); leaves u² = uⁿ + d in ``u2``.  With ``jac`` it also
+    assembles the Jacobian at d (what ``_jacobian`` does, in the same pass: the evaluation
+    that starts a Newton iteration needs it), without it the residual's rounding scale
+    (the evaluations that may end the iteration need that).
 
     Returns ``(status, |F|², |scale|²)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 with
     ``jac``); status is BAD_STRAIN, BAD_FLOOR or NON_FINITE for an iterate outside the
@@ -237,7 +235,6 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     r = work[R]
     sc = work[SC]
     e1 = work[E1]
-    qs = work[Q]
     qps = work[QP]
     j0 = work[J0]
     j1 = work[J1]
@@ -249,8 +246,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
         u2[i] = u[i] + d[i]
     if not u2[0] > lower(floor):
         return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
-    qb = quotient(u[0], np.nan, u2[0], floor)
-    qs[n] = qb
+    qb, qbp = difference(u[0], u2[0], floor)
     beam = system.gamma > 0.0
     cb = c2 * system.gamma
     if beam:   # the bending terms first, into rows R and SC
@@ -293,15 +289,13 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             e2 = (u2[i + 1] - u2[i]) * ih - 1.0
             bad |= not e2 > lo
             nonfinite |= not math.isfinite(e2)
-            q = quotient(e1[i], np.nan, e2, rod)   # P(εⁿ) only if the exact quotient is used
-            qs[i] = q
+            q, qp = difference(e1[i], e2, rod)   # the slope only with jac (else dead code)
             tq = c2 * q
             tv = cv * (d[i + 1] - d[i])
             t = tq + tv
             ri -= t
             t_prev = t
             if jac:
-                qp = quotient_slope(e1[i], e2, q, rod)
                 qps[i] = qp
                 c = c2 * qp * ih + cv
                 ji += c
@@ -314,7 +308,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
         if i == 0:
             ri -= c2 * qb
             if jac:
-                ji -= c2 * quotient_slope(u[0], u2[0], qb, floor)
+                ji -= c2 * qbp
             else:
                 si += c2 * abs(qb)
         r[i] = ri
@@ -357,21 +351,20 @@ def _jacobian(system, rod, floor, u, d, u2, dt, work):
     j0 = work[J0]
     j1 = work[J1]
     e1 = work[E1]
-    qs = work[Q]
     qps = work[QP]
     c2 = 0.5 * dt * dt
     cv = 0.5 * dt * system.mu * ih
     j0[0] = _mass(0, n, h)
     for i in range(n):   # each entry written once: no zeroing pass (a memset call)
         e2 = (u2[i + 1] - u2[i]) * ih - 1.0
-        qp = quotient_slope(e1[i], e2, qs[i], rod)
+        qp = difference(e1[i], e2, rod)[1]
         qps[i] = qp
         c = c2 * qp * ih + cv
         j0[i] += c
         j0[i + 1] = _mass(i + 1, n, h) + c
         j1[i] = -c
     j1[n] = 0.0
-    j0[0] -= c2 * quotient_slope(u[0], u2[0], qs[n], floor)
+    j0[0] -= c2 * difference(u[0], u2[0], floor)[1]
     if system.gamma > 0.0:
         _add_bending_jacobian(system, work, c2, ih)
 

@@ -35,6 +35,13 @@ class Law:
     strain to bound the stiffness, instead of evaluating ``deriv`` on every segment.  Give
     it when the law allows it exactly (``deriv(lo)`` when the derivative decreases,
     ``max(deriv(lo), deriv(hi))`` when it is convex); without it the kernels scan.
+
+    ``difference(a, b, params)`` (optional, compiled) returns the divided difference of the
+    primitive q = (P(b) − P(a))/(b − a) and its slope ∂q/∂b in closed form, accurate also
+    as b → a (where it must give s(a) and s'(a)/2); the energy integrator calls it twice
+    per segment and step.  Without it ``kernels.discrete_gradient`` evaluates q by
+    Gauss–Legendre quadrature or the exact quotient, a few evaluations of ``value`` and
+    ``deriv`` each (see there for the accuracy a closed form must match).
     """
 
     name: str
@@ -47,6 +54,7 @@ class Law:
     lower: Callable
     description: str = ""
     deriv_max: Callable | None = None
+    difference: Callable | None = None
 
 
 _BY_TYPE: dict[type, Law] = {}
@@ -79,7 +87,8 @@ def _fingerprint(law: Law) -> str:
     """Hash of where and how the law is defined: module, names and code of its parts."""
     h = hashlib.sha1()
     parts = [law.params] + [getattr(f, "py_func", f) for f in
-                            (law.value, law.deriv, law.primitive, law.lower)]
+                            (law.value, law.deriv, law.primitive, law.lower, law.deriv_max,
+                             law.difference) if f is not None]
     for obj in parts:
         h.update(f"{obj.__module__}.{obj.__qualname__}".encode())
         code = getattr(obj, "__code__", None)
