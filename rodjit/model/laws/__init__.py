@@ -1,8 +1,9 @@
 """Stress laws: the rod's f and the floor's σ_b, each with derivative and primitive.
 
 Adding a law with the same singular structure is one module like ``aiki_kosugi.py``:
-a NamedTuple of parameters, four ``numba.njit`` functions (a fifth, ``deriv_max``, is an
-optional shortcut for the stiffness bound) and a ``register(Law(...))`` call; import it
+a NamedTuple of parameters, four ``numba.njit`` functions (two more are optional
+shortcuts: ``deriv_max`` for the stiffness bound, ``difference`` for the energy step's
+quotients) and a ``register(Law(...))`` call; import it
 here (or anywhere before the run) and select it with ``rod.law`` / ``floor.law``.  No
 kernel changes.
 """
