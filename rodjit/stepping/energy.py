@@ -371,24 +371,25 @@ def _jacobian(system, rod, floor, u, d, u2, dt, work):
 
 @step_kernel
 def _newton_update(system, work):
-    """δ = −J⁻¹F with the banded solvers (tridiagonal for γ = 0, else pentadiagonal)."""
-    rhs = work[DEL]
+    """y = J⁻¹F into row DEL (the update is δ = −y: negation is exact, so this is −J⁻¹F
+    bit for bit without a pass that negates F) with the banded solvers (tridiagonal for
+    γ = 0, else pentadiagonal)."""
+    y = work[DEL]
     r = work[R]
-    for i in range(rhs.size):
-        rhs[i] = -r[i]
     if system.gamma > 0.0:
         penta_factor(work[J0], work[J1], work[J2], work[L1], work[L2], work[DINV])
-        penta_solve(work[L1], work[L2], work[DINV], rhs, rhs)
+        penta_solve(work[L1], work[L2], work[DINV], r, y)
     else:
-        sym_tridiag_solve(work[J0], work[J1], rhs, rhs, work[L1])
+        sym_tridiag_solve(work[J0], work[J1], r, y, work[L1])
 
 
 @step_kernel
 def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
-    """Solve F(d) = 0 from the start value in row D; leaves d in row D and uⁿ + d in
-    ``u2``.  Returns ``(status, value)``: OK, NO_CONVERGENCE with the last update size in
-    ``value``, or the first evaluation's BAD_STRAIN, BAD_FLOOR or NON_FINITE if the start
-    is not admissible (row D then unchanged).
+    """Solve F(d) = 0 from the start value in row D; leaves d in row ``row`` (D or DT:
+    an accepted trial iterate changes places with the old one instead of being copied) and
+    uⁿ + d in ``u2``.  Returns ``(status, value, row)``: OK, NO_CONVERGENCE with the last
+    update size in ``value``, or the first evaluation's BAD_STRAIN, BAD_FLOOR or NON_FINITE
+    if the start is not admissible (row D then unchanged).
 
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
     terms), or when the update is at most newton_tol × |d|∞: that update is applied and
@@ -399,18 +400,19 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     compared squared.
     """
     n1 = u.size
+    row = D
     d = work[D]
-    dl = work[DEL]
+    y = work[DEL]
     dtr = work[DT]
     status, rn2, sn2 = _evaluate(system, rod, floor, u, v, d, u2, dt, work, True)
     if status != OK:
-        return status, 0.0
+        return status, 0.0, row
     have_jacobian = True
     rounding2 = (64.0 * EPS) ** 2
     last = np.inf
     for it in range(scheme.max_newton + 1):
         if it > 0 and rn2 <= rounding2 * sn2:
-            return OK, 0.0
+            return OK, 0.0, row
         if it == scheme.max_newton:
             break
         if not have_jacobian:
@@ -420,9 +422,10 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         sstats[0] += 1
         dmax = 0.0
         dref = 0.0
-        for i in range(n1):
-            dmax = max(dmax, abs(dl[i]))
+        for i in range(n1):   # the norms and the full-step trial in one pass
+            dmax = max(dmax, abs(y[i]))
             dref = max(dref, abs(d[i]))
+            dtr[i] = d[i] - y[i]
         last = dmax
         if not math.isfinite(dmax):
             break
@@ -432,8 +435,9 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         rt2 = 0.0
         st2 = 0.0
         for _ in range(MAX_BACKTRACK):
-            for i in range(n1):
-                dtr[i] = d[i] + alpha * dl[i]
+            if alpha < 1.0:
+                for i in range(n1):
+                    dtr[i] = d[i] - alpha * y[i]
             status, rt2, st2 = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work, False)
             armijo = 1.0 - ARMIJO * alpha
             if status == OK and (small or rt2 <= armijo * armijo * rn2
@@ -443,14 +447,14 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             alpha *= 0.5
         if not accepted:
             break
-        for i in range(n1):
-            d[i] = dtr[i]
+        d, dtr = dtr, d
+        row = DT if row == D else D
         rn2 = rt2
         sn2 = st2
         if small and alpha == 1.0:
-            return OK, 0.0
+            return OK, 0.0, row
     sstats[1] += 1
-    return NO_CONVERGENCE, last
+    return NO_CONVERGENCE, last, row
 
 
 @step_kernel
@@ -483,7 +487,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         d[i] = dp[i] + c3 * ad[i]
     alpha = 1.0
     for _ in range(60):
-        status, val = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+        status, val, row = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
         if status != BAD_STRAIN and status != BAD_FLOOR:
             break
         alpha *= 0.5
@@ -491,6 +495,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             d[i] = alpha * (dp[i] + c3 * ad[i])
     if status != OK:
         return status, val, 0.0, 0.0, 0.0, 0.0, 0.0
+    d = work[row]
     # vⁿ⁺¹ from the increment itself: 2(u2 − u)/dt would amplify the rounding of u2 by 1/dt
     idt2 = 2.0 / dt
     for i in range(n1):
