@@ -88,8 +88,7 @@ DT = 13       # line-search trial increment
 SC = 14       # magnitude of the residual's terms (rounding scale)
 UB = 15       # midpoint uⁿ + d/2 for the bending term
 D = 16        # Newton iterate d
-QP = 17       # slopes of the segment quotients at the last Jacobian
-WORK_ROWS = 18
+WORK_ROWS = 17
 
 
 class Energy(NamedTuple):
@@ -218,16 +217,17 @@ def initial(scheme, system, rod, floor, u, v, a, work):
 @step_kernel
 def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     """Residual F(d) (row R); leaves u² = uⁿ + d in ``u2``.  With ``jac`` it also
-    assembles the Jacobian at d (what ``_jacobian`` does, in the same pass: the evaluation
-    that starts a Newton iteration needs it), without it the residual's rounding scale
-    (the evaluations that may end the iteration need that).
+    assembles the Jacobian at d (rows J0–J2: M + dt²/2 (Σ_i q_i'/h (e_{i+1} − e_i)(e_{i+1} −
+    e_i)ᵀ − q_b' e_0e_0ᵀ + γB/2) + dt μ/2 K, with q' the exact slopes of the computed
+    quotients, so also across u_0 = 0) and the residual's rounding scale, in the same pass;
+    the trial evaluations of a Newton iteration need the residual only.
 
-    Returns ``(status, |F|², |scale|²)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 with
-    ``jac``); status is BAD_STRAIN, BAD_FLOOR or NON_FINITE for an iterate outside the
-    admissible set.  The scale sums the magnitudes of the residual's terms, plus the stress
-    change that the rounding of u² in a strain causes (slopes from the last Jacobian), so
-    64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
-    takes the terms of segments i − 1 (carried over) and i.
+    Returns ``(status, |F|², |scale|²)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0
+    without ``jac``); status is BAD_STRAIN, BAD_FLOOR or NON_FINITE for an iterate outside
+    the admissible set.  The scale sums the magnitudes of the residual's terms, plus the
+    stress change that the rounding of u² in a strain causes, so 64 ε_mach × scale is the
+    residual's rounding level.  One pass over the nodes: node i takes the terms of segments
+    i − 1 (carried over) and i.
     """
     n = system.n
     h = system.h
@@ -235,7 +235,6 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     r = work[R]
     sc = work[SC]
     e1 = work[E1]
-    qps = work[QP]
     j0 = work[J0]
     j1 = work[J1]
     c2 = 0.5 * dt * dt
@@ -256,7 +255,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             r[i] = 0.0
             sc[i] = 0.0
         add_beam_term(ub, r, work[K], h, cb, False)
-        if not jac:
+        if jac:
             kk = work[K]
             for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
                 t = abs(cb * kk[i]) * ih
@@ -280,7 +279,6 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
         ji = 0.0
         if jac:
             ji = m + c_prev
-        else:
             si = m * (abs(d[i]) + abs(dt * v[i])) + c2 * m * abs(g)
             if beam:
                 si += sc[i]
@@ -296,20 +294,17 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             ri -= t
             t_prev = t
             if jac:
-                qps[i] = qp
                 c = c2 * qp * ih + cv
                 ji += c
                 j1[i] = -c
                 c_prev = c
-            else:
-                at = abs(tq) + abs(tv) + c2 * qps[i] * (abs(u2[i]) + abs(u2[i + 1])) * ih
+                at = abs(tq) + abs(tv) + c2 * qp * (abs(u2[i]) + abs(u2[i + 1])) * ih
                 si += at
                 a_prev = at
         if i == 0:
             ri -= c2 * qb
             if jac:
                 ji -= c2 * qbp
-            else:
                 si += c2 * abs(qb)
         r[i] = ri
         if jac:
@@ -341,35 +336,6 @@ def _add_bending_jacobian(system, work, c2, ih):
 
 
 @step_kernel
-def _jacobian(system, rod, floor, u, d, u2, dt, work):
-    """Jacobian of F at the last evaluated iterate (rows J0–J2; slopes kept in row QP):
-    M + dt²/2 (Σ_i q_i'/h (e_{i+1} − e_i)(e_{i+1} − e_i)ᵀ − q_b' e_0e_0ᵀ + γB/2) + dt μ/2 K,
-    with q' the exact slopes of the computed quotients (so also across u_0 = 0)."""
-    n = system.n
-    h = system.h
-    ih = 1.0 / h
-    j0 = work[J0]
-    j1 = work[J1]
-    e1 = work[E1]
-    qps = work[QP]
-    c2 = 0.5 * dt * dt
-    cv = 0.5 * dt * system.mu * ih
-    j0[0] = _mass(0, n, h)
-    for i in range(n):   # each entry written once: no zeroing pass (a memset call)
-        e2 = (u2[i + 1] - u2[i]) * ih - 1.0
-        qp = difference(e1[i], e2, rod)[1]
-        qps[i] = qp
-        c = c2 * qp * ih + cv
-        j0[i] += c
-        j0[i + 1] = _mass(i + 1, n, h) + c
-        j1[i] = -c
-    j1[n] = 0.0
-    j0[0] -= c2 * difference(u[0], u2[0], floor)[1]
-    if system.gamma > 0.0:
-        _add_bending_jacobian(system, work, c2, ih)
-
-
-@step_kernel
 def _newton_update(system, work):
     """y = J⁻¹F into row DEL (the update is δ = −y: negation is exact, so this is −J⁻¹F
     bit for bit without a pass that negates F) with the banded solvers (tridiagonal for
@@ -392,32 +358,26 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     if the start is not admissible (row D then unchanged).
 
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
-    terms), or when the update is at most newton_tol × |d|∞: that update is applied and
-    leaves a residual O(update²) by quadratic convergence.  Each update is backtracked
-    until the iterate is admissible and the residual drops (Armijo).  The start value is
-    always updated once (the Taylor predictor is never a root to rounding, so its residual
-    is not tested): its evaluation assembles the first Jacobian instead.  Norms are
-    compared squared.
+    terms at the iterate the update came from: they change by the update, which is tiny
+    next to them by then), or when the update is at most newton_tol × |d|∞: that update is
+    applied and leaves a residual O(update²) by quadratic convergence.  Each update is
+    backtracked until the iterate is admissible and the residual drops (Armijo).  The start
+    value is always updated once (the Taylor predictor is never a root to rounding, so its
+    residual is not tested).  Each iteration evaluates residual, Jacobian and scale in one
+    pass at its iterate, its trial iterates the residual alone.  Norms are compared
+    squared.
     """
     n1 = u.size
     row = D
     d = work[D]
     y = work[DEL]
     dtr = work[DT]
-    status, rn2, sn2 = _evaluate(system, rod, floor, u, v, d, u2, dt, work, True)
-    if status != OK:
-        return status, 0.0, row
-    have_jacobian = True
     rounding2 = (64.0 * EPS) ** 2
     last = np.inf
-    for it in range(scheme.max_newton + 1):
-        if it > 0 and rn2 <= rounding2 * sn2:
-            return OK, 0.0, row
-        if it == scheme.max_newton:
-            break
-        if not have_jacobian:
-            _jacobian(system, rod, floor, u, d, u2, dt, work)
-        have_jacobian = False
+    for it in range(scheme.max_newton):
+        status, rn2, sn2 = _evaluate(system, rod, floor, u, v, d, u2, dt, work, True)
+        if status != OK:   # only the start can be outside: trial iterates are backtracked
+            return status, 0.0, row
         _newton_update(system, work)
         sstats[0] += 1
         dmax = 0.0
@@ -433,15 +393,14 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         alpha = 1.0
         accepted = False
         rt2 = 0.0
-        st2 = 0.0
         for _ in range(MAX_BACKTRACK):
             if alpha < 1.0:
                 for i in range(n1):
                     dtr[i] = d[i] - alpha * y[i]
-            status, rt2, st2 = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work, False)
+            status, rt2, _ = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work, False)
             armijo = 1.0 - ARMIJO * alpha
             if status == OK and (small or rt2 <= armijo * armijo * rn2
-                                 or rt2 <= rounding2 * st2):
+                                 or rt2 <= rounding2 * sn2):
                 accepted = True
                 break
             alpha *= 0.5
@@ -449,9 +408,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             break
         d, dtr = dtr, d
         row = DT if row == D else D
-        rn2 = rt2
-        sn2 = st2
-        if small and alpha == 1.0:
+        if rt2 <= rounding2 * sn2 or (small and alpha == 1.0):
             return OK, 0.0, row
     sstats[1] += 1
     return NO_CONVERGENCE, last, row
