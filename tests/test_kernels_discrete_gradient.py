@@ -104,9 +104,16 @@ def check_closed_form(law, a, b, q_ex, qp_ex, s_scale, d_scale, dist):
     """The law's closed form: a few ulps of the stress scale, times the conditioning of its
     poles (q ∝ q_a⁻²q_b⁻², ∂q/∂b ∝ q_a⁻²q_b⁻³: order ≤ 5) — well inside the bound above.
     Across the floor's switch at 0 it is the exact quotient, with that bound's terms."""
-    p = LAWS[law][0]
-    q, qp = difference(a, b, p)
+    p, f = LAWS[law][:2]
+    q, qp, sb = difference(a, b, p)
     cond = 1 + 5 * max(abs(a), abs(b)) / dist
+    # s(b) by the law's own formula, its one division shared: a few ulps, times the
+    # conditioning of the pole at b (the literal formula cancels down to O(b) near 0)
+    with mp.workdps(int(40 + 2 * _digits(b))):
+        sb_ex = f(mp.mpf(b))
+    lo = -1.0 if law == "rod" else -FLOOR.beta
+    assert abs(mp.mpf(sb) - sb_ex) <= 8 * EPS * (1 + 5 * abs(b) / (b - lo)) * abs(sb_ex), (
+        law, a, b, sb, sb_ex)
     if law == "floor" and (a > 0.0) != (b > 0.0):
         d_scale = d_scale + s_scale / abs(mp.mpf(b) - mp.mpf(a))
         tol = 4 * (2 / TAU + 2)
@@ -214,7 +221,8 @@ def test_limits_at_coinciding_arguments():
         qp = quotient_slope(x, x, q, p)
         assert q == pytest.approx(value(x, p), rel=1e-15, abs=1e-300)
         assert qp == pytest.approx(0.5 * deriv(x, p), rel=1e-15, abs=1e-300)
-        qc, qpc = difference(x, x, p)
+        qc, qpc, sc = difference(x, x, p)
+        assert sc == pytest.approx(value(x, p), rel=4 * EPS, abs=1e-300)
         assert qc == pytest.approx(value(x, p), rel=4 * EPS, abs=1e-300)
         assert qpc == pytest.approx(0.5 * deriv(x, p), rel=4 * EPS, abs=1e-300)
 
@@ -231,15 +239,15 @@ def test_closed_form_reproduces_the_primitive_difference(law):
         b = a + abs(lo) * rng.choice([1e-9, 1e-5, 1e-2, 0.5]) * rng.normal()
         if not b > lo:
             continue
-        q, _ = difference(a, b, p)
+        q = difference(a, b, p)[0]
         dp = primitive(b, p) - primitive(a, p)
         mag = abs(primitive(a, p)) + abs(primitive(b, p))
         assert abs(q * (b - a) - dp) <= 8 * EPS * mag + 1e-300, (a, b)
 
 
 def test_a_law_without_a_closed_form_gets_the_evaluations():
-    """``difference`` of a law that gives none (tests/custom_law.py) is ``quotient`` and
-    ``quotient_slope``, bit for bit, compiled as in the step."""
+    """``difference`` of a law that gives none (tests/custom_law.py) is ``quotient``,
+    ``quotient_slope`` and ``value``, bit for bit, compiled as in the step."""
     import numba
 
     import custom_law
@@ -252,7 +260,7 @@ def test_a_law_without_a_closed_form_gets_the_evaluations():
 
     for a, b in ((0.2, 0.2 + 1e-9), (-0.5, 0.4), (0.1, 0.1 + 1e-3)):
         q = quotient(a, np.nan, b, p)
-        assert both(a, b, p) == (q, quotient_slope(a, b, q, p))
+        assert both(a, b, p) == (q, quotient_slope(a, b, q, p), value(b, p))
 
 
 @pytest.mark.parametrize("law", ["rod", "floor"])

@@ -152,6 +152,10 @@ def test_step_solves_the_discrete_gradient_equations_of_the_numpy_spec():
     m = masses(12)
     assert np.abs(r_u).max() < 1e-14
     assert np.abs(r_v).max() < 1e-9 * np.abs(m * (v2 - v)).max()
+    # the new state's acceleration (assembled from the stresses of Newton's last
+    # evaluation) is the full acceleration of the NumPy spec at (u2, v2), to rounding
+    a_ref = ref.rhs(0.0, np.concatenate([u2, v2]), run.system, run.rod, run.floor)[13:]
+    assert np.abs(a2 - a_ref).max() <= 1e-12 * np.abs(a_ref).max()
     # the energy balance in 50 digits
     mp.mp.dps = 50
     E = lambda uu, vv: _energy_mp(uu, vv, run)

@@ -24,7 +24,7 @@ Both bounds come on top of the conditioning of s itself: its arguments (the node
 b) are floating-point numbers, so next to a pole of order p at distance d the stress is only
 defined to a relative p·ε_mach·|x|/d; no evaluation can do better.
 
-A law that gives ``difference`` (a closed form of q and ∂q/∂b, ``rodjit.model.laws.Law``)
+A law that gives ``difference`` (closed forms of q, ∂q/∂b and s(b), ``rodjit.model.laws.Law``)
 has it used instead by ``difference`` below: one division and no branch per call, which is
 most of the energy step's cost on a short rod.  The tests hold the closed forms of the
 Aiki–Kosugi laws to the same bounds as the evaluation here.
@@ -123,12 +123,13 @@ def quotient_slope(a, b, q, p):
 @step_kernel
 def _by_evaluations(a, b, p):
     q = quotient(a, np.nan, b, p)
-    return q, quotient_slope(a, b, q, p)
+    return q, quotient_slope(a, b, q, p), value(b, p)
 
 
 def difference(a, b, p):
-    """(q(a, b), ∂q/∂b): the law's closed form if it has one, else ``quotient`` and
-    ``quotient_slope``.  Where only q is used, the compiled slope is dead code."""
+    """(q(a, b), ∂q/∂b, s(b)): the law's closed form if it has one, else ``quotient``,
+    ``quotient_slope`` and ``value``.  What a caller does not use is dead code once
+    compiled."""
     law = law_of(p)
     if law.difference is not None:
         return law.difference(a, b, p)

@@ -104,17 +104,29 @@ def accel(u, a, s, k, system, rod, floor, beam, bound=True):
         fpmax = max_deriv(u, ih, emin, emax, rod)   # the largest f' over the segments
     if bad or not math.isfinite(fl + fpmax + fd):
         return NON_FINITE, fl + fpmax, emin, fl, np.inf
+    assemble(u, a, s, k, fl, system, beam)
+    omega2 = 4.0 * fpmax * ih * ih + 2.0 * fd * ih
+    if beam and system.gamma > 0.0 and bound:
+        omega2 += 16.0 * system.gamma * ih * ih * ih * ih
+    return OK, 0.0, emin, fl, omega2
+
+
+@step_kernel
+def assemble(u, a, s, k, fl, system, beam):
+    """a = M⁻¹(stretch + floor [+ bending if ``beam``]) + g from the segment stresses ``s``
+    and the floor stress ``fl`` (curvatures into ``k``): the part of ``accel`` after the
+    stresses, for a scheme that has them already."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    g = system.g
     ie = 2.0 * ih
     a[0] = (s[0] + fl) * ie + g
     for i in range(1, n):
         a[i] = (s[i] - s[i - 1]) * ih + g
     a[n] = -s[n - 1] * ie + g
-    omega2 = 4.0 * fpmax * ih * ih + 2.0 * fd * ih
     if beam and system.gamma > 0.0:
         add_beam_term(u, a, k, h, -system.gamma, True)
-        if bound:
-            omega2 += 16.0 * system.gamma * ih * ih * ih * ih
-    return OK, 0.0, emin, fl, omega2
 
 
 @step_kernel

@@ -49,7 +49,7 @@ import numpy as np
 from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
 from ..kernels.discrete_gradient import difference
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
-                              OK, accel, add_beam_term)
+                              OK, accel, add_beam_term, assemble)
 from ..model.laws import deriv, lower
 from .beam import add_bending
 from .schemes import register_scheme
@@ -154,7 +154,15 @@ def full_accel(system, rod, floor, u, v, a, s, k, bound):
     ``accel``'s ``(status, value, min_strain, floor_force, omega2)`` (omega2 = 0 unless
     ``bound``: only the first step's proposal uses it)."""
     res = accel(u, a, s, k, system, rod, floor, True, bound)
-    if res[0] == OK and system.mu > 0.0:
+    if res[0] == OK:
+        _add_viscous(system, v, a)
+    return res
+
+
+@step_kernel
+def _add_viscous(system, v, a):
+    """a −= M⁻¹μKv, the viscous part of the full acceleration."""
+    if system.mu > 0.0:
         n = system.n
         ih = 1.0 / system.h
         c = system.mu * ih
@@ -162,7 +170,6 @@ def full_accel(system, rod, floor, u, v, a, s, k, bound):
             t = c * (v[i + 1] - v[i])
             a[i] += t * _inv_mass(i, n, ih)
             a[i + 1] -= t * _inv_mass(i + 1, n, ih)
-    return res
 
 
 @step_kernel
@@ -222,9 +229,10 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     quotients, so also across u_0 = 0) and the residual's rounding scale, in the same pass;
     the trial evaluations of a Newton iteration need the residual only.
 
-    Returns ``(status, |F|², |scale|²)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0
-    without ``jac``); status is BAD_STRAIN, BAD_FLOOR or NON_FINITE for an iterate outside
-    the admissible set.  The scale sums the magnitudes of the residual's terms, plus the
+    Also leaves the stresses f(ε) of u² in row S.  Returns ``(status, |F|², |scale|², σ_b,
+    min ε)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 without ``jac``), with the floor
+    stress and the smallest strain of u²; status is BAD_STRAIN, BAD_FLOOR or NON_FINITE
+    for an iterate outside the admissible set.  The scale sums the magnitudes of the residual's terms, plus the
     stress change that the rounding of u² in a strain causes, so 64 ε_mach × scale is the
     residual's rounding level.  One pass over the nodes: node i takes the terms of segments
     i − 1 (carried over) and i.
@@ -244,8 +252,10 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     for i in range(n + 1):
         u2[i] = u[i] + d[i]
     if not u2[0] > lower(floor):
-        return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0
-    qb, qbp = difference(u[0], u2[0], floor)
+        return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0, 0.0, 0.0
+    qb, qbp, fl = difference(u[0], u2[0], floor)
+    st = work[S]
+    emin = np.inf
     beam = system.gamma > 0.0
     cb = c2 * system.gamma
     if beam:   # the bending terms first, into rows R and SC
@@ -287,7 +297,9 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             e2 = (u2[i + 1] - u2[i]) * ih - 1.0
             bad |= not e2 > lo
             nonfinite |= not math.isfinite(e2)
-            q, qp = difference(e1[i], e2, rod)   # the slope only with jac (else dead code)
+            q, qp, sb = difference(e1[i], e2, rod)   # the slope only with jac
+            st[i] = sb
+            emin = min(emin, e2)
             tq = c2 * q
             tv = cv * (d[i + 1] - d[i])
             t = tq + tv
@@ -313,14 +325,14 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
         rn += ri * ri * im
         sn += si * si * im
     if bad:
-        return (NON_FINITE if nonfinite else BAD_STRAIN), 0.0, 0.0
+        return (NON_FINITE if nonfinite else BAD_STRAIN), 0.0, 0.0, 0.0, 0.0
     if jac:
         j1[n] = 0.0
         if beam:
             _add_bending_jacobian(system, work, c2, ih)
     if not math.isfinite(rn + sn):
-        return NON_FINITE, 0.0, 0.0
-    return OK, rn, sn
+        return NON_FINITE, 0.0, 0.0, 0.0, 0.0
+    return OK, rn, sn, fl, emin
 
 
 @step_kernel
@@ -353,7 +365,8 @@ def _newton_update(system, work):
 def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     """Solve F(d) = 0 from the start value in row D; leaves d in row ``row`` (D or DT:
     an accepted trial iterate changes places with the old one instead of being copied) and
-    uⁿ + d in ``u2``.  Returns ``(status, value, row)``: OK, NO_CONVERGENCE with the last
+    uⁿ + d in ``u2``, its stresses in row S.  Returns ``(status, value, row, σ_b, min ε)``
+    (the floor stress and smallest strain of uⁿ + d): OK, NO_CONVERGENCE with the last
     update size in ``value``, or the first evaluation's BAD_STRAIN, BAD_FLOOR or NON_FINITE
     if the start is not admissible (row D then unchanged).
 
@@ -375,9 +388,10 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     rounding2 = (64.0 * EPS) ** 2
     last = np.inf
     for it in range(scheme.max_newton):
-        status, rn2, sn2 = _evaluate(system, rod, floor, u, v, d, u2, dt, work, True)
+        status, rn2, sn2, fl, emin = _evaluate(system, rod, floor, u, v, d, u2, dt, work,
+                                               True)
         if status != OK:   # only the start can be outside: trial iterates are backtracked
-            return status, 0.0, row
+            return status, 0.0, row, 0.0, 0.0
         _newton_update(system, work)
         sstats[0] += 1
         dmax = 0.0
@@ -397,7 +411,8 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             if alpha < 1.0:
                 for i in range(n1):
                     dtr[i] = d[i] - alpha * y[i]
-            status, rt2, _ = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work, False)
+            status, rt2, _, fl, emin = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work,
+                                                 False)
             armijo = 1.0 - ARMIJO * alpha
             if status == OK and (small or rt2 <= armijo * armijo * rn2
                                  or rt2 <= rounding2 * sn2):
@@ -409,9 +424,9 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         d, dtr = dtr, d
         row = DT if row == D else D
         if rt2 <= rounding2 * sn2 or (small and alpha == 1.0):
-            return OK, 0.0, row
+            return OK, 0.0, row, fl, emin
     sstats[1] += 1
-    return NO_CONVERGENCE, last, row
+    return NO_CONVERGENCE, last, row, 0.0, 0.0
 
 
 @step_kernel
@@ -444,7 +459,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         d[i] = dp[i] + c3 * ad[i]
     alpha = 1.0
     for _ in range(60):
-        status, val, row = _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats)
+        status, val, row, fl, emin = _newton(scheme, system, rod, floor, u, v, u2, dt, work,
+                                             sstats)
         if status != BAD_STRAIN and status != BAD_FLOOR:
             break
         alpha *= 0.5
@@ -454,13 +470,19 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         return status, val, 0.0, 0.0, 0.0, 0.0, 0.0
     d = work[row]
     # vⁿ⁺¹ from the increment itself: 2(u2 − u)/dt would amplify the rounding of u2 by 1/dt
+    # (u2 = uⁿ + d is Newton's last iterate already)
     idt2 = 2.0 / dt
     for i in range(n1):
-        u2[i] = u[i] + d[i]
         v2[i] = idt2 * d[i] - v[i]
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K], False)
-    if status != OK:
-        return status, val, emin, fl, 0.0, 0.0, 0.0
+    # the full acceleration of the new state from the stresses of Newton's last evaluation,
+    # which was at this state (``full_accel`` without evaluating the laws again)
+    assemble(u2, a2, work[S], work[K], fl, system, True)
+    _add_viscous(system, v2, a2)
+    finite = True
+    for i in range(n1):
+        finite &= abs(a2[i]) < np.inf
+    if not finite:
+        return NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0
     # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
     # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node
     err = 0.0

@@ -65,14 +65,17 @@ def rod_difference(a, b, p):
     # q = κ/8 (2σ + X/(q_a q_b)²), σ = a + b, X = 2(q_a q_b)² − q_a − q_b written as
     # q_a(b(2+b) + a q_b²) + q_b(a(2+a) + b q_a²): for strains of one sign every term has
     # that sign (no cancellation near 0 or near the pole; at a = b it is rod_value's form).
-    # ∂q/∂b = κ/8 (2 + (2q_a + q_b)/(q_a² q_b³)), a sum of positive terms.  One division.
+    # ∂q/∂b = κ/8 (2 + (2q_a + q_b)/(q_a² q_b³)), a sum of positive terms; f(b) as in
+    # rod_value with 1/q_b³ = q_a²·(1/(q_a² q_b³)).  One division for the three.
     qa = 1.0 + a
     qb = 1.0 + b
-    inv = 1.0 / (qa * qa * (qb * qb * qb))
-    x = qa * (b * (2.0 + b) + a * (qb * qb)) + qb * (a * (2.0 + a) + b * (qa * qa))
+    qb2 = qb * qb
+    inv = 1.0 / (qa * qa * (qb2 * qb))
+    x = qa * (b * (2.0 + b) + a * qb2) + qb * (a * (2.0 + a) + b * (qa * qa))
     c = 0.125 * p.kappa
     return (c * (2.0 * (a + b) + x * (qb * inv)),
-            c * (2.0 + (2.0 * qa + qb) * inv))
+            c * (2.0 + (2.0 * qa + qb) * inv),
+            0.25 * p.kappa * b * (2.0 * (qb2 * qb) + qb2 + qb + 1.0) * ((qa * qa) * inv))
 
 
 @step_kernel
@@ -115,22 +118,29 @@ def floor_difference(a, b, p):
     # Both at or below 0: with s = h + β, 1/s_b² − 1/s_a² = −(b − a)(s_a + s_b)/(s_a s_b)²
     # gives q = −κ_b M/(2(s_a s_b)²), M = β s_a b(2β + b) + a s_a s_b² + β s_b a(2β + a)
     # + b s_b s_a² (every term ≤ 0: no cancellation), and ∂q/∂b = −κ_b β³(2s_a + s_b)/
-    # (2 s_a² s_b³).  One division.  Across the contact switch at 0 (σ_b, P ≡ 0 above) the
+    # (2 s_a² s_b³); σ_b(b) as in floor_value with 1/s_b = s_a² s_b²·(1/(s_a² s_b³)).  One
+    # division for the three.  Across the contact switch at 0 (σ_b, P ≡ 0 above) the
     # interval is at least as long as its part below 0, and the exact quotient is accurate.
     if a > 0.0 and b > 0.0:
-        return 0.0, 0.0
+        return 0.0, 0.0, 0.0
     if a > 0.0 or b > 0.0:
         pa = floor_primitive(a, p)
         q = (floor_primitive(b, p) - pa) / (b - a)
-        return q, (floor_value(b, p) - q) / (b - a)
+        vb = floor_value(b, p)
+        return q, (vb - q) / (b - a), vb
     be = p.beta
     sa = a + be
     sb = b + be
-    inv = 1.0 / (sa * sa * (sb * sb * sb))
-    m = (be * sa * (b * (2.0 * be + b)) + a * sa * (sb * sb)
-         + be * sb * (a * (2.0 * be + a)) + b * sb * (sa * sa))
+    sa2 = sa * sa
+    sb2 = sb * sb
+    inv = 1.0 / (sa2 * (sb2 * sb))
+    m = (be * sa * (b * (2.0 * be + b)) + a * sa * sb2
+         + be * sb * (a * (2.0 * be + a)) + b * sb * sa2)
     c = -0.5 * p.kappa_b
-    return c * m * (sb * inv), c * (be * be * be) * (2.0 * sa + sb) * inv
+    isb = (sa2 * sb2) * inv
+    r = be * isb
+    return (c * m * (sb * inv), c * (be * be * be) * (2.0 * sa + sb) * inv,
+            -p.kappa_b * (b * isb) * (r * r + r + 1.0))
 
 
 @step_kernel

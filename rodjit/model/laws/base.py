@@ -37,9 +37,10 @@ class Law:
     ``max(deriv(lo), deriv(hi))`` when it is convex); without it the kernels scan.
 
     ``difference(a, b, params)`` (optional, compiled) returns the divided difference of the
-    primitive q = (P(b) − P(a))/(b − a) and its slope ∂q/∂b in closed form, accurate also
-    as b → a (where it must give s(a) and s'(a)/2); the energy integrator calls it twice
-    per segment and step.  Without it ``kernels.discrete_gradient`` evaluates q by
+    primitive q = (P(b) − P(a))/(b − a), its slope ∂q/∂b and the stress s(b), in closed
+    form sharing their work (one division for all three in the Aiki–Kosugi laws), accurate
+    also as b → a (where q, ∂q/∂b must give s(a) and s'(a)/2); the energy integrator calls
+    it twice per segment and step.  Without it ``kernels.discrete_gradient`` evaluates q by
     Gauss–Legendre quadrature or the exact quotient, a few evaluations of ``value`` and
     ``deriv`` each (see there for the accuracy a closed form must match).
     """
