@@ -71,7 +71,7 @@ FAC_MAX = 5.0
 EPS = 2.220446049250313e-16
 
 # rows of the scratch array ``work`` (all per-step scratch: nothing survives a step)
-S = 0         # segment stresses (accel)
+S = 0         # segment stresses (accel; the last Newton evaluation's, for the new state)
 K = 1         # curvatures
 E1 = 2        # strains of uⁿ
 AD = 3        # ȧⁿ, the time derivative of the acceleration
@@ -232,10 +232,10 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     Also leaves the stresses f(ε) of u² in row S.  Returns ``(status, |F|², |scale|², σ_b,
     min ε)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 without ``jac``), with the floor
     stress and the smallest strain of u²; status is BAD_STRAIN, BAD_FLOOR or NON_FINITE
-    for an iterate outside the admissible set.  The scale sums the magnitudes of the residual's terms, plus the
-    stress change that the rounding of u² in a strain causes, so 64 ε_mach × scale is the
-    residual's rounding level.  One pass over the nodes: node i takes the terms of segments
-    i − 1 (carried over) and i.
+    for an iterate outside the admissible set.  The scale sums the magnitudes of the
+    residual's terms, plus the stress change that the rounding of u² in a strain causes,
+    so 64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
+    takes the terms of segments i − 1 (carried over) and i.
     """
     n = system.n
     h = system.h
