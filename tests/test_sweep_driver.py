@@ -135,7 +135,7 @@ def test_points_waiting_behind_a_dying_point_run_elsewhere():
 def test_workers_run_numba_single_threaded_with_kernels_loaded_before_the_first_point():
     before = {k: os.environ.get(k) for k in WORKER_ENV}
     task = PointTask(0, BASE, None, ())
-    pool = ProcessPool(1, warm=task)
+    pool = ProcessPool(1, warm=BASE)
     results = [r for r in pool.results([task]) if r is not None]
     assert len(results) == 1 and results[0].status == "completed"
     assert results[0].worker["numba_threads"] == 1 and results[0].worker["pid"] != os.getpid()

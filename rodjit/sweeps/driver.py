@@ -175,7 +175,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     first = grid.config(base, todo[0])
     # workers load the first point's kernels before they report ready, unless that means
     # running a user's law (which could crash a worker before it has taken any point)
-    warm = PointTask(todo[0], first, None, ()) if not law_modules(first) else None
+    warm = first if not law_modules(first) else None
     executor = make_executor(scheduler, jobs, warm)   # last check: a cluster may be unreachable
     if runs_dir is not None:
         runs_dir.mkdir(parents=True, exist_ok=True)

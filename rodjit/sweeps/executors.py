@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from itertools import count, islice
 from multiprocessing.connection import wait
 
-from .point import PointTask, died, run_point, run_points
+from .point import PointTask, died, run_point, run_points, start_worker
 
 __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
            "WORKER_ENV", "SCHEDULERS", "default_jobs"]
@@ -115,15 +115,11 @@ def _die_with_parent() -> None:
 
 
 def _worker_main(conn, warm) -> None:
-    """A pool worker: load the kernels of ``warm`` (a PointTask), then run the tasks the
-    parent sends until it sends None or goes away."""
+    """A pool worker: load the kernels of ``warm`` (a Config), then run the tasks the parent
+    sends until it sends None or goes away."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
     _die_with_parent()
-    from .point import warm_up, worker_info
-
-    if warm is not None:
-        warm_up(warm.config, warm.laws)
-    conn.send(("ready", worker_info()))
+    conn.send(("ready", start_worker(warm)))
     while True:
         try:
             task = conn.recv()
@@ -183,13 +179,13 @@ class ProcessPool:
     it never waits for the parent (which may be writing the sweep file).  A worker that
     dies fails the point it was running; the points waiting behind it go to another
     worker.  Each worker imports rodjit once and loads the kernels of ``warm`` (a
-    PointTask) from the disk cache before it reports ready.
+    Config) from the disk cache before it reports ready.
     """
 
     name = "processes"
     DEPTH = 2
 
-    def __init__(self, jobs: int, warm: PointTask | None = None):
+    def __init__(self, jobs: int, warm=None):
         self.jobs = jobs
         self.warm = warm
         self.ctx = mp.get_context("spawn")
@@ -257,13 +253,12 @@ class ProcessPool:
                         w.tasks.clear()
                         busy.remove(w)
                         self._retire(w, cancel=True)
-                        if requeued or len(busy) < self.jobs:
-                            task = take()
-                            if task is not None:           # a fresh worker takes over
-                                nw = self._spawn()
-                                nw.assign(task)
-                                fill(nw)
-                                busy.append(nw)
+                        task = take()
+                        if task is not None:           # a fresh worker takes over
+                            nw = self._spawn()
+                            nw.assign(task)
+                            fill(nw)
+                            busy.append(nw)
                         yield lost
                         continue
                     w.tasks.popleft()
@@ -315,7 +310,7 @@ class DaskCluster:
     name = "dask"
     depth = 2            # tasks in flight per worker thread
 
-    def __init__(self, scheduler: str, jobs: int, warm: PointTask | None = None):
+    def __init__(self, scheduler: str, jobs: int, warm=None):
         try:
             import distributed
         except ImportError:
@@ -344,7 +339,7 @@ class DaskCluster:
             self.name = f"dask {scheduler}"
         self.jobs = max(1, sum(self.client.nthreads().values()))
         try:     # every worker imports rodjit now (and says so if it cannot)
-            self.client.run(_ready, warm)
+            self.client.run(start_worker, warm)
         except ImportError as exc:
             self.close()
             raise ValueError(f"the Dask workers cannot import rodjit ({exc}); install rodjit "
@@ -468,16 +463,6 @@ class DaskCluster:
                 self.cluster.close()
 
 
-def _ready(warm: PointTask | None) -> dict:
-    """Run on each Dask worker at start: import rodjit, load the kernels of ``warm``,
-    report the worker."""
-    from .point import warm_up, worker_info
-
-    if warm is not None:
-        warm_up(warm.config, warm.laws)
-    return worker_info()
-
-
 def check_scheduler(scheduler) -> None:
     """ValueError (one line) unless ``scheduler`` is one ``make_executor`` knows."""
     if scheduler is None or (isinstance(scheduler, str) and (
@@ -488,10 +473,11 @@ def check_scheduler(scheduler) -> None:
                      f"tcp://HOST:PORT (an existing Dask scheduler))")
 
 
-def make_executor(scheduler: str | None, jobs: int, warm: PointTask | None = None):
+def make_executor(scheduler: str | None, jobs: int, warm=None):
     """The executor for ``--scheduler`` (see ``check_scheduler``): None/"processes" (the
     local pool), "inline", "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing
-    Dask cluster); workers load the kernels of ``warm`` before their first point."""
+    Dask cluster); workers load the kernels of the Config ``warm`` before their first
+    point."""
     check_scheduler(scheduler)
     if scheduler in (None, "processes"):
         return ProcessPool(jobs, warm)

@@ -22,8 +22,8 @@ from ..driver.run import Run, SimulationError, Sink
 from ..output.extremes import Extremes
 from ..stepping import layout as L
 
-__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died", "empty_columns",
-           "law_modules", "BOUNCE_COLUMNS", "warm_up", "worker_info"]
+__all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
+           "empty_columns", "law_modules", "BOUNCE_COLUMNS", "start_worker", "worker_info"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -235,15 +235,16 @@ def run_points(points: tuple[PointTask, ...]) -> bytes:
     return pickle.dumps([run_point(task) for task in points], protocol=pickle.HIGHEST_PROTOCOL)
 
 
-def warm_up(config, laws: tuple[str, ...] = ()) -> None:
-    """Load (or compile) the kernels ``config`` runs with, so a worker's first point does not
-    pay for it; a configuration that cannot start is left to its point to report."""
-    try:
-        for mod in laws:
-            importlib.import_module(mod)
-        Run(config).start(Sink())
-    except Exception:
-        pass
+def start_worker(warm=None) -> dict:
+    """A worker's start: load (or compile) the kernels the Config ``warm`` runs with, if
+    given, so its first point does not pay for it (a configuration that cannot start is
+    left to its point to report); then who the worker is (``worker_info``)."""
+    if warm is not None:
+        try:
+            Run(warm).start(Sink())
+        except Exception:
+            pass
+    return worker_info()
 
 
 def worker_info() -> dict:
