@@ -39,7 +39,7 @@ from numba.extending import overload
 
 from ..model.laws import deriv, law_of, lower, primitive, value
 from ..model.laws.base import _law_for_type
-from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
+from .._jit import STEP_JIT_OPTIONS, step_kernel
 
 TAU = 0.02      # 4 points up to here, the exact quotient beyond
 TAU3 = 1e-3     # 3 points up to here

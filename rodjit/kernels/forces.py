@@ -77,7 +77,6 @@ def accel(u, a, s, k, system, rod, floor, beam, bound=True):
     n = system.n
     h = system.h
     ih = 1.0 / h
-    g = system.g
     # one pass over the segments: stresses, strain range, finiteness (vectorised)
     emin = np.inf
     emax = -np.inf

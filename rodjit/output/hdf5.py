@@ -28,9 +28,9 @@ from .extremes import Extremes
 from .table import Table
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "RunWriter", "NotARunFile",
-           "FileBusy", "open_file", "check_kind", "check_run_file", "read_config", "read_checkpoint",
-           "read_table", "load_file", "create_run_file", "reopen_run_file", "recover",
-           "writer_alive", "CLOCK_NAMES", "COUNT_NAMES", "EV_NAMES"]
+           "FileBusy", "open_file", "check_kind", "check_run_file", "read_config",
+           "read_checkpoint", "read_table", "load_file", "create_run_file", "reopen_run_file",
+           "recover", "writer_alive", "CLOCK_NAMES", "COUNT_NAMES", "EV_NAMES"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
 FORMAT_VERSION = 1

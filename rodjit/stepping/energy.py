@@ -53,7 +53,7 @@ from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE,
 from ..model.laws import deriv, lower
 from .beam import add_bending
 from .schemes import register_scheme
-from .._jit import kernel, step_kernel
+from .._jit import step_kernel
 
 __all__ = ["Energy", "initial", "step", "WORK_ROWS", "GAP_CONTROL"]
 
