@@ -377,8 +377,9 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     backtracked until the iterate is admissible and the residual drops (Armijo).  The start
     value is always updated once (the Taylor predictor is never a root to rounding, so its
     residual is not tested).  Each iteration evaluates residual, Jacobian and scale in one
-    pass at its iterate, its trial iterates the residual alone.  Norms are compared
-    squared.
+    pass at its iterate, its trial iterates the residual alone (so an accepted iterate's
+    residual is evaluated again when another iteration follows: cheaper than a Jacobian at
+    every trial, as most steps end after one update).  Norms are compared squared.
     """
     n1 = u.size
     row = D
