@@ -229,7 +229,8 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     quotients, so also across u_0 = 0) and the residual's rounding scale, in the same pass;
     the trial evaluations of a Newton iteration need the residual only.
 
-    Also leaves the stresses f(ε) of u² in row S.  Returns ``(status, |F|², |scale|², σ_b,
+    Without ``jac`` (a trial iterate: Newton's last evaluation is always one) it also leaves
+    the stresses f(ε) of u² in row S.  Returns ``(status, |F|², |scale|², σ_b,
     min ε)`` in the norm |x|² = Σ x_i²/m_i (|scale|² = 0 without ``jac``), with the floor
     stress and the smallest strain of u²; status is BAD_STRAIN, BAD_FLOOR or NON_FINITE
     for an iterate outside the admissible set.  The scale sums the magnitudes of the
@@ -298,7 +299,8 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             bad |= not e2 > lo
             nonfinite |= not math.isfinite(e2)
             q, qp, sb = difference(e1[i], e2, rod)   # the slope only with jac
-            st[i] = sb
+            if not jac:   # the stress of the final iterate: Newton ends on a trial
+                st[i] = sb
             emin = min(emin, e2)
             tq = c2 * q
             tv = cv * (d[i + 1] - d[i])
