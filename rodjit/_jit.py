@@ -2,6 +2,24 @@
 
 ``error_model="numpy"``: a division by zero gives inf/nan (which the admissibility checks
 reject) instead of raising inside compiled code, and keeps loops vectorisable.
+``fastmath={"contract"}``: LLVM may fuse a multiply and an add into one fused multiply-add
+(one rounding instead of two, as ``gcc -O3`` does by default in the C speed limit,
+../shared/bench/limit.c).  No other fast-math flag: NaN, inf, signed zeros and the order of
+operations keep their IEEE meaning, so the admissibility checks and the cancellation-free
+forms of the laws stay as written.  Short rods' steps are chains of dependent multiply-adds:
+fusing them takes 6–10 % off an N = 5 step, and brings the explicit N = 1000 step ~5 %
+closer to C (benchmarks/README.md).  The price: a run is the same in every run on a
+machine, but differs at rounding level from the plain-Python kernels (NUMBA_DISABLE_JIT=1)
+and from a CPU without FMA, and a law's general path (no ``deriv_max``) gives the same run
+to rounding instead of bit for bit (tests/test_kernels_fast_paths.py).
+Fusing is more accurate per operation but not always overall: it can break a cancellation
+of rounding errors that an algorithm relies on.  The pivots of Gaussian elimination,
+p_i = d_i − e_(i−1)·(e_(i−1)/p_(i−1)), are one such case (a stiff, mass-scaled Newton
+matrix: 3e-13 relative error unfused, 3e-9 fused; tests/test_kernels_banded_symmetric.py),
+so the banded solvers are compiled unfused (``exact_kernel``, ``exact_step_kernel``).
+Fast-math flags belong to each instruction, so they stay unfused when inlined into a fused
+kernel; but a kernel that leaves ``fastmath`` unset is compiled with its caller's flags,
+so these set it to False explicitly.
 ``cache=True``: compiled code is stored on disk, so later processes start warm.
 ``_nrt=False``: no reference counting.  Numba counts references to every array it holds:
 each view (``state[0]``, ``work[R]``) and each array handed to a function costs calls to
@@ -35,9 +53,12 @@ from numba.core.cpu import CPUTargetOptions
 # helpers with it); a Numba without it compiles the kernels with reference counting
 _CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
 JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
-               **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
+               "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
 
 kernel = numba.njit(**JIT_OPTIONS)
+# no fused multiply-adds (module docstring): the banded solvers' elimination recurrences
+EXACT_JIT_OPTIONS = {**JIT_OPTIONS, "fastmath": False}
+exact_kernel = numba.njit(**EXACT_JIT_OPTIONS)
 
 # Kernels called on every step of the time loop (the step, its forces and sub-steps, the
 # event and step-size helpers, the stress laws) are also marked for inlining into the loop
@@ -50,6 +71,7 @@ kernel = numba.njit(**JIT_OPTIONS)
 _CAN_FORCE_INLINE = hasattr(CPUTargetOptions, "forceinline")
 STEP_JIT_OPTIONS = {**JIT_OPTIONS, **({"forceinline": True} if _CAN_FORCE_INLINE else {})}
 step_kernel = numba.njit(**STEP_JIT_OPTIONS)
+exact_step_kernel = numba.njit(**{**STEP_JIT_OPTIONS, "fastmath": False})
 
 # the packages whose modules hold compiled code (a change anywhere here may change a kernel)
 COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")

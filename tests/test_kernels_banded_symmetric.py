@@ -1,4 +1,9 @@
 """The symmetric tridiagonal LDLᵀ solver (variable off-diagonal) used by the energy step."""
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -21,8 +26,9 @@ def test_solves_spd_tridiagonal_systems(n1):
     np.testing.assert_array_equal(y, x)
 
 
-def test_stiff_and_mass_scaled_rows():
-    """The Newton matrices mix masses ~1e-3 with stiffnesses ~1e8 (contact rows)."""
+def _stiff_system():
+    """A Newton matrix that mixes masses ~1e-3 with stiffnesses ~1e8 (contact rows):
+    diagonal, off-diagonal, right-hand side."""
     n1 = 200
     h = 1.0 / (n1 - 1)
     d = np.full(n1, h)
@@ -33,8 +39,51 @@ def test_stiff_and_mass_scaled_rows():
     dd = d.copy()
     dd[:-1] += c[:-1]
     dd[1:] += c[:-1]
-    A = np.diag(dd) + np.diag(e[:-1], 1) + np.diag(e[:-1], -1)
-    b = np.linspace(-1, 1, n1)
-    cp, x = np.zeros(n1), np.zeros(n1)
-    sym_tridiag_solve(dd, e, b, x, cp)
+    return dd, e, np.linspace(-1, 1, n1)
+
+
+def test_stiff_and_mass_scaled_rows():
+    """Its pivots cancel to O(mass) out of O(stiffness): elimination must keep them accurate
+    (fused multiply-adds in the pivots would lose 4 digits here)."""
+    d, e, b = _stiff_system()
+    A = np.diag(d) + np.diag(e[:-1], 1) + np.diag(e[:-1], -1)
+    cp, x = np.zeros(b.size), np.zeros(b.size)
+    sym_tridiag_solve(d, e, b, x, cp)
     np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-8)
+
+
+
+FUSED_CALLER = """
+import sys
+import numpy as np
+from rodjit._jit import kernel
+from rodjit.kernels.banded import sym_tridiag_solve
+sys.path.insert(0, {tests!r})
+from test_kernels_banded_symmetric import _stiff_system
+
+
+@kernel
+def solve_inside(d, e, b, x, cp):
+    sym_tridiag_solve(d, e, b, x, cp)
+
+
+d, e, b = _stiff_system()
+x = np.zeros(b.size)
+solve_inside(d, e, b, x, np.zeros(b.size))   # compiles the solver as a callee, first
+A = np.diag(d) + np.diag(e[:-1], 1) + np.diag(e[:-1], -1)
+ref = np.linalg.solve(A, b)
+print(np.abs(x - ref).max() / np.abs(ref).max())
+"""
+
+
+def test_solver_stays_unfused_inside_a_fused_kernel(tmp_path):
+    """Numba compiles a callee with its caller's fast-math flags unless it sets its own
+    (and caches it so): the solver's pivots must stay unfused (rodjit._jit) when a fused
+    kernel, as the energy step, compiles it first.  A fresh process and cache, so the
+    solver is compiled there first."""
+    script = tmp_path / "fused_caller.py"
+    script.write_text(FUSED_CALLER.format(tests=str(Path(__file__).resolve().parent)))
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "cache")}
+    out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True,
+                         text=True, check=True, timeout=300)
+    assert float(out.stdout.split()[-1]) < 1e-10

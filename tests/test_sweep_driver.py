@@ -366,7 +366,7 @@ def test_progress_reports_points_failures_and_time_left():
 
 def test_the_same_sweep_with_jit_disabled(tmp_path):
     """A sweep in a process with NUMBA_DISABLE_JIT=1 (the kernels as plain Python) writes
-    the same table as the compiled one."""
+    the same table as the compiled one, to rounding."""
     import subprocess
     import sys
 
@@ -380,8 +380,11 @@ def test_the_same_sweep_with_jit_disabled(tmp_path):
     plain = rodjit.load_sweep(path)
     compiled = rodjit.sweep(rodjit.Config().override(over), grid, scheduler="inline")
     assert list(plain["steps"]) == list(compiled["steps"])
-    for name in ("restitution_first", "min_u0", "max_floor_force", "energy_error"):
+    # to rounding, not bit for bit: compiled kernels fuse multiply-adds (rodjit._jit)
+    for name in ("restitution_first", "min_u0", "max_floor_force"):
         assert np.allclose(plain[name], compiled[name], rtol=1e-12, atol=0, equal_nan=True)
+    # the energy error is a relative difference of O(1) energies: rounding is 1e-12 absolute
+    assert np.allclose(plain["energy_error"], compiled["energy_error"], rtol=0, atol=1e-12)
 
 
 def test_a_reader_holding_the_file_delays_writes_but_loses_nothing(tmp_path, monkeypatch,

@@ -1,8 +1,11 @@
-"""O(N) banded solves used by the implicit sub-steps: symmetric tri- and pentadiagonal."""
-from .._jit import kernel, step_kernel
+"""O(N) banded solves used by the implicit sub-steps: symmetric tri- and pentadiagonal.
+
+Compiled without fused multiply-adds: the pivots' rounding errors must cancel as they do
+unfused (``rodjit._jit``)."""
+from .._jit import exact_kernel, exact_step_kernel
 
 
-@kernel
+@exact_kernel
 def tridiag_factor(d, off, cp, inv):
     """Thomas factorisation of the symmetric tridiagonal matrix (diag ``d``, constant
     off-diagonal ``off``); fills ``cp`` (modified super-diagonal) and ``inv`` (1/pivots)."""
@@ -14,7 +17,7 @@ def tridiag_factor(d, off, cp, inv):
         cp[i] = off * inv[i]
 
 
-@step_kernel
+@exact_step_kernel
 def tridiag_solve(off, cp, inv, rhs, x):
     """Solve with a ``tridiag_factor`` result; ``x`` may alias ``rhs``."""
     n1 = rhs.size
@@ -25,7 +28,7 @@ def tridiag_solve(off, cp, inv, rhs, x):
         x[i] -= cp[i] * x[i + 1]
 
 
-@kernel
+@exact_kernel
 def penta_factor(a0, a1, a2, l1, l2, dinv):
     """LDLᵀ of the symmetric pentadiagonal matrix with diagonals a0 (i,i), a1 (i,i+1),
     a2 (i,i+2).  Fills the unit-lower factor's sub-diagonals l1 (i,i-1), l2 (i,i-2) and
@@ -49,7 +52,7 @@ def penta_factor(a0, a1, a2, l1, l2, dinv):
         d_m1 = di
 
 
-@kernel
+@exact_kernel
 def penta_solve(l1, l2, dinv, rhs, x):
     """Solve with a ``penta_factor`` result; ``x`` may alias ``rhs``."""
     n1 = rhs.size
@@ -71,7 +74,7 @@ def penta_solve(l1, l2, dinv, rhs, x):
         x[i] = z
 
 
-@step_kernel
+@exact_step_kernel
 def sym_tridiag_solve(d, e, rhs, x, cp):
     """Solve the symmetric tridiagonal system with diagonal ``d`` and off-diagonal ``e``
     (e[i] is entry (i, i+1)); ``cp`` is scratch, ``x`` may alias ``rhs``.  For SPD

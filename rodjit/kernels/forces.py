@@ -140,9 +140,9 @@ def kick(v, a, tau, h):
 def momentum(v, h):
     """Σ m_i v_i = h·(v_1 + … + v_{N−1}) + h/2·(v_0 + v_N).
 
-    The inner sum runs in four interleaved partial sums, a fixed order (the same result on
-    every machine and in every run) that vectorises; one running sum would be a chain of
-    dependent additions as long as the rod (~0.8 ns per node at N = 1000)."""
+    The inner sum runs in four interleaved partial sums, a fixed order (the same result in
+    every run) that vectorises; one running sum would be a chain of dependent additions as
+    long as the rod (~0.8 ns per node at N = 1000)."""
     n = v.size - 1
     s0 = 0.0
     s1 = 0.0
