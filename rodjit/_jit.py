@@ -8,10 +8,11 @@ reject) instead of raising inside compiled code, and keeps loops vectorisable.
 operations keep their IEEE meaning, so the admissibility checks and the cancellation-free
 forms of the laws stay as written.  Short rods' steps are chains of dependent multiply-adds:
 fusing them takes 6–10 % off an N = 5 step, and brings the explicit N = 1000 step ~5 %
-closer to C (benchmarks/README.md).  The price: a run is the same in every run on a
-machine, but differs at rounding level from the plain-Python kernels (NUMBA_DISABLE_JIT=1)
-and from a CPU without FMA, and a law's general path (no ``deriv_max``) gives the same run
-to rounding instead of bit for bit (tests/test_kernels_fast_paths.py).
+closer to C (benchmarks/README.md).  The price: on one machine a run still gives the same
+bits every time, but they differ at rounding level from the plain-Python kernels'
+(NUMBA_DISABLE_JIT=1) and from a CPU's without FMA, and a law's general path (no
+``deriv_max``) gives the same run to rounding instead of bit for bit
+(tests/test_kernels_fast_paths.py).
 Fusing is more accurate per operation but not always overall: it can break a cancellation
 of rounding errors that an algorithm relies on.  The pivots of Gaussian elimination,
 p_i = d_i − e_(i−1)·(e_(i−1)/p_(i−1)), are one such case (a stiff, mass-scaled Newton

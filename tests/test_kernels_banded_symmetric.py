@@ -52,7 +52,6 @@ def test_stiff_and_mass_scaled_rows():
     np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-8)
 
 
-
 FUSED_CALLER = """
 import sys
 import numpy as np
