@@ -58,8 +58,7 @@ JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
 
 kernel = numba.njit(**JIT_OPTIONS)
 # no fused multiply-adds (module docstring): the banded solvers' elimination recurrences
-EXACT_JIT_OPTIONS = {**JIT_OPTIONS, "fastmath": False}
-exact_kernel = numba.njit(**EXACT_JIT_OPTIONS)
+exact_kernel = numba.njit(**{**JIT_OPTIONS, "fastmath": False})
 
 # Kernels called on every step of the time loop (the step, its forces and sub-steps, the
 # event and step-size helpers, the stress laws) are also marked for inlining into the loop
