@@ -1,4 +1,5 @@
-"""The symmetric tridiagonal LDLᵀ solver (variable off-diagonal) used by the energy step."""
+"""The symmetric tridiagonal solver (variable off-diagonal) used by the energy step, and the
+second solve with its stored factor (the chord updates of Newton's method)."""
 import os
 import subprocess
 import sys
@@ -7,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from rodjit.kernels.banded import sym_tridiag_solve
+from rodjit.kernels.banded import sym_tridiag_apply, sym_tridiag_solve
 
 
 @pytest.mark.parametrize("n1", [1, 2, 3, 6, 7, 17, 400])
@@ -18,12 +19,21 @@ def test_solves_spd_tridiagonal_systems(n1):
     d[0] = abs(e[0]) + 0.5
     A = np.diag(d) + np.diag(e[:-1], 1) + np.diag(e[:-1], -1)
     b = rng.standard_normal(n1)
-    cp, x = np.zeros(n1), np.zeros(n1)
-    sym_tridiag_solve(d, e, b, x, cp)
+    cp, pinv, x = np.zeros(n1), np.zeros(n1), np.zeros(n1)
+    sym_tridiag_solve(d, e, b, x, cp, pinv)
     np.testing.assert_allclose(A @ x, b, rtol=0, atol=1e-12 * np.abs(b).max())
     y = b.copy()
-    sym_tridiag_solve(d, e, y, y, cp)           # in place
+    sym_tridiag_solve(d, e, y, y, np.zeros(n1), np.zeros(n1))   # in place
     np.testing.assert_array_equal(y, x)
+    # the stored factor solves other right-hand sides, and the first one to the same bits
+    c = rng.standard_normal(n1)
+    z = np.zeros(n1)
+    sym_tridiag_apply(e, cp, pinv, c, z)
+    np.testing.assert_allclose(A @ z, c, rtol=0, atol=1e-12 * np.abs(c).max())
+    sym_tridiag_apply(e, cp, pinv, c, c)       # in place
+    np.testing.assert_array_equal(c, z)
+    sym_tridiag_apply(e, cp, pinv, b, z)
+    np.testing.assert_array_equal(z, x)
 
 
 def _stiff_system():
@@ -47,9 +57,12 @@ def test_stiff_and_mass_scaled_rows():
     (fused multiply-adds in the pivots would lose 4 digits here)."""
     d, e, b = _stiff_system()
     A = np.diag(d) + np.diag(e[:-1], 1) + np.diag(e[:-1], -1)
-    cp, x = np.zeros(b.size), np.zeros(b.size)
-    sym_tridiag_solve(d, e, b, x, cp)
-    np.testing.assert_allclose(x, np.linalg.solve(A, b), rtol=1e-8)
+    cp, pinv, x = np.zeros(b.size), np.zeros(b.size), np.zeros(b.size)
+    sym_tridiag_solve(d, e, b, x, cp, pinv)
+    ref = np.linalg.solve(A, b)
+    np.testing.assert_allclose(x, ref, rtol=1e-8)
+    sym_tridiag_apply(e, cp, pinv, b, x)
+    np.testing.assert_allclose(x, ref, rtol=1e-8)
 
 
 FUSED_CALLER = """
@@ -62,13 +75,13 @@ from test_kernels_banded_symmetric import _stiff_system
 
 
 @kernel
-def solve_inside(d, e, b, x, cp):
-    sym_tridiag_solve(d, e, b, x, cp)
+def solve_inside(d, e, b, x, cp, pinv):
+    sym_tridiag_solve(d, e, b, x, cp, pinv)
 
 
 d, e, b = _stiff_system()
 x = np.zeros(b.size)
-solve_inside(d, e, b, x, np.zeros(b.size))   # compiles the solver as a callee, first
+solve_inside(d, e, b, x, np.zeros(b.size), np.zeros(b.size))   # compiles it as a callee, first
 A = np.diag(d) + np.diag(e[:-1], 1) + np.diag(e[:-1], -1)
 ref = np.linalg.solve(A, b)
 print(np.abs(x - ref).max() / np.abs(ref).max())

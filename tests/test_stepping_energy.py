@@ -166,6 +166,60 @@ def test_step_solves_the_discrete_gradient_equations_of_the_numpy_spec():
     assert abs(dissipated - d_exact) < 1e-14 * d_exact
 
 
+@pytest.mark.parametrize("gamma, mu, u_bottom", [(0.0, 0.0, -0.01), (0.0, 100.0, -0.004),
+                                                 (0.02, 0.5, -0.01), (0.0, 0.5, 0.2)])
+def test_jerk_is_the_time_derivative_of_the_acceleration(gamma, mu, u_bottom):
+    """ȧ (the predictor's and the error estimate's third derivative) against a central
+    difference of the NumPy spec's acceleration along the motion, (a(u + δv, v + δa) −
+    a(u − δv, v − δa))/2δ, in contact and in flight; and the segment strains it leaves."""
+    n = 8
+    cfg = energy_config(**{"rod.N": n, "rod.gamma": gamma, "rod.mu": mu})
+    run = Run(cfg)
+    rng = np.random.default_rng(3)
+    x = np.arange(n + 1) / n
+    u = u_bottom + x * (1.0 + 0.05 * rng.standard_normal()) + 1e-3 * rng.standard_normal(n + 1)
+    v = rng.standard_normal(n + 1)
+    acc = lambda uu, vv: ref.acceleration(uu, vv, run.system, run.rod, run.floor)
+    a = acc(u, v)
+    out, k, strains = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
+    EN.jerk(run.system, run.rod, run.floor, u, v, a, out, k, strains)
+    dl = 1e-6
+    fd = (acc(u + dl * v, v + dl * a) - acc(u - dl * v, v - dl * a)) / (2 * dl)
+    np.testing.assert_allclose(out, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
+    np.testing.assert_array_equal(strains[:n], (u[1:] - u[:-1]) * n - 1.0)
+
+
+@pytest.mark.parametrize("gamma", [0.0, 0.02])
+def test_chord_updates_reach_the_same_root(gamma):
+    """Newton's later updates may reuse the first factor (``chord``): a contact step that
+    needs several updates lands on the root of the discrete-gradient equations to rounding
+    whether it never (chord = 0), by default, or always (chord = 1) reuses it."""
+    cfg = energy_config(**{"rod.N": 12, "rod.gamma": gamma, "rod.mu": 100.0,
+                           "initial.height": 0.0, "initial.velocity": -2.0,
+                           "time.t_end": 0.004, "time.dt": 2e-3})
+    run = Run(cfg)
+    run.start(MemorySink())
+    run.advance(MemorySink(), max_steps=1)             # into the floor
+    u, v, a = (x.copy() for x in run.state)
+    assert u[0] < 0
+    dt = 1e-3
+    ends = {}
+    for chord in (0.0, EN.CHORD, 1.0):
+        out = [np.zeros_like(u) for _ in range(3)]
+        ss = np.zeros(2, np.int64)
+        status = EN.step(run.scheme._replace(chord=chord), run.system, run.rod, run.floor,
+                         u, v, a, *out, np.zeros_like(run.work), ss, dt)[0]
+        assert status in (OK, INACCURATE) and ss[0] >= 2 and ss[1] == 0
+        r_u, r_v = ref.discrete_gradient_residual(u, v, out[0], out[1], dt, run.system,
+                                                  run.rod, run.floor)
+        assert np.abs(r_u).max() < 1e-14
+        assert np.abs(r_v).max() < 1e-9 * np.abs(masses(12) * (out[1] - v)).max()
+        ends[chord] = out[0]
+    assert run.scheme.chord == EN.CHORD
+    for chord in (EN.CHORD, 1.0):
+        np.testing.assert_allclose(ends[chord], ends[0.0], rtol=0, atol=1e-14)
+
+
 def _energy_mp(u, v, run):
     """E_h of MODEL.md §2 in 50 digits, from the literal formulas."""
     n = len(u) - 1

@@ -75,11 +75,12 @@ def penta_solve(l1, l2, dinv, rhs, x):
 
 
 @exact_step_kernel
-def sym_tridiag_solve(d, e, rhs, x, cp):
+def sym_tridiag_solve(d, e, rhs, x, cp, pinv):
     """Solve the symmetric tridiagonal system with diagonal ``d`` and off-diagonal ``e``
-    (e[i] is entry (i, i+1)); ``cp`` is scratch, ``x`` may alias ``rhs``.  For SPD
-    matrices (the Newton Jacobians of the energy step, rebuilt at every iterate), so no
-    pivoting.
+    (e[i] is entry (i, i+1)), leaving its factor in ``cp`` (eliminated couplings) and
+    ``pinv`` (reciprocal pivots) for more right-hand sides (``sym_tridiag_apply``); ``x``
+    may alias ``rhs``.  For SPD matrices (the Newton Jacobians of the energy step, rebuilt
+    at every iterate), so no pivoting.
 
     A twisted factorisation: Thomas eliminations from both ends at once, meeting at the
     middle row k (one division per row, as one sweep, but two independent recurrences of
@@ -91,24 +92,24 @@ def sym_tridiag_solve(d, e, rhs, x, cp):
     k = n1 // 2
     # rows 0 … k−1 downward (cp[i]: e[i]/pivot) and rows n … k+1 upward (cp[i]: e[i−1]/pivot)
     if k >= 1:
-        inv = 1.0 / d[0]
-        cp[0] = e[0] * inv
-        x[0] = rhs[0] * inv
+        pinv[0] = 1.0 / d[0]
+        cp[0] = e[0] * pinv[0]
+        x[0] = rhs[0] * pinv[0]
     if n >= k + 1:
-        inv = 1.0 / d[n]
-        cp[n] = e[n - 1] * inv
-        x[n] = rhs[n] * inv
+        pinv[n] = 1.0 / d[n]
+        cp[n] = e[n - 1] * pinv[n]
+        x[n] = rhs[n] * pinv[n]
     for j in range(1, max(k, n - k)):
         i = j
         if i <= k - 1:
-            inv = 1.0 / (d[i] - e[i - 1] * cp[i - 1])
-            cp[i] = e[i] * inv
-            x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * inv
+            pinv[i] = 1.0 / (d[i] - e[i - 1] * cp[i - 1])
+            cp[i] = e[i] * pinv[i]
+            x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * pinv[i]
         i = n - j
         if i >= k + 1:
-            inv = 1.0 / (d[i] - e[i] * cp[i + 1])
-            cp[i] = e[i - 1] * inv
-            x[i] = (rhs[i] - e[i] * x[i + 1]) * inv
+            pinv[i] = 1.0 / (d[i] - e[i] * cp[i + 1])
+            cp[i] = e[i - 1] * pinv[i]
+            x[i] = (rhs[i] - e[i] * x[i + 1]) * pinv[i]
     piv = d[k]
     z = rhs[k]
     if k >= 1:
@@ -117,7 +118,42 @@ def sym_tridiag_solve(d, e, rhs, x, cp):
     if n >= k + 1:
         piv -= e[k] * cp[k + 1]
         z -= e[k] * x[k + 1]
-    x[k] = z / piv
+    pinv[k] = 1.0 / piv
+    x[k] = z * pinv[k]
+    _substitute(cp, x, k, n)
+
+
+@exact_step_kernel
+def sym_tridiag_apply(e, cp, pinv, rhs, x):
+    """Solve again with the factor a ``sym_tridiag_solve`` left (same ``e``), for another
+    right-hand side: its eliminations with the stored pivots, no division; ``x`` may alias
+    ``rhs``."""
+    n1 = rhs.size
+    n = n1 - 1
+    k = n1 // 2
+    if k >= 1:
+        x[0] = rhs[0] * pinv[0]
+    if n >= k + 1:
+        x[n] = rhs[n] * pinv[n]
+    for j in range(1, max(k, n - k)):
+        i = j
+        if i <= k - 1:
+            x[i] = (rhs[i] - e[i - 1] * x[i - 1]) * pinv[i]
+        i = n - j
+        if i >= k + 1:
+            x[i] = (rhs[i] - e[i] * x[i + 1]) * pinv[i]
+    z = rhs[k]
+    if k >= 1:
+        z -= e[k - 1] * x[k - 1]
+    if n >= k + 1:
+        z -= e[k] * x[k + 1]
+    x[k] = z * pinv[k]
+    _substitute(cp, x, k, n)
+
+
+@exact_step_kernel
+def _substitute(cp, x, k, n):
+    """The substitution outward from the middle row k of the twisted factorisation."""
     for j in range(1, max(k, n - k) + 1):
         i = k - j
         if i >= 0:

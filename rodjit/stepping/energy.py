@@ -46,7 +46,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_solve
+from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_apply, sym_tridiag_solve
 from ..kernels.discrete_gradient import difference
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term, assemble)
@@ -65,6 +65,7 @@ NEWTON_TOL = 1e-10    # converged when the update is below this × |uⁿ⁺¹ �
 MAX_NEWTON = 30
 MAX_BACKTRACK = 40
 ARMIJO = 1e-4
+CHORD = 1e-2  # the factor is used again while a full update shrinks the residual this much
 SAFETY = 0.9
 FAC_MIN = 0.2
 FAC_MAX = 5.0
@@ -98,10 +99,11 @@ class Energy(NamedTuple):
     atol: float
     newton_tol: float
     max_newton: int
+    chord: float
 
 
 def _build(tc):
-    return Energy(float(tc.rtol), float(tc.atol), NEWTON_TOL, MAX_NEWTON)
+    return Energy(float(tc.rtol), float(tc.atol), NEWTON_TOL, MAX_NEWTON, CHORD)
 
 
 @step_kernel
@@ -173,27 +175,30 @@ def _add_viscous(system, v, a):
 
 
 @step_kernel
-def jerk(system, rod, floor, u, v, a, out, k):
+def jerk(system, rod, floor, u, v, a, out, k, strains):
     """ȧ = M⁻¹(−H(u)v − μKa), the time derivative of the acceleration along the motion
-    (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself)."""
+    (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself).  Also leaves the
+    segment strains of u in ``strains`` (the step needs them, and they are computed here)."""
     n = system.n
     h = system.h
     ih = 1.0 / h
     mu = system.mu
+    beam = system.gamma > 0.0
     # out_i = t_i − t_{i−1} with the segment terms t (no zeroing pass: LLVM makes it a
-    # memset call, which costs more than the whole loop for a short rod)
-    t_prev = 0.0
+    # memset call, which costs more than the whole loop for a short rod), divided by m_i
+    # in the same pass unless the bending term is still to be added
+    t_prev = -deriv(u[0], floor) * v[0]
     for i in range(n):
         e = (u[i + 1] - u[i]) * ih - 1.0
+        strains[i] = e
         t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
-        out[i] = t - t_prev
+        out[i] = t - t_prev if beam else (t - t_prev) * _inv_mass(i, n, ih)
         t_prev = t
-    out[n] = -t_prev
-    out[0] += deriv(u[0], floor) * v[0]
-    if system.gamma > 0.0:
+    out[n] = -t_prev if beam else -t_prev * _inv_mass(n, n, ih)
+    if beam:
         add_beam_term(v, out, k, h, -system.gamma, False)
-    for i in range(n + 1):
-        out[i] *= _inv_mass(i, n, ih)
+        for i in range(n + 1):
+            out[i] *= _inv_mass(i, n, ih)
 
 
 @step_kernel
@@ -213,7 +218,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
     if status != OK:
         return status, val, emin, fl, 0.0
-    jerk(system, rod, floor, u, v, a, work[AD], work[K])
+    jerk(system, rod, floor, u, v, a, work[AD], work[K], work[E1])
     dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
     rate = _error_rate(scheme, u, work[AD])
     if rate > 0.0:
@@ -236,7 +241,9 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     for an iterate outside the admissible set.  The scale sums the magnitudes of the
     residual's terms, plus the stress change that the rounding of u² in a strain causes,
     so 64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
-    takes the terms of segments i − 1 (carried over) and i.
+    takes the terms of segments i − 1 (carried over) and i, and sets u²_{i+1} (a separate
+    loop u² = uⁿ + d, which LLVM vectorises with run-time checks, cost ~7 % of an N = 5
+    run: benchmarks/README.md).
     """
     n = system.n
     h = system.h
@@ -250,8 +257,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     cv = 0.5 * dt * system.mu * ih
     g = system.g
     lo = lower(rod)
-    for i in range(n + 1):
-        u2[i] = u[i] + d[i]
+    u2[0] = u[0] + d[0]
     if not u2[0] > lower(floor):
         return (BAD_FLOOR if math.isfinite(u2[0]) else NON_FINITE), 0.0, 0.0, 0.0, 0.0
     qb, qbp, fl = difference(u[0], u2[0], floor)
@@ -295,6 +301,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
                 si += sc[i]
             si += a_prev
         if i < n:
+            u2[i + 1] = u[i + 1] + d[i + 1]   # here, not in a loop of its own (docstring)
             e2 = (u2[i + 1] - u2[i]) * ih - 1.0
             bad |= not e2 > lo
             nonfinite |= not math.isfinite(e2)
@@ -350,17 +357,21 @@ def _add_bending_jacobian(system, work, c2, ih):
 
 
 @step_kernel
-def _newton_update(system, work):
+def _newton_update(system, work, fresh):
     """y = J⁻¹F into row DEL (the update is δ = −y: negation is exact, so this is −J⁻¹F
     bit for bit without a pass that negates F) with the banded solvers (tridiagonal for
-    γ = 0, else pentadiagonal)."""
+    γ = 0, else pentadiagonal): a ``fresh`` Jacobian (rows J0–J2) is factored into rows
+    L1, L2, DINV, else their factor is used again."""
     y = work[DEL]
     r = work[R]
     if system.gamma > 0.0:
-        penta_factor(work[J0], work[J1], work[J2], work[L1], work[L2], work[DINV])
+        if fresh:
+            penta_factor(work[J0], work[J1], work[J2], work[L1], work[L2], work[DINV])
         penta_solve(work[L1], work[L2], work[DINV], r, y)
+    elif fresh:
+        sym_tridiag_solve(work[J0], work[J1], r, y, work[L1], work[DINV])
     else:
-        sym_tridiag_solve(work[J0], work[J1], r, y, work[L1])
+        sym_tridiag_apply(work[J1], work[L1], work[DINV], r, y)
 
 
 @step_kernel
@@ -375,13 +386,20 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     Converged when the residual is at its rounding level (64 ε_mach × the size of its
     terms at the iterate the update came from: they change by the update, which is tiny
     next to them by then), or when the update is at most newton_tol × |d|∞: that update is
-    applied and leaves a residual O(update²) by quadratic convergence.  Each update is
+    applied and leaves a residual O(update²) by quadratic convergence (after a chord update
+    O(update × the Jacobian's change since its factor), as small).  Each update is
     backtracked until the iterate is admissible and the residual drops (Armijo).  The start
     value is always updated once (the Taylor predictor is never a root to rounding, so its
-    residual is not tested).  Each iteration evaluates residual, Jacobian and scale in one
-    pass at its iterate, its trial iterates the residual alone (so an accepted iterate's
-    residual is evaluated again when another iteration follows: cheaper than a Jacobian at
-    every trial, as most steps end after one update).  Norms are compared squared.
+    residual is not tested).  The first iteration evaluates residual, Jacobian and scale in
+    one pass at the start and factors the Jacobian; trial iterates evaluate the residual
+    alone.  A later iteration reuses that factor (a chord step, no evaluation: the accepted
+    trial left its residual in row R) while the previous full update shrank the residual by
+    a factor ``chord`` (so the iterate is close: the Jacobian moved by about the update's
+    relative size, and the chord step contracts nearly as Newton's would); otherwise it
+    evaluates and factors afresh at its iterate.
+    Steps in contact need two updates (their start is off by about the local error, which
+    the accuracy control sets near the tolerance), so the second is one solve with the
+    stored factor instead of an evaluation and a factorisation.  Norms are compared squared.
     """
     n1 = u.size
     row = D
@@ -390,12 +408,16 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     dtr = work[DT]
     rounding2 = (64.0 * EPS) ** 2
     last = np.inf
+    fresh = True
+    rn2 = 0.0
+    sn2 = 0.0
     for it in range(scheme.max_newton):
-        status, rn2, sn2, fl, emin = _evaluate(system, rod, floor, u, v, d, u2, dt, work,
-                                               True)
-        if status != OK:   # only the start can be outside: trial iterates are backtracked
-            return status, 0.0, row, 0.0, 0.0
-        _newton_update(system, work)
+        if fresh:
+            status, rn2, sn2, fl, emin = _evaluate(system, rod, floor, u, v, d, u2, dt,
+                                                   work, True)
+            if status != OK:   # only the start can be outside: trials are backtracked
+                return status, 0.0, row, 0.0, 0.0
+        _newton_update(system, work, fresh)
         sstats[0] += 1
         dmax = 0.0
         dref = 0.0
@@ -428,6 +450,10 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         row = DT if row == D else D
         if rt2 <= rounding2 * sn2 or (small and alpha == 1.0):
             return OK, 0.0, row, fl, emin
+        # the next update from the same factor while a full update contracts the residual
+        # fast (row R holds the residual at the new iterate, from its trial evaluation)
+        fresh = not (alpha == 1.0 and rt2 <= scheme.chord * scheme.chord * rn2)
+        rn2 = rt2
     sstats[1] += 1
     return NO_CONVERGENCE, last, row, 0.0, 0.0
 
@@ -448,9 +474,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     dp = work[DP]
     ad = work[AD]
     d = work[D]
-    jerk(system, rod, floor, u, v, a, ad, work[K])
-    for i in range(n):
-        e1[i] = (u[i + 1] - u[i]) * ih - 1.0
+    jerk(system, rod, floor, u, v, a, ad, work[K], e1)
     # the Taylor predictor dp (error estimate); Newton's start is dp + dt³ȧ/4, the step's
     # own leading-order deviation from it (module docstring), pulled back toward uⁿ
     # (halved) while it is outside the admissible set (the first residual evaluation
@@ -481,16 +505,13 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     # which was at this state (``full_accel`` without evaluating the laws again)
     assemble(u2, a2, work[S], work[K], fl, system, True)
     _add_viscous(system, v2, a2)
-    finite = True
-    for i in range(n1):
-        finite &= abs(a2[i]) < np.inf
-    if not finite:
-        return NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0
     # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
     # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node
     err = 0.0
     w = 0.0
+    finite = True
     for i in range(n1):
+        finite &= abs(a2[i]) < np.inf
         eu = abs(d[i] - dp[i])
         ev = abs(v2[i] - (v[i] + dt * a[i] + hdt2 * ad[i]))
         su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
@@ -498,6 +519,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         err = max(err, max(eu * sv, ev * su) / (su * sv))
         w += _mass(i, n, h) * v2[i]
     err /= 3.0
+    if not finite:
+        return NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0
     diss = 0.0
     if system.mu > 0.0:
         for i in range(n):
