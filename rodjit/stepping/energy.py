@@ -242,8 +242,8 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     residual's terms, plus the stress change that the rounding of u² in a strain causes,
     so 64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
     takes the terms of segments i − 1 (carried over) and i, and sets u²_{i+1} (a separate
-    loop u² = uⁿ + d, which LLVM vectorises with run-time checks, cost ~7 % of an N = 5
-    run: benchmarks/README.md).
+    loop u² = uⁿ + d, which LLVM vectorises, cost 6–7 % of an N = 5 run:
+    benchmarks/README.md).
     """
     n = system.n
     h = system.h
