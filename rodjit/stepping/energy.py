@@ -396,10 +396,10 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     trial left its residual in row R) while the previous full update shrank the residual by
     a factor ``chord`` (so the iterate is close: the Jacobian moved by about the update's
     relative size, and the chord step contracts nearly as Newton's would); otherwise it
-    evaluates and factors afresh at its iterate.
-    Steps in contact need two updates (their start is off by about the local error, which
-    the accuracy control sets near the tolerance), so the second is one solve with the
-    stored factor instead of an evaluation and a factorisation.  Norms are compared squared.
+    evaluates and factors afresh at its iterate.  Steps in contact need two updates (their
+    start is off by about the local error, which the accuracy control sets near the
+    tolerance), so the second is one solve with the stored factor instead of an evaluation
+    and a factorisation.  Norms are compared squared.
     """
     n1 = u.size
     row = D
