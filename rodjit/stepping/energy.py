@@ -183,22 +183,19 @@ def jerk(system, rod, floor, u, v, a, out, k, strains):
     h = system.h
     ih = 1.0 / h
     mu = system.mu
-    beam = system.gamma > 0.0
-    # out_i = t_i − t_{i−1} with the segment terms t (no zeroing pass: LLVM makes it a
-    # memset call, which costs more than the whole loop for a short rod), divided by m_i
-    # in the same pass unless the bending term is still to be added
+    # out_i = (t_i − t_{i−1})/m_i with the segment terms t (no zeroing pass: LLVM makes it
+    # a memset call, which costs more than the whole loop for a short rod); the bending
+    # term is added already divided by the masses, as in ``forces.assemble``
     t_prev = -deriv(u[0], floor) * v[0]
     for i in range(n):
         e = (u[i + 1] - u[i]) * ih - 1.0
         strains[i] = e
         t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
-        out[i] = t - t_prev if beam else (t - t_prev) * _inv_mass(i, n, ih)
+        out[i] = (t - t_prev) * _inv_mass(i, n, ih)
         t_prev = t
-    out[n] = -t_prev if beam else -t_prev * _inv_mass(n, n, ih)
-    if beam:
-        add_beam_term(v, out, k, h, -system.gamma, False)
-        for i in range(n + 1):
-            out[i] *= _inv_mass(i, n, ih)
+    out[n] = -t_prev * _inv_mass(n, n, ih)
+    if system.gamma > 0.0:
+        add_beam_term(v, out, k, h, -system.gamma, True)
 
 
 @step_kernel
