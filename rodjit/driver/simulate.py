@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from ..stepping import layout as L
-from .result import MemorySink, Result
+from ..records.result import MemorySink, Result
 from .run import Run, SimulationError
 
 __all__ = ["simulate"]
