@@ -229,7 +229,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                     for name in SUMMARY_COLUMNS:
                         cols[name][result.index] = result.values[name]
                     if output is None:
-                        table._bounces[result.index] = result.bounces
+                        table.keep_bounces(result.index, result.bounces)
                     else:
                         batch.append(result)
                     ran += 1

@@ -53,7 +53,13 @@ class SweepTable:
         """The configuration point ``index`` ran."""
         return self.grid.config(self.base, index)
 
+    def keep_bounces(self, index: int, bounces: dict[str, np.ndarray]) -> None:
+        """Hold point ``index``'s bounce table in memory (a sweep without a file)."""
+        self._bounces[index] = bounces
+
     def bounces(self, index: int) -> dict[str, np.ndarray]:
+        """Point ``index``'s bounce table: kept in memory, else read from the file (empty
+        columns for a point that has not run)."""
         if index in self._bounces:
             return self._bounces[index]
         if self.path is None:
