@@ -3,9 +3,10 @@ and the plots.
 
 ``info`` and ``plot`` dispatch on a file's ``rodjit_kind`` root attribute (``run`` or
 ``sweep``): ``info`` prints ``reports.info`` (one path for both kinds), ``plot`` checks that
-the figure asked for belongs to the file's kind.  Exit codes: 0 done, 1 the run failed (or a sweep point did),
-2 usage or configuration error (nothing written), 130/143 interrupted by SIGINT/SIGTERM
-(checkpoint written).
+the figure asked for belongs to the file's kind.  Each command imports what it runs when it
+runs, so ``rodjit --help`` and usage errors do not wait for NumPy, h5py and Numba to load.
+Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configuration error
+(nothing written), 130/143 interrupted by SIGINT/SIGTERM (checkpoint written).
 """
 from __future__ import annotations
 

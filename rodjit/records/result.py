@@ -19,9 +19,10 @@ class Result:
     """Everything a run produced.
 
     ``t``/``u``/``v``: snapshots (rows are times, columns the nodes at ``x``);
-    ``diagnostics``: column name -> array (``t``, ``dt``, energies, ``dissipated``,
-    ``u_bottom``, ``floor_force``, ``min_strain``, ``cm_height``, ``cm_velocity``);
-    ``episodes``: ``t_start``, ``t_end``; ``bounces``: MODEL.md §3 columns plus ``open``;
+    ``diagnostics``: column name -> array, the columns of ``records.columns.DIAG_COLUMNS``
+    (``t``, ``dt``, energies, ``dissipated``, the floor and strain extremes, the centre of
+    mass); ``episodes``: ``t_start``, ``t_end``; ``bounces``: ``records.bounces.bounce_table``
+    (MODEL.md §3 columns plus ``open``);
     ``stats``: steps, rejected steps, wall/compile/run time, node-steps per second.
     """
 
