@@ -38,8 +38,8 @@ WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_TH
 # tasks per worker, nothing to steal), event-loop, system and memory monitors polled every
 # second or so instead of Dask's 20-500 ms (an idle cluster otherwise keeps a good part of a
 # core busy; benchmarks/bench_sweep.py measures it), no active memory manager (results
-# leave the workers at once), and
-# no retries of a point whose worker died (rodjit re-runs it alone: DaskCluster.results)
+# leave the workers at once), and no retries of a point whose worker died (rodjit re-runs
+# it alone: DaskCluster.results)
 DASK_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
                       "distributed.scheduler.work-stealing": False,
                       "distributed.admin.tick.interval": "500ms",
