@@ -62,7 +62,7 @@ class WriterClock:
     def __init__(self):
         self.wall = self.cpu = 0.0
         self._depth = 0
-        for owner, name in ((files.hdf5, "create_run_file"), (files, "closed_summary"),
+        for owner, name in ((files.run_writer, "create_run_file"), (files, "closed_summary"),
                             (hdf5.RunWriter, "snapshots"), (hdf5.RunWriter, "diagnostics"),
                             (hdf5.RunWriter, "episodes"), (hdf5.RunWriter, "bounces"),
                             (hdf5.RunWriter, "save"), (hdf5.RunWriter, "close")):

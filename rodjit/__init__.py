@@ -5,22 +5,16 @@
 >>> summary = rodjit.run_to_file(rodjit.Config(), "run.h5", overwrite=True)  # streamed to HDF5
 >>> table = rodjit.sweep(rodjit.Config(), {"rod.mu": [0, 1, 10]}, output="sweep.h5")
 """
-from importlib.metadata import PackageNotFoundError, version as _version
-
 from .config import Config
-from .driver.result import Result
-from .driver.run import SimulationError
 from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
+from .driver.run import SimulationError
 from .driver.simulate import simulate
 from .output.hdf5 import load_file
 from .presets import load_preset, preset_names
+from .records.result import Result
 from .sweeps import SweepInterrupted, SweepTable, load_sweep, sweep
-
-try:
-    __version__ = _version("rodjit")
-except PackageNotFoundError:  # running from a source tree without installation
-    __version__ = "0.0.0+unknown"
+from .version import __version__
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
-           "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable", "load_preset", "preset_names",
-           "SweepInterrupted", "__version__"]
+           "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
+           "load_preset", "preset_names", "SweepInterrupted", "__version__"]

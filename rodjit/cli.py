@@ -2,10 +2,11 @@
 and the plots.
 
 ``info`` and ``plot`` dispatch on a file's ``rodjit_kind`` root attribute (``run`` or
-``sweep``): ``INFO`` maps each kind to its report, ``plot`` checks that the figure asked for
-belongs to the file's kind.  Exit codes: 0 done, 1 the run failed (or a sweep point did),
-2 usage or configuration error (nothing written), 130/143 interrupted by SIGINT/SIGTERM
-(checkpoint written).
+``sweep``): ``info`` prints ``reports.info`` (one path for both kinds), ``plot`` checks that
+the figure asked for belongs to the file's kind.  Each command imports what it runs when it
+runs, so ``rodjit --help`` and usage errors do not wait for NumPy, h5py and Numba to load.
+Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configuration error
+(nothing written), 130/143 interrupted by SIGINT/SIGTERM (checkpoint written).
 """
 from __future__ import annotations
 
@@ -322,55 +323,13 @@ def presets_command():
 
 # ---- rodjit info / plot: dispatch on the file's kind --------------------------------------
 def _kind(path: str) -> str:
-    from .output import hdf5
+    """The file's kind ("run", "sweep"), or a UsageError naming what is wrong with it."""
+    from .reports import readable_kind
 
     try:
-        with hdf5.open_file(path) as f:
-            kind = f.attrs.get("rodjit_kind")
+        return readable_kind(path)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
-    if kind is None:
-        raise UsageError(f"{path!r} is not a rodjit file (no 'rodjit_kind' attribute)")
-    kind = str(kind)
-    if kind not in INFO:
-        raise UsageError(f"{path!r} is a rodjit {kind!r} file, which this version of rodjit "
-                         f"cannot read")
-    return kind
-
-
-def _header(kind: str, path: str, version: int, attrs, status: str) -> None:
-    """The first lines of ``rodjit info``: what the file is, who wrote it, its status."""
-    click.echo(f"rodjit {kind} file {path} (format {version}, written by rodjit "
-               f"{attrs.get('rodjit_version', '?')})")
-    click.echo(f"created   {attrs.get('created', '?')}")
-    click.echo(f"command   {attrs.get('command', '?')}")
-    click.echo(f"status    {status}")
-
-
-def info_run(path: str) -> None:
-    from .output import hdf5
-    from .output.summary import summarize
-
-    try:
-        s = summarize(path)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    a = s.attrs
-    status = s.status
-    if status == "running":
-        if s.writer_alive:
-            status += " (the writing process is alive)"
-        elif s.writer_alive is False:
-            status += (f" (the writing process is gone: it was killed; 'rodjit run --resume "
-                       f"{path}' continues from the checkpoint at t = {s.t:.6g})")
-    _header("run", path, hdf5.FORMAT_VERSION, a, status)
-    c = s.counts
-    click.echo(f"rows      {c['snapshots']} snapshots, {c['diagnostics']} diagnostics, "
-               f"{c['episodes']} episodes, {c['bounces']} bounces")
-    click.echo("configuration:")
-    for line in s.config.to_toml().strip().splitlines():
-        click.echo(f"  {line}")
-    click.echo(s.report(max_bounces=None))
 
 
 def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
@@ -393,47 +352,12 @@ def plot_run(path: str, output: str | None, kind: str) -> None:
     _draw(plot_file, path, output, kind)
 
 
-def info_sweep(path: str) -> None:
-    from .output import sweep_file
-    from .sweeps import load_sweep
-
-    try:
-        table = load_sweep(path)
-    except ValueError as exc:
-        raise UsageError(str(exc)) from None
-    a = table.attrs
-    status = table.status
-    if status == "running":
-        with sweep_file.open_sweep(path) as f:
-            from .output.hdf5 import writer_alive
-            alive = writer_alive(f)
-        status += (" (the sweep is running)" if alive else
-                   f" (its process is gone; 'rodjit sweep --resume -o {path}' continues)"
-                   if alive is False else "")
-    c = table.counts
-    _header("sweep", path, sweep_file.FORMAT_VERSION, a,
-            status + (f": {table.message}" if table.message else ""))
-    click.echo(f"points    {len(table)} ({c['completed']} completed, {c['failed']} failed, "
-               f"{c['pending']} not run) on {a.get('scheduler', '?')}")
-    click.echo("grid:")
-    for key, values in zip(table.grid.keys, table.grid.values):
-        from .sweeps.grid import format_value
-        click.echo(f"  {key} = {', '.join(format_value(v) for v in values)}")
-    if a.get("save_runs"):
-        click.echo(f"run files {a['save_runs']}")
-    click.echo("base configuration:")
-    for line in table.base.to_toml().strip().splitlines():
-        click.echo(f"  {line}")
-    click.echo(table.report())
-
-
 def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
     from .plotting.sweep import plot_sweep_file
 
     _draw(plot_sweep_file, path, output, kind, **options)
 
 
-INFO = {"run": info_run, "sweep": info_sweep}      # rodjit_kind -> info(path)
 # copies of plotting.KINDS and plotting.sweep.KINDS (tests/test_cli.py checks they agree):
 # importing those modules would load numpy, h5py and Numba before every command
 RUN_KINDS = ("heights", "energy", "bounces")
@@ -445,7 +369,13 @@ PLOT_KINDS = RUN_KINDS + SWEEP_KINDS
 @click.argument("file", type=click.Path(dir_okay=True))
 def info_command(file):
     """Configuration, status, counts and the bounce table of a rodjit file."""
-    INFO[_kind(file)](file)
+    from .reports import info
+
+    try:
+        text = info(file)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(text)
 
 
 @main.command("plot")

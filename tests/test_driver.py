@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.driver.result import MemorySink
+from rodjit.records.result import MemorySink
 from rodjit.driver.run import Run
 from rodjit.stepping import layout as L
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.output import hdf5
+from rodjit.output import h5files, hdf5
 from rodjit.stepping import layout as L
 
 from conftest import assert_same_files, datasets, final_state, rodjit_cli
@@ -157,7 +157,7 @@ def test_resume_errors(tmp_path, small_config, many_calls):
 KILL_AFTER_SAVE = """
 import os, signal, sys, rodjit
 from rodjit.driver.run import Run
-from rodjit.output import hdf5
+from rodjit.output import h5files, hdf5
 from rodjit.stepping import layout as L
 cfg = rodjit.Config().override({"time.t_end": 1.0})
 run = Run(cfg)
@@ -225,7 +225,7 @@ def test_resume_refuses_a_file_whose_writer_is_alive(tmp_path):
 
 
 def test_writer_alive_is_not_fooled_by_a_reused_pid(tmp_path, small_config):
-    if not hdf5._process_tag(os.getpid()):
+    if not h5files.process_tag(os.getpid()):
         pytest.skip("no /proc here to tell two processes with one pid apart")
     path = tmp_path / "r.h5"
     rodjit.run_to_file(small_config, path)
@@ -238,7 +238,7 @@ def test_writer_alive_is_not_fooled_by_a_reused_pid(tmp_path, small_config):
         with h5py.File(path, "r") as f:
             return hdf5.writer_alive(f)
     try:
-        assert alive(writer_pid=other.pid, writer_tag=hdf5._process_tag(other.pid)) is True
+        assert alive(writer_pid=other.pid, writer_tag=h5files.process_tag(other.pid)) is True
         assert alive(writer_tag="another-boot:12345") is False   # same pid, not the writer
         assert alive(writer_host="elsewhere.example") is None    # cannot tell
     finally:

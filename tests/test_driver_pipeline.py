@@ -17,7 +17,7 @@ import rodjit
 import rodjit.driver.files as files
 from rodjit.driver import pipeline
 from rodjit.driver.run import Run
-from rodjit.output import hdf5
+from rodjit.output import hdf5, run_writer
 from rodjit.stepping import layout as L
 
 from conftest import assert_same_files, final_state
@@ -186,7 +186,7 @@ def test_tiny_calls_run_inline_and_give_the_same_file(tmp_path, monkeypatch, man
 def test_the_layout_is_created_while_the_first_block_computes(tmp_path, monkeypatch):
     monkeypatch.setattr(files, "OVERLAP", True)
     bump, wait_for = _counter()
-    compute, create = Run.compute, hdf5.create_run_file
+    compute, create = Run.compute, run_writer.create_run_file
     seen = []
 
     def counted(self, max_steps=None):
@@ -198,7 +198,7 @@ def test_the_layout_is_created_while_the_first_block_computes(tmp_path, monkeypa
         seen.append(wait_for(1, timeout=5.0))      # the first call ends before the file exists
         return create(*args, **kwargs)
     monkeypatch.setattr(Run, "compute", counted)
-    monkeypatch.setattr(hdf5, "create_run_file", creating)
+    monkeypatch.setattr(run_writer, "create_run_file", creating)
     summary = rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.5}),
                                  tmp_path / "r.h5")
     assert seen == [True] and summary.status == "completed"

@@ -106,7 +106,7 @@ def test_closed_summary_equals_the_file_read_back(tmp_path, monkeypatch):
 def test_extremes_give_the_energy_error_exactly(rng):
     """max |x - e0| from the running max and min of x (in blocks of any size) equals the
     direct computation bit for bit."""
-    from rodjit.output.extremes import Extremes
+    from rodjit.records.extremes import Extremes
 
     for _ in range(200):
         n = int(rng.integers(1, 500))

@@ -4,7 +4,7 @@ import h5py
 import numpy as np
 import pytest
 
-from rodjit.output.table import Table
+from rodjit.output.growing_table import Table
 
 
 def test_table_writes_in_chunk_blocks_and_reopens(tmp_path):

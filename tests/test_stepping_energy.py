@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.driver.result import MemorySink
+from rodjit.records.result import MemorySink
 from rodjit.driver.run import Run
 from rodjit.kernels.forces import INACCURATE, NO_CONVERGENCE, OK, energies
 from rodjit.model import reference as ref

@@ -13,7 +13,8 @@ import pytest
 
 import killer_law  # noqa: F401  (registers "kill-test", which kills its worker)
 import rodjit
-from rodjit.output import hdf5, sweep_file
+from rodjit.output import hdf5
+from rodjit.sweeps import sweep_file
 from rodjit.sweeps.executors import WORKER_ENV, ProcessPool
 from rodjit.sweeps.grid import Grid
 from rodjit.sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, PointTask, run_point

@@ -1,1 +1,4 @@
-"""Python orchestration: runs in progress, results, the ``simulate`` entry point."""
+"""Running one simulation: a run in progress (``run``), its compiled calls overlapped with
+writing (``pipeline``), streaming it to a run file (``files``: ``run_to_file``,
+``resume_file``), the in-memory ``simulate``, and the clean stop on SIGINT/SIGTERM
+(``signals``)."""

@@ -10,19 +10,21 @@ file's layout is created while the first one does.
 from __future__ import annotations
 
 import math
-import os
 import signal
-import threading
 import time
 from pathlib import Path
 
-from ..output import hdf5
+from ..config import Config
+from ..output import run_writer
+from ..output.h5files import FileBusy, OutputExists, check_output, open_file, writer_alive
+from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
 from .run import Run, SimulationError
+from .signals import StopFlag
 
-__all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists"]
+__all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists", "check_output"]
 
 FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
 OVERLAP = True         # compute the next block in a worker thread while writing the last
@@ -35,69 +37,6 @@ class RunInterrupted(RuntimeError):
         super().__init__(message)
         self.signum = signum
         self.summary = summary
-
-
-class OutputExists(ValueError):
-    """The output file exists and overwriting was not asked for."""
-
-
-class _StopFlag:
-    """While active (main thread only), SIGINT and SIGTERM record the signal instead of
-    killing the process; the run stops cleanly at the next return from compiled code.
-    A second signal aborts at once."""
-
-    def __init__(self, install: bool):
-        self.install = install and threading.current_thread() is threading.main_thread()
-        self.signum: int | None = None
-        self._old = {}
-
-    def _handler(self, signum, frame):
-        if self.signum is not None:
-            raise KeyboardInterrupt
-        self.signum = signum
-
-    def __enter__(self):
-        if self.install:
-            for s in (signal.SIGINT, signal.SIGTERM):
-                self._old[s] = signal.signal(s, self._handler)
-        return self
-
-    def __exit__(self, *exc):
-        for s, old in self._old.items():
-            signal.signal(s, old)
-        self._old = {}
-
-
-def check_output(path, overwrite: bool) -> Path:
-    """Raise ValueError (one line) unless ``path`` can be created or replaced."""
-    path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.exists():
-        raise ValueError(f"output directory {str(parent)!r} does not exist")
-    if not parent.is_dir():
-        raise ValueError(f"output directory {str(parent)!r} is not a directory")
-    if path.is_dir():
-        raise ValueError(f"output {str(path)!r} is a directory, not a file")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise ValueError(f"output directory {str(parent)!r} is not writable")
-    if path.exists():
-        if not overwrite:
-            raise OutputExists(f"output file {str(path)!r} already exists; pass "
-                               f"overwrite=True to replace it")
-        if _is_live(path):
-            raise hdf5.FileBusy(f"output file {str(path)!r} is being written by a running "
-                                f"rodjit process; stop it before replacing the file")
-    return path
-
-
-def _is_live(path) -> bool:
-    """True if ``path`` is a rodjit file (a run or a sweep) whose writer is still running
-    on this host."""
-    try:
-        with hdf5.open_file(path) as f:
-            return f.attrs.get("status") == "running" and hdf5.writer_alive(f) is True
-    except (ValueError, OSError):
-        return False
 
 
 def run_to_file(config, path, *, overwrite: bool = False,
@@ -115,8 +54,6 @@ def run_to_file(config, path, *, overwrite: bool = False,
     (SIGINT/SIGTERM, caught while ``handle_signals``) raises RunInterrupted, both after
     the file is closed with its status and a checkpoint; both carry ``summary``.
     """
-    from ..config import Config
-
     if config is None:
         config = Config()
     elif not isinstance(config, Config):
@@ -129,8 +66,8 @@ def run_to_file(config, path, *, overwrite: bool = False,
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
-    with _StopFlag(handle_signals) as stop:
-        return _drive(run, lambda: hdf5.create_run_file(path, config, first, command=command),
+    with StopFlag(handle_signals) as stop:
+        return _drive(run, lambda: run_writer.create_run_file(path, config, first, command=command),
                       path, progress, flush_interval, stop, overlap)
 
 
@@ -145,12 +82,12 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
     """
     path = Path(path)
     _check_interval(flush_interval)
-    with hdf5.open_file(path) as f:
-        hdf5.check_run_file(f, path)
-        config = hdf5.read_config(f)
-        ck = hdf5.read_checkpoint(f)
+    with open_file(path) as f:
+        check_run_file(f, path)
+        config = read_config(f)
+        ck = read_checkpoint(f)
         needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
-        alive = hdf5.writer_alive(f) if needs_recovery else False
+        alive = writer_alive(f) if needs_recovery else False
         pid, host = f.attrs.get("writer_pid"), f.attrs.get("writer_host")
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
@@ -163,10 +100,10 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         raise ValueError(f"{str(path)!r} is already complete at t = {t:.9g}; give a later "
                          f"t_end to extend it")
     if alive:
-        raise hdf5.FileBusy(f"{str(path)!r} is being written by process {pid}; stop it "
+        raise FileBusy(f"{str(path)!r} is being written by process {pid}; stop it "
                             f"before resuming")
     if needs_recovery and alive is None:
-        raise hdf5.FileBusy(f"{str(path)!r} was being written by process {pid} on host "
+        raise FileBusy(f"{str(path)!r} was being written by process {pid} on host "
                             f"{host!r}; if that process has stopped, run 'h5clear -s "
                             f"{path}' and resume again")
     run = Run.from_checkpoint(config, ck)
@@ -175,10 +112,10 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
     if command is None:
         command = f"rodjit.resume_file({str(path)!r})"
     finish_only = complete and t_end is None    # killed after its last checkpoint
-    with _StopFlag(handle_signals) as stop:
+    with StopFlag(handle_signals) as stop:
         if needs_recovery:
-            hdf5.recover(path)
-        writer = hdf5.reopen_run_file(
+            run_writer.recover(path)
+        writer = run_writer.reopen_run_file(
             path, config_toml=config.to_toml() if t_end is not None else None,
             history=(f"closed at its end t = {t!r} by: {command}" if finish_only else
                      f"resumed at t = {t!r} by: {command}"))
@@ -195,7 +132,7 @@ def _check_interval(flush_interval) -> None:
 
 
 def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
-           stop: _StopFlag, overlap: bool | None = None) -> RunSummary:
+           stop: StopFlag, overlap: bool | None = None) -> RunSummary:
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
     returns (called once the first compiled call is under way); close the file."""
     calls = (Pipeline if (OVERLAP if overlap is None else overlap) else Inline)(run)

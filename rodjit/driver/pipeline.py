@@ -20,9 +20,9 @@ from .run import Block, Run
 
 __all__ = ["Inline", "Pipeline"]
 
-# A handoff to the worker and back costs a few thread wake-ups (~0.15 ms measured on a
-# shared 2-core VM); overlapping saves at most the shorter of a call and a drain.  Below
-# this, calls run inline: many tiny blocks (small rods, dense output) go no slower than serial.
+# A handoff to the worker and back costs a few thread wake-ups; overlapping saves at most
+# the shorter of a call and a drain.  Calls shorter than this run inline, so many tiny
+# blocks (small rods, dense output) cost no more than serial calls.
 HANDOFF = 5e-4    # seconds
 
 

@@ -1,8 +1,9 @@
 """A run in progress: the arrays the compiled loop works on, and the calls that advance it.
 
-``Run`` owns no output: each call drains the loop's buffers into a *sink* (in memory for
-``simulate``, an HDF5 file for the command line).  ``checkpoint``/``from_checkpoint`` save
-and restore everything the stepper needs, so a resumed run continues bit for bit.
+``Run`` owns no output: each call drains the loop's buffers into a *sink*
+(``records.sink.Sink``: in memory for ``simulate``, an HDF5 file for the command line).
+``checkpoint``/``from_checkpoint`` save and restore everything the stepper needs, so a
+resumed run continues bit for bit.
 
 ``advance`` is one call and its drain.  The two halves exist apart for ``driver.pipeline``:
 ``compute`` (the compiled call), ``take`` (the filled rows as a ``Block``, switching the
@@ -19,6 +20,8 @@ import numpy as np
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
+from ..records.sink import Sink
+from ..records.stats import run_stats
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
@@ -37,25 +40,6 @@ class SimulationError(RuntimeError):
     def __init__(self, message: str, result=None):
         super().__init__(message)
         self.result = result
-
-
-class Sink:
-    """Receives drained output blocks; subclasses store them (memory, HDF5).
-
-    The arrays are views of the run's buffers, valid only during the call (the buffers are
-    refilled next): a sink that keeps data must copy it."""
-
-    def snapshots(self, t, step, u, v):
-        pass
-
-    def diagnostics(self, rows):
-        pass
-
-    def episodes(self, rows):
-        pass
-
-    def bounces(self, rows):
-        pass
 
 
 def _capacity(n1: int) -> int:
@@ -299,18 +283,10 @@ class Run:
         return row, is_open
 
     def stats(self) -> dict:
-        n1 = self.system.n + 1
-        stats = {
-            "steps": self.steps,
-            "rejected_steps": self.rejected,
-            "wall_time": self.compile_time + self.run_time,
-            "compile_time": self.compile_time,
-            "run_time": self.run_time,
-            "node_steps_per_second": (self.steps * n1 / self.run_time) if self.run_time > 0 else 0.0,
-        }
-        for name, value in zip(SCHEME_STATS, self.sstats):
-            stats[name] = int(value)
-        return stats
+        """``Result.stats`` of the run so far (``records.stats.run_stats``)."""
+        return run_stats(steps=self.steps, rejected=self.rejected,
+                         compile_time=self.compile_time, run_time=self.run_time,
+                         nodes=self.system.n + 1, scheme_counts=self.sstats)
 
     # ---- failure -------------------------------------------------------------------------
     def failure_message(self) -> str:

@@ -1,8 +1,9 @@
 """``simulate``: the one Python entry point for an in-memory run."""
 from __future__ import annotations
 
+from ..config import Config
+from ..records.result import MemorySink, Result
 from ..stepping import layout as L
-from .result import MemorySink, Result
 from .run import Run, SimulationError
 
 __all__ = ["simulate"]
@@ -15,8 +16,6 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
     ``progress(run)`` is called between compiled chunks.  Invalid input raises ValueError;
     a run that cannot continue raises SimulationError carrying the partial ``result``.
     """
-    from ..config import Config
-
     if config is None:
         config = Config()
     elif not isinstance(config, Config):

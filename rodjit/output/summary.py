@@ -9,10 +9,13 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-
+from ..records.extremes import Extremes
+from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
-from . import hdf5
-from .extremes import Extremes
+from .h5files import open_file, writer_alive
+from .run_layout import SUMMARY_ATTRS, TABLES
+from .run_reader import check_run_file, read_checkpoint, read_config, read_table
+from .run_writer import RunWriter
 
 __all__ = ["RunSummary", "summarize", "closed_summary"]
 
@@ -108,21 +111,21 @@ def _num(value, spec: str) -> str:
 
 def summarize(path) -> RunSummary:
     """Read the summary of the run file at ``path`` (also while it is being written)."""
-    with hdf5.open_file(path) as f:
-        hdf5.check_run_file(f, path)
+    with open_file(path) as f:
+        check_run_file(f, path)
         counts = {name: min(f[name][c].shape[0] for c in cols)
-                  for name, cols in hdf5.TABLES.items()}
+                  for name, cols in TABLES.items()}
         extremes = Extremes()
         extremes.read(f["diagnostics"], counts["diagnostics"])
         status = str(f.attrs["status"])
         return _summary(
-            path, status, str(f.attrs["message"]), hdf5.read_config(f), hdf5.read_checkpoint(f),
-            counts, hdf5.read_table(f, "bounces"), extremes,
-            {k: f.attrs[k] for k in hdf5._SUMMARY_ATTRS if k in f.attrs},
-            hdf5.writer_alive(f) if status == "running" else None)
+            path, status, str(f.attrs["message"]), read_config(f), read_checkpoint(f),
+            counts, read_table(f, "bounces"), extremes,
+            {k: f.attrs[k] for k in SUMMARY_ATTRS if k in f.attrs},
+            writer_alive(f) if status == "running" else None)
 
 
-def closed_summary(writer: hdf5.RunWriter) -> RunSummary:
+def closed_summary(writer: RunWriter) -> RunSummary:
     """The summary of the file ``writer`` has just closed, from what it wrote: equal to
     ``summarize(writer.path)``."""
     fin = writer.final
@@ -147,6 +150,6 @@ def _summary(path, status, message, config, ck, counts, bounces, extremes: Extre
         max_floor_force=ext.force_max if math.isfinite(ext.force_max) else math.nan,
         steps=steps, rejected_steps=int(count[L.REJECTED]),
         compile_time=ck["compile_time"], run_time=run_time,
-        node_steps_per_second=steps * (config.rod.N + 1) / run_time if run_time > 0 else 0.0,
+        node_steps_per_second=node_steps_per_second(steps, config.rod.N + 1, run_time),
         attrs=attrs, writer_alive=alive,
     )

@@ -10,6 +10,7 @@ import numpy as np
 from ..config import parse_value
 from ..sweeps.grid import format_value
 from ..sweeps.point import SUMMARY_COLUMNS
+from ..sweeps.sweep_table import SweepTable, load_sweep
 from .mpl import new_figure
 
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
@@ -167,8 +168,6 @@ def _heatmap(fig, table, quantity, x, y, at) -> None:
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
                  at=None):
     """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable."""
-    from ..sweeps.table import SweepTable, load_sweep
-
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)

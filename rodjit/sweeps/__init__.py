@@ -1,7 +1,7 @@
 """Parameter sweeps: a grid of configurations run on every core or on a Dask cluster, one
 summary row per point in one HDF5 file (``rodjit sweep`` on the command line)."""
-from .driver import SweepInterrupted, SweepProgress, sweep
 from .grid import Grid
-from .table import SweepTable, load_sweep
+from .run_sweep import SweepInterrupted, SweepProgress, sweep
+from .sweep_table import SweepTable, load_sweep
 
 __all__ = ["sweep", "Grid", "SweepTable", "load_sweep", "SweepInterrupted", "SweepProgress"]

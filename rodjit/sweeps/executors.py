@@ -36,9 +36,10 @@ WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_TH
 # cut: no statistical profiler sampling every worker thread every 10 ms (the tasks are
 # compiled code: the samples would say nothing), no work stealing (rodjit keeps at most two
 # tasks per worker, nothing to steal), event-loop, system and memory monitors polled every
-# second or so instead of every 20-500 ms (an idle cluster of two workers: 1.3 % of a core
-# instead of 5.6 % here), no active memory manager (results leave the workers at once), and
-# no retries of a point whose worker died (rodjit re-runs it alone: DaskCluster.results)
+# second or so instead of Dask's 20-500 ms (an idle cluster otherwise keeps a good part of a
+# core busy; benchmarks/bench_sweep.py measures it), no active memory manager (results
+# leave the workers at once), and no retries of a point whose worker died (rodjit re-runs
+# it alone: DaskCluster.results)
 DASK_WORKER_CONFIG = {"distributed.worker.profile.enabled": False,
                       "distributed.scheduler.work-stealing": False,
                       "distributed.admin.tick.interval": "500ms",
@@ -360,7 +361,7 @@ class DaskCluster:
         timing = {"sent": 0, "done": 0, "wall": 0.0}
 
         def batch() -> tuple[PointTask, ...]:
-            # a task costs Dask ~5-10 ms of CPU here (scheduler, client, worker): short points
+            # a task costs Dask milliseconds of CPU (scheduler, client, worker): short points
             # go several to a task, of about TASK_SECONDS; none before a point has been
             # timed, and (guided scheduling) at most the remaining points over the tasks in
             # flight, so the tasks shrink toward the end and the workers finish together
@@ -381,7 +382,7 @@ class DaskCluster:
 
         def fill() -> None:
             # Two tasks per worker thread: the next one waits on the worker while one runs,
-            # so no scheduler round trip (~10 ms here) stands between them.  While a point
+            # so no scheduler round trip stands between them.  While a point
             # whose worker died is pending or re-running, at most one task per live worker
             # process: then that point has a process to itself, and if it dies again it was
             # the one that killed it.

@@ -18,12 +18,18 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..driver.run import Run, SimulationError, Sink
-from ..output.extremes import Extremes
+from ..driver.files import run_to_file
+from ..driver.run import Run, SimulationError
+from ..model.laws import get_law
+from ..records.bounces import bounce_table, empty_bounces
+from ..records.columns import BOUNCE_COLUMNS
+from ..records.extremes import Extremes
+from ..records.sink import Sink
 from ..stepping import layout as L
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
-           "empty_columns", "law_modules", "BOUNCE_COLUMNS", "start_worker", "worker_info"]
+           "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS", "start_worker",
+           "worker_info"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -50,9 +56,6 @@ SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
 }
 _FILL = {"str": "", "int": 0, "float": math.nan}
 _NP_DTYPES = {"str": object, "int": np.int64, "float": np.float64}
-
-# the bounce table of a point: the run file's columns and dtypes
-BOUNCE_COLUMNS = L.BOUNCE_COLUMNS + ("open",)
 
 
 class PointTask(NamedTuple):
@@ -92,13 +95,6 @@ def empty_columns(n: int) -> dict[str, np.ndarray]:
             for name, (kind, _) in SUMMARY_COLUMNS.items()}
 
 
-def empty_bounces() -> dict:
-    out = {name: np.zeros(0) for name in L.BOUNCE_COLUMNS}
-    out["n_episodes"] = np.zeros(0, np.int64)
-    out["open"] = np.zeros(0, bool)
-    return out
-
-
 def died(index: int, message: str) -> PointResult:
     """The result of a point whose worker process died while running it."""
     return PointResult(index, empty_values("failed", message), empty_bounces())
@@ -108,8 +104,6 @@ def law_modules(config) -> tuple[str, ...]:
     """Modules defining the point's stress laws, unless rodjit's own: a worker in a fresh
     process imports them to find the laws by name (the module of ``from_config`` is the
     one that registers a law, the kernels may come from others)."""
-    from ..model.laws import get_law
-
     mods = []
     for kind, name in (("rod", config.rod.law), ("floor", config.floor.law)):
         law = get_law(kind, name)
@@ -123,31 +117,15 @@ def law_modules(config) -> tuple[str, ...]:
 class _PointSink(Sink):
     """Keeps what a summary row needs: running extremes and the bounce rows."""
 
-    _COLUMNS = tuple(L.DIAG_COLUMNS.index(c) for c in Extremes.COLUMNS)
-
     def __init__(self):
         self.extremes = Extremes()
         self.rows: list[np.ndarray] = []
 
     def diagnostics(self, rows):
-        self.extremes.update(*(rows[:, j] for j in self._COLUMNS))
+        self.extremes.update_rows(rows)
 
     def bounces(self, rows):
         self.rows.append(rows.copy())
-
-
-def _bounce_table(sink: _PointSink, run: Run) -> dict:
-    rows = list(sink.rows)
-    is_open = [np.zeros(len(r), bool) for r in rows]
-    pending = run.pending_bounce()
-    if pending is not None:
-        rows.append(pending[0][None, :])
-        is_open.append(np.array([pending[1]]))
-    b = np.concatenate(rows) if rows else np.zeros((0, len(L.BOUNCE_COLUMNS)))
-    out = {name: b[:, j].copy() for j, name in enumerate(L.BOUNCE_COLUMNS)}
-    out["n_episodes"] = out["n_episodes"].astype(np.int64)
-    out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)
-    return out
 
 
 def _bounce_values(bounces: dict) -> dict:
@@ -174,7 +152,7 @@ def _run_in_memory(config) -> tuple[dict, dict]:
             pass
     except SimulationError as exc:
         status, message = "failed", str(exc)
-    bounces = _bounce_table(sink, run)
+    bounces = bounce_table(sink.rows, run.pending_bounce())
     ext = sink.extremes.with_bounces(bounces)
     values = {"status": status, "message": message, "min_u0": _finite(ext.u0_min),
               "max_floor_force": _finite(ext.force_max), "min_strain": _finite(ext.strain_min),
@@ -189,8 +167,6 @@ def _finite(x: float) -> float:
 
 
 def _run_to_file(config, path: str) -> tuple[dict, dict]:
-    from ..driver.files import run_to_file
-
     try:
         # one thread: the sweep's workers already occupy every core
         s = run_to_file(config, path, overwrite=True, handle_signals=False, overlap=False,

@@ -1,12 +1,15 @@
-"""The in-memory result of ``simulate`` and the sink that collects it."""
+"""The in-memory result of a run (what ``simulate`` returns and ``load_file`` reads) and
+the sink that collects it."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..stepping.layout import BOUNCE_COLUMNS, DIAG_COLUMNS, EPISODE_COLUMNS
-from .run import Sink
+from .bounces import bounce_table
+from .columns import DIAG_COLUMNS, EPISODE_COLUMNS
+from .extremes import Extremes
+from .sink import Sink
 
 __all__ = ["Result", "MemorySink"]
 
@@ -16,9 +19,10 @@ class Result:
     """Everything a run produced.
 
     ``t``/``u``/``v``: snapshots (rows are times, columns the nodes at ``x``);
-    ``diagnostics``: column name -> array (``t``, ``dt``, energies, ``dissipated``,
-    ``u_bottom``, ``floor_force``, ``min_strain``, ``cm_height``, ``cm_velocity``);
-    ``episodes``: ``t_start``, ``t_end``; ``bounces``: MODEL.md §3 columns plus ``open``;
+    ``diagnostics``: column name -> array, the columns of ``records.columns.DIAG_COLUMNS``
+    (``t``, ``dt``, energies, ``dissipated``, the floor and strain extremes, the centre of
+    mass); ``episodes``: ``t_start``, ``t_end``; ``bounces``: ``records.bounces.bounce_table``
+    (MODEL.md §3 columns plus ``open``);
     ``stats``: steps, rejected steps, wall/compile/run time, node-steps per second.
     """
 
@@ -47,8 +51,6 @@ class Result:
         """max |E(t) + dissipated(t) − E(0)| / scale over the diagnostics samples, scale =
         max(|E(0)|, max kinetic energy): the drift at μ = 0, the balance error at μ > 0
         (NaN without diagnostics samples)."""
-        from ..output.extremes import Extremes
-
         ext = Extremes()
         ext.update(*(self.diagnostics[c] for c in Extremes.COLUMNS))
         return ext.energy_error(self.energy0)
@@ -81,15 +83,6 @@ class MemorySink(Sink):
         cat = lambda parts, shape: np.concatenate(parts) if parts else np.zeros(shape)
         diag = cat(self._diag, (0, len(DIAG_COLUMNS)))
         ep = cat(self._ep, (0, len(EPISODE_COLUMNS)))
-        b = cat(self._b, (0, len(BOUNCE_COLUMNS)))
-        is_open = np.zeros(b.shape[0], dtype=bool)
-        pending = run.pending_bounce()
-        if pending is not None:
-            b = np.vstack([b, pending[0]])
-            is_open = np.append(is_open, pending[1])
-        bounces = {name: b[:, j].copy() for j, name in enumerate(BOUNCE_COLUMNS)}
-        bounces["n_episodes"] = bounces["n_episodes"].astype(np.int64)
-        bounces["open"] = is_open
         return Result(
             config=run.config,
             x=np.arange(n1) / run.system.n,
@@ -98,7 +91,7 @@ class MemorySink(Sink):
             v=cat(self._v, (0, n1)),
             diagnostics={name: diag[:, j].copy() for j, name in enumerate(DIAG_COLUMNS)},
             episodes={name: ep[:, j].copy() for j, name in enumerate(EPISODE_COLUMNS)},
-            bounces=bounces,
+            bounces=bounce_table(self._b, run.pending_bounce()),
             stats=run.stats(),
             status=status,
             message=message,

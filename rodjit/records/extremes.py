@@ -14,6 +14,8 @@ import math
 
 import numpy as np
 
+from .columns import DIAG_COLUMNS
+
 __all__ = ["Extremes"]
 
 
@@ -23,6 +25,7 @@ class Extremes:
 
     COLUMNS = ("energy_total", "dissipated", "energy_kinetic", "min_strain", "u_bottom",
                "floor_force")
+    ROW_INDICES = tuple(DIAG_COLUMNS.index(c) for c in COLUMNS)   # in a diagnostics row
     BLOCK_ROWS = 1 << 16     # rows read at a time from a file
 
     def __init__(self):
@@ -46,6 +49,10 @@ class Extremes:
         self.strain_min = min(self.strain_min, float(np.min(min_strain)))
         self.u0_min = min(self.u0_min, float(np.min(u_bottom)))
         self.force_max = max(self.force_max, float(np.max(floor_force)))
+
+    def update_rows(self, rows) -> None:
+        """Fold in a block of diagnostics rows as the run drains them (``DIAG_COLUMNS``)."""
+        self.update(*(rows[:, j] for j in self.ROW_INDICES))
 
     def read(self, group, n: int) -> None:
         """Fold in the first ``n`` rows of a diagnostics group of a run file, in blocks."""

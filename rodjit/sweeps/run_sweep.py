@@ -17,12 +17,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ..driver.files import _StopFlag, check_output
-from ..output import hdf5
+from ..config import Config
+from ..driver.signals import StopFlag
+from ..output.h5files import FileBusy, check_output, writer_alive
+from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import Grid
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules
-from .table import SweepTable
+from .sweep_table import SweepTable
 
 __all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
 
@@ -68,9 +70,7 @@ def _check_jobs(jobs) -> int:
 
 
 def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
-    from ..output.sweep_file import key_columns
-
-    return {**key_columns(grid), **empty_columns(len(grid))}
+    return {**sweep_file.key_columns(grid), **empty_columns(len(grid))}
 
 
 def _prepare_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
@@ -95,14 +95,12 @@ def _prepare_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool
 
 def _open_resume(output, config, grid):
     """Base config, grid, columns and attributes of the sweep file to continue."""
-    from ..output import sweep_file
-
     with sweep_file.open_sweep(output) as f:
         header = sweep_file.read_header(f)
         columns = sweep_file.read_summary(f)
-        alive = hdf5.writer_alive(f) if header["attrs"].get("status") == "running" else False
+        alive = writer_alive(f) if header["attrs"].get("status") == "running" else False
     if alive:
-        raise hdf5.FileBusy(f"{str(output)!r} is being written by a running sweep (process "
+        raise FileBusy(f"{str(output)!r} is being written by a running sweep (process "
                             f"{header['attrs'].get('writer_pid')}); stop it before resuming")
     base, file_grid = header["base"], header["grid"]
     if config is not None and config != base:
@@ -132,9 +130,6 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     a SweepProgress.  Bad input raises ValueError before anything is written; SIGINT or
     SIGTERM raise SweepInterrupted after the file is closed with every finished point.
     """
-    from ..config import Config
-    from ..output import sweep_file
-
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     jobs = _check_jobs(jobs)
@@ -209,8 +204,6 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
            flush_interval, t0: float) -> SweepTable:
     """Run ``todo`` on ``executor`` (started at ``t0``: its start-up counts in the wall
     time) into ``table`` and its file."""
-    from ..output import sweep_file
-
     grid, base, cols = table.grid, table.base, table.columns
     output = table.path
     n = len(grid)
@@ -229,14 +222,14 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     last = time.monotonic()
     status, message, signum = "completed", "", None
     results = executor.results(tasks(), total=len(todo))
-    with _StopFlag(handle_signals) as stop:
+    with StopFlag(handle_signals) as stop:
         try:
             for result in results:
                 if result is not None:
                     for name in SUMMARY_COLUMNS:
                         cols[name][result.index] = result.values[name]
                     if output is None:
-                        table._bounces[result.index] = result.bounces
+                        table.keep_bounces(result.index, result.bounces)
                     else:
                         batch.append(result)
                     ran += 1
@@ -254,7 +247,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                         sweep_file.write_results(output, batch, wait=BUSY_WAIT)
                         batch = []
                         busy = False
-                    except hdf5.FileBusy:   # a reader holds the file: keep them, retry later
+                    except FileBusy:   # a reader holds the file: keep them, retry later
                         busy = True
                     last = time.monotonic()
         except KeyboardInterrupt:          # a second signal while stopping

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..records.bounces import empty_bounces
+from . import sweep_file
 from .grid import Grid, format_value
 from .point import SUMMARY_COLUMNS
 
@@ -51,14 +53,17 @@ class SweepTable:
         """The configuration point ``index`` ran."""
         return self.grid.config(self.base, index)
 
+    def keep_bounces(self, index: int, bounces: dict[str, np.ndarray]) -> None:
+        """Hold point ``index``'s bounce table in memory (a sweep without a file)."""
+        self._bounces[index] = bounces
+
     def bounces(self, index: int) -> dict[str, np.ndarray]:
+        """Point ``index``'s bounce table: kept in memory, else read from the file (empty
+        columns for a point that has not run)."""
         if index in self._bounces:
             return self._bounces[index]
         if self.path is None:
-            from .point import empty_bounces
             return empty_bounces()
-        from ..output import sweep_file
-
         with sweep_file.open_sweep(self.path) as f:
             return sweep_file.read_bounces(f, index)
 
@@ -133,8 +138,6 @@ def _cell(value, column: str) -> str:
 
 def load_sweep(path) -> SweepTable:
     """Read a sweep file's summary table (also while the sweep is still running)."""
-    from ..output import sweep_file
-
     with sweep_file.open_sweep(path) as f:
         header = sweep_file.read_header(f)
         columns = sweep_file.read_summary(f)

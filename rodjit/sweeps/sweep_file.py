@@ -11,15 +11,19 @@ again, so between batches the file is complete on disk and other processes can r
 """
 from __future__ import annotations
 
-import datetime
 import time
 
 import h5py
 import numpy as np
 
-from ..sweeps.grid import Grid
-from ..sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, empty_columns
-from . import hdf5
+from ..config import Config
+from ..output.h5files import (FileBusy, NotARunFile, check_kind, history_with, now, open_file,
+                              writer_attrs)
+from ..records.bounces import empty_bounces
+from ..records.columns import BOUNCE_COLUMNS
+from ..version import __version__
+from .grid import Grid
+from .point import SUMMARY_COLUMNS, empty_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
            "read_header", "read_summary", "read_bounces", "check_sweep_file", "key_columns",
@@ -32,10 +36,6 @@ LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file befor
 
 _STR = h5py.string_dtype("utf-8")
 _DTYPES = {"str": _STR, "int": np.int64, "float": np.float64}
-
-
-def _now() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
 
 
 def _key_kind(values) -> str:
@@ -63,25 +63,23 @@ def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
         except OSError as exc:
             if "lock" not in str(exc) or time.monotonic() > deadline:
                 if "lock" in str(exc):
-                    raise hdf5.FileBusy(f"{str(path)!r} is held open by another process; "
-                                        f"close it there and retry") from None
+                    raise FileBusy(f"{str(path)!r} is held open by another process; "
+                                   f"close it there and retry") from None
                 raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
             time.sleep(0.05)
 
 
 def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
     """A new sweep file: attributes, every summary column with all rows pending."""
-    from .. import __version__
-
     n = len(grid)
     with _open(path, "w") as f:
         for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
-                           "rodjit_version": __version__, "created": _now(),
+                           "rodjit_version": __version__, "created": now(),
                            "command": command, "base_config_toml": base.to_toml(),
                            "grid": grid.to_json(), "grid_keys": list(grid.keys),
                            "n_points": n, "status": "running", "message": "",
-                           "history": [f"{_now()} created by: {command}"],
-                           **hdf5._writer_attrs(), **attrs}.items():
+                           "history": [f"{now()} created by: {command}"],
+                           **writer_attrs(), **attrs}.items():
             f.attrs[key] = value
         s = f.create_group("summary", track_order=True)
         s.attrs["description"] = ("one row per grid point, in grid order (the last swept key "
@@ -104,8 +102,8 @@ def reopen(path, *, history: str) -> None:
     with _open(path, "r+") as f:
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
-        f.attrs["history"] = [str(s) for s in f.attrs.get("history", [])] + [f"{_now()} {history}"]
-        for key, value in hdf5._writer_attrs().items():
+        f.attrs["history"] = history_with(f, history)
+        for key, value in writer_attrs().items():
             f.attrs[key] = value
 
 
@@ -147,13 +145,11 @@ def finish(path, status: str, message: str = "", attrs: dict | None = None) -> N
 # ---- reading ------------------------------------------------------------------------------
 def check_sweep_file(f: h5py.File, path=None) -> None:
     """Raise NotARunFile unless ``f`` is a sweep file of a format this version reads."""
-    hdf5.check_kind(f, KIND, FORMAT_VERSION, path)
+    check_kind(f, KIND, FORMAT_VERSION, path)
 
 
 def read_header(f: h5py.File) -> dict:
     """Base configuration, grid and the root attributes of an open sweep file."""
-    from ..config import Config
-
     attrs = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in f.attrs.items()}
     return {"base": Config.from_toml_string(f.attrs["base_config_toml"]),
             "grid": Grid.from_json(f.attrs["grid"]), "attrs": attrs}
@@ -172,7 +168,6 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
     """Point ``index``'s bounce table (empty columns if the point has not run)."""
     g = f["points"].get(str(index))
     if g is None:
-        from ..sweeps.point import empty_bounces
         return empty_bounces()
     return {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
 
@@ -183,9 +178,9 @@ def open_sweep(path) -> h5py.File:
     deadline = time.monotonic() + 5.0
     while True:
         try:
-            f = hdf5.open_file(path)
+            f = open_file(path)
             break
-        except hdf5.NotARunFile as exc:
+        except NotARunFile as exc:
             if "lock" not in str(exc) or time.monotonic() > deadline:
                 raise
             time.sleep(0.05)

@@ -1,0 +1,35 @@
+"""A clean stop on SIGINT/SIGTERM for long calls (a streamed run, a sweep): the signal is
+recorded and the call stops at its next safe point instead of dying mid-write."""
+from __future__ import annotations
+
+import signal
+import threading
+
+__all__ = ["StopFlag"]
+
+
+class StopFlag:
+    """While active (main thread only), SIGINT and SIGTERM record the signal instead of
+    killing the process; the run stops cleanly at the next return from compiled code.
+    A second signal aborts at once (KeyboardInterrupt)."""
+
+    def __init__(self, install: bool):
+        self.install = install and threading.current_thread() is threading.main_thread()
+        self.signum: int | None = None
+        self._old = {}
+
+    def _handler(self, signum, frame):
+        if self.signum is not None:
+            raise KeyboardInterrupt
+        self.signum = signum
+
+    def __enter__(self):
+        if self.install:
+            for s in (signal.SIGINT, signal.SIGTERM):
+                self._old[s] = signal.signal(s, self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        for s, old in self._old.items():
+            signal.signal(s, old)
+        self._old = {}

@@ -1,0 +1,168 @@
+"""Opening rodjit's HDF5 files and telling what they are: read-only opening of a file
+that may be being written (SWMR), the kind and format checks, opening for writing, the
+record of which process writes a file and whether it is still alive, and the checks an
+output path passes before a run or a sweep writes to it.
+
+Both file kinds (runs, ``output.run_writer``; sweeps, ``sweeps.sweep_file``) use these.
+"""
+from __future__ import annotations
+
+import datetime
+import os
+import socket
+from pathlib import Path
+
+import h5py
+
+__all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
+           "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
+           "writer_alive", "is_live", "check_output"]
+
+
+class NotARunFile(ValueError):
+    """The path is not a rodjit run file (missing, not HDF5, or another kind of file)."""
+
+
+class FileBusy(ValueError):
+    """Another process holds the file (a live writer, or a reader blocking a write)."""
+
+
+class OutputExists(ValueError):
+    """The output file exists and overwriting was not asked for."""
+
+
+def open_file(path) -> h5py.File:
+    """Open a rodjit file read-only: plainly if it was closed, in SWMR-read mode if a writer
+    has it open or was killed before closing it (both leave the SWMR flags set)."""
+    path = Path(path)
+    if not path.exists():
+        raise NotARunFile(f"{str(path)!r} does not exist")
+    if path.is_dir():
+        raise NotARunFile(f"{str(path)!r} is a directory, not a rodjit file")
+    if not os.access(path, os.R_OK):
+        raise NotARunFile(f"{str(path)!r} is not readable")
+    if not h5py.is_hdf5(path):
+        raise NotARunFile(f"{str(path)!r} is not a rodjit file (not an HDF5 file)")
+    try:
+        return h5py.File(path, "r")
+    except OSError as exc:
+        if "already open for write" not in str(exc):
+            raise NotARunFile(f"cannot open {str(path)!r}: {exc}") from None
+    return h5py.File(path, "r", swmr=True)
+
+
+def check_kind(f: h5py.File, kind: str, version: int, path=None) -> None:
+    """Raise NotARunFile unless ``f`` is a rodjit ``kind`` file ("run", "sweep") of format
+    ``version``."""
+    name = str(path if path is not None else f.filename)
+    found = f.attrs.get("rodjit_kind")
+    if found is None:
+        raise NotARunFile(f"{name!r} is not a rodjit file (no 'rodjit_kind' attribute)")
+    if found != kind:
+        raise NotARunFile(f"{name!r} is a rodjit {found!r} file, not a {kind} file")
+    got = int(f.attrs.get("format_version", 0))
+    if got != version:
+        raise NotARunFile(f"{name!r} has {kind}-file format {got}; this rodjit reads format "
+                          f"{version}")
+
+
+def file_kind(path) -> str:
+    """The ``rodjit_kind`` root attribute of the file at ``path`` ("run", "sweep", ...);
+    NotARunFile if it is not a readable rodjit file."""
+    with open_file(path) as f:
+        kind = f.attrs.get("rodjit_kind")
+    if kind is None:
+        raise NotARunFile(f"{str(path)!r} is not a rodjit file (no 'rodjit_kind' attribute)")
+    return str(kind)
+
+
+def open_for_writing(path, mode: str) -> h5py.File:
+    """``h5py.File(path, mode)`` in the latest file format (SWMR needs it); FileBusy if
+    another process holds the file, ValueError (one line) for any other failure."""
+    try:
+        return h5py.File(path, mode, libver="latest")
+    except OSError as exc:
+        if "lock" in str(exc):
+            raise FileBusy(f"{str(path)!r} is open in another process; close it there and "
+                           f"retry") from None
+        raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
+
+
+def now() -> str:
+    """The current UTC time as the files record it (ISO 8601, seconds)."""
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def history_with(f: h5py.File, entry: str) -> list[str]:
+    """The file's ``history`` attribute with ``entry`` appended, stamped with ``now()``."""
+    return [str(s) for s in f.attrs.get("history", [])] + [f"{now()} {entry}"]
+
+
+def process_tag(pid: int) -> str:
+    """Boot id and start time of process ``pid`` (Linux), so a reused pid is not mistaken
+    for the writer; "" where /proc does not tell."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id") as fh:
+            boot = fh.read().strip()
+        with open(f"/proc/{pid}/stat") as fh:
+            start = fh.read().rsplit(")", 1)[1].split()[19]   # field 22: start time
+        return f"{boot}:{start}"
+    except (OSError, IndexError):
+        return ""
+
+
+def writer_attrs() -> dict:
+    """The root attributes naming the writing process (this one): host, pid, start tag."""
+    pid = os.getpid()
+    return {"writer_host": socket.gethostname(), "writer_pid": pid,
+            "writer_tag": process_tag(pid)}
+
+
+def writer_alive(f: h5py.File) -> bool | None:
+    """Is the process that last wrote ``f`` still running?  None if it ran on another host."""
+    if f.attrs.get("writer_host") != socket.gethostname():
+        return None
+    pid = int(f.attrs.get("writer_pid", -1))
+    if pid <= 0 or pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        pass
+    tag = str(f.attrs.get("writer_tag", ""))
+    return not tag or process_tag(pid) in ("", tag)
+
+
+def is_live(path) -> bool:
+    """True if ``path`` is a rodjit file (a run or a sweep) whose writer is still running
+    on this host."""
+    try:
+        with open_file(path) as f:
+            return f.attrs.get("status") == "running" and writer_alive(f) is True
+    except (ValueError, OSError):
+        return False
+
+
+def check_output(path, overwrite: bool) -> Path:
+    """Raise ValueError (one line) unless ``path`` can be created or replaced: its directory
+    exists and is writable, and it is not the file of a live writer."""
+    path = Path(path)
+    parent = path.parent if str(path.parent) else Path(".")
+    if not parent.exists():
+        raise ValueError(f"output directory {str(parent)!r} does not exist")
+    if not parent.is_dir():
+        raise ValueError(f"output directory {str(parent)!r} is not a directory")
+    if path.is_dir():
+        raise ValueError(f"output {str(path)!r} is a directory, not a file")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise ValueError(f"output directory {str(parent)!r} is not writable")
+    if path.exists():
+        if not overwrite:
+            raise OutputExists(f"output file {str(path)!r} already exists; pass "
+                               f"overwrite=True to replace it")
+        if is_live(path):
+            raise FileBusy(f"output file {str(path)!r} is being written by a running "
+                           f"rodjit process; stop it before replacing the file")
+    return path

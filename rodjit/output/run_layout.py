@@ -1,0 +1,237 @@
+"""The run file's layout (the public contract; README "HDF5 layout") and the builder that
+creates it.
+
+Root attributes, ``/grid/x``, the tables ``/snapshots``, ``/diagnostics``, ``/episodes``,
+``/bounces`` (one dataset per column, growing along axis 0, with dimension scales so xarray
+sees coordinates) and ``/checkpoint`` (two slots written alternately; ``/checkpoint/current``
+names the valid one).  Everything is created before SWMR writing starts, which cannot add
+objects.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import h5py
+import numpy as np
+from h5py import h5a, h5d, h5p, h5s, h5t
+
+from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS, INT_COLUMNS
+from ..stepping import layout as L
+from ..stepping.schemes import SCHEME_STATS
+from ..version import __version__
+from .growing_table import Table
+from .h5files import now, writer_attrs
+
+__all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
+           "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "RunLayout",
+           "build_layout", "overwrite"]
+
+KIND = "run"            # root attribute rodjit_kind: what this file holds
+FORMAT_VERSION = 1
+STATUSES = ("running", "completed", "interrupted", "failed")
+
+SNAPSHOT_CHUNK_BYTES = 256 * 1024   # one chunk of u (or v) holds this many bytes of snapshots
+COLUMN_CHUNK_ROWS = 8192            # diagnostics: rows per chunk
+EVENT_CHUNK_ROWS = 1024             # episodes, bounces: rows per chunk
+
+# group -> columns (in file order); the first column is the group's dimension scale
+TABLES = {
+    "snapshots": ("t", "step", "u", "v"),
+    "diagnostics": L.DIAG_COLUMNS,
+    "episodes": L.EPISODE_COLUMNS,
+    "bounces": BOUNCE_COLUMNS,
+}
+
+_DESCRIPTIONS = {
+    "snapshots/t": "simulated time of each snapshot (t0 + k * output.snapshot_interval)",
+    "snapshots/step": "accepted steps taken before the snapshot",
+    "snapshots/u": "height u_i of every node (rows: times, columns: nodes at x)",
+    "snapshots/v": "velocity v_i of every node",
+    "snapshots/x": "natural position x_i = i/N of each node",
+    "grid/x": "natural position x_i = i/N of each node",
+    "episodes/t_start": "start of a contact episode (u_0 < 0)",
+    "episodes/t_end": "end of the episode",
+    "bounces/open": "true if the bounce's last episode had not ended when the run stopped",
+}
+
+
+def _names(size: int, mapping: dict[int, str]) -> tuple[str, ...]:
+    """Names for the entries of a layout array, checked complete at import."""
+    if sorted(mapping) != list(range(size)):
+        raise RuntimeError(f"layout names out of date: indices {sorted(mapping)} vs size {size}")
+    return tuple(mapping[i] for i in range(size))
+
+
+CLOCK_NAMES = _names(L.CLOCK_SIZE, {
+    L.T: "t", L.DT: "dt", L.T_END: "t_end", L.DISSIPATED: "dissipated", L.E0: "energy0",
+    L.SNAP_DT: "snapshot_interval", L.DIAG_DT: "diagnostics_interval", L.T0: "t0",
+    L.W: "cm_velocity", L.TOL: "time_tolerance", L.EMIN: "min_strain"})
+COUNT_NAMES = _names(L.COUNT_SIZE, {
+    L.STEP: "step", L.REJECTED: "rejected", L.K_SNAP: "next_snapshot_index",
+    L.K_DIAG: "next_diagnostics_index", L.N_SNAP: "buffered_snapshots",
+    L.N_DIAG: "buffered_diagnostics", L.N_EP: "buffered_episodes",
+    L.N_BOUNCE: "buffered_bounces", L.EPISODES_TOTAL: "episodes_total",
+    L.BOUNCES_TOTAL: "bounces_total", L.STARTED: "started"})
+EV_NAMES = _names(L.EV_SIZE, {
+    L.IN_CONTACT: "in_contact", L.EP_START: "episode_start",
+    L.B_NEP: "bounce_episodes", L.B_T_IMPACT: "bounce_t_impact",
+    L.B_W_IMPACT: "bounce_w_impact", L.B_T_RELEASE: "bounce_t_release",
+    L.B_W_RELEASE: "bounce_w_release", L.CUR_MIN_U0: "min_u0_since_impact",
+    L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
+    L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
+    L.REL_MIN_EPS: "min_strain_at_release"})
+SUMMARY_ATTRS = ("rodjit_version", "created", "command", "history")   # shown by ``info``
+CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")      # a checkpoint's arrays
+CK_SCALARS = ("run_time", "compile_time")                     # and its numbers
+_CK_DATASETS = CK_ARRAYS + CK_SCALARS + ("lengths",)
+_CK_NAMES = {"state": ("u", "v", "a"), "clock": CLOCK_NAMES, "count": COUNT_NAMES,
+             "ev": EV_NAMES, "sstats": SCHEME_STATS or ("unused",),
+             "lengths": tuple(TABLES)}
+
+
+def _filters(compression: str) -> dict:
+    if compression == "gzip":
+        return {"compression": "gzip", "compression_opts": 4, "shuffle": True}
+    if compression == "lzf":
+        return {"compression": "lzf", "shuffle": True}
+    return {}
+
+
+class RunLayout(NamedTuple):
+    """What a writer writes: each table, the checkpoint slots' datasets, current."""
+
+    tables: dict
+    slots: list
+    current: h5py.Dataset
+
+    @classmethod
+    def of(cls, f: h5py.File) -> "RunLayout":
+        """Looked up in an existing run file."""
+        ckg = f["checkpoint"]
+        return cls({name: Table.of(f[name][c] for c in cols) for name, cols in TABLES.items()},
+                   [{name: ckg[f"slot{i}"][name] for name in _CK_DATASETS} for i in (0, 1)],
+                   ckg["current"])
+
+
+def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
+    """Create every group, dataset, dimension scale and attribute of a run file with empty
+    tables and the checkpoint ``ck`` in slot 0 (``ck["lengths"]``: the rows it matches, none
+    if absent); everything must exist before SWMR writing starts.  Return the datasets
+    written."""
+    n1 = config.rod.N + 1
+    x = np.arange(n1, dtype=np.float64) / config.rod.N
+    base = {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
+            "rodjit_version": __version__, "created": now(), "command": "",
+            "config_toml": config.to_toml(), "status": "running", "message": "",
+            **writer_attrs()}
+    base.update(attrs)
+    for key, value in base.items():
+        _attr(f, key, value)
+    filters = _filters(config.output.compression)
+
+    grid = f.create_group("grid")
+    gx = grid.create_dataset("x", data=x)
+    gx.make_scale("x")
+
+    def column(group, name, row_shape, chunk_rows, dtype=np.float64, like=None):
+        """A growing column; ``like``: a column of the same group, shape and dtype whose
+        creation properties it shares."""
+        if like is not None:
+            ds = _like(like, group, name)
+        else:
+            ds = group.create_dataset(name, shape=(0,) + row_shape,
+                                      maxshape=(None,) + row_shape,
+                                      chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
+        text = _DESCRIPTIONS.get(f"{group.name[1:]}/{name}")
+        if text:
+            _attr(ds, "description", text)
+        return ds
+
+    snap = f.create_group("snapshots")
+    rows = max(1, SNAPSHOT_CHUNK_BYTES // (8 * n1))
+    t = column(snap, "t", (), rows)
+    t.make_scale("t")
+    sx = snap.create_dataset("x", data=x)
+    sx.make_scale("x")
+    _attr(sx, "description", _DESCRIPTIONS["snapshots/x"])
+    step = column(snap, "step", (), rows, np.int64)
+    step.dims[0].attach_scale(t)
+    columns = {"snapshots": [t, step]}
+    for name in ("u", "v"):
+        ds = column(snap, name, (n1,), rows, like=columns["snapshots"][-1] if name == "v" else None)
+        ds.dims[0].attach_scale(t)
+        ds.dims[1].attach_scale(sx)
+        columns["snapshots"].append(ds)
+    shapes = {"snapshots": ((rows, [(), (), (n1,), (n1,)],
+                             [np.float64, np.int64, np.float64, np.float64]))}
+
+    for group, chunk in (("diagnostics", COLUMN_CHUNK_ROWS), ("episodes", EVENT_CHUNK_ROWS),
+                         ("bounces", EVENT_CHUNK_ROWS)):
+        g = f.create_group(group)
+        names = TABLES[group]
+        scale = column(g, names[0], (), chunk)
+        scale.make_scale(names[0])
+        columns[group] = [scale]
+        dtypes = [np.int64 if name in INT_COLUMNS else bool if name in BOOL_COLUMNS
+                  else np.float64 for name in names]
+        for name, dtype in zip(names[1:], dtypes[1:]):
+            ds = column(g, name, (), chunk, dtype, like=scale if dtype is np.float64 else None)
+            ds.dims[0].attach_scale(scale)
+            columns[group].append(ds)
+        shapes[group] = (chunk, [()] * len(names), dtypes)
+    tables = {name: Table(columns[name], cap=shapes[name][0], rows=shapes[name][1],
+                          dtypes=shapes[name][2], direct=not filters) for name in TABLES}
+
+    ckg = f.create_group("checkpoint")
+    _attr(ckg, "description", "two slots written alternately; 'current' names the valid "
+                              "one; its 'lengths' are the table rows it matches")
+    current = ckg.create_dataset("current", data=np.int64(0))
+    lengths = ck.get("lengths", {})
+    first = {name: np.asarray(ck[name], np.float64) for name in CK_SCALARS}
+    first.update({name: ck[name] for name in CK_ARRAYS},
+                 lengths=np.array([lengths.get(name, 0) for name in TABLES], np.int64))
+    slots = []
+    for slot in (0, 1):                       # slot 1: zeros (its fill value), unwritten
+        g = ckg.create_group(f"slot{slot}")
+        slots.append({})
+        for name in _CK_DATASETS:
+            value = np.asarray(first[name])
+            ds = slots[-1][name] = (g.create_dataset(name, data=value) if slot == 0 else
+                                    g.create_dataset(name, value.shape, value.dtype))
+            if name in _CK_NAMES:
+                _attr(ds, "names", _CK_NAMES[name])
+    return RunLayout(tables, slots, current)
+
+
+# A new run file has dozens of datasets and attributes, whose creation through h5py's
+# high-level calls costs more than streaming many snapshots; _attr and _like make the same
+# objects through the low-level API, skipping h5py's checks for an existing attribute or
+# dataset, which are moot in a new file (benchmarks/streaming_overhead.py measures it).
+_STR = h5py.string_dtype()
+_LINKS = h5p.create(h5p.LINK_CREATE)       # as h5py creates links with ASCII names
+_LINKS.set_create_intermediate_group(True)
+
+
+def _attr(obj, name: str, value) -> None:
+    """A new attribute, stored as ``obj.attrs[name] = value`` stores it: str and sequences
+    of str as variable-length UTF-8 strings, numbers as their NumPy type."""
+    arr = np.asarray(value)
+    if arr.dtype.kind in "OU":
+        arr = np.asarray(value, dtype=_STR)
+    space = h5s.create_simple(arr.shape) if arr.ndim else h5s.create(h5s.SCALAR)
+    h5a.create(obj.id, name.encode(), h5t.py_create(arr.dtype, logical=True), space).write(arr)
+
+
+def _like(proto: h5py.Dataset, group: h5py.Group, name: str) -> h5py.Dataset:
+    """A new dataset in ``group`` with the dtype, shape, maxshape and creation properties
+    (chunks, filters) of ``proto``."""
+    return h5py.Dataset(h5d.create(group.id, name.encode(), proto.id.get_type(),
+                                   proto.id.get_space(), dcpl=proto.id.get_create_plist(),
+                                   lcpl=_LINKS))
+
+
+def overwrite(ds: h5py.Dataset, value) -> None:
+    """Overwrite a whole small dataset through the low-level API, far cheaper than
+    ``ds[...] = value`` for the checkpoint's small writes (HDF5 converts the value's type
+    to the dataset's)."""
+    ds.id.write(h5s.ALL, h5s.ALL, np.ascontiguousarray(value))

@@ -1,0 +1,70 @@
+"""Reading a run file: its configuration, valid checkpoint and tables, or all of it as a
+``rodjit.Result`` (``load_file``).  A file still being written is read up to the rows
+present in every column."""
+from __future__ import annotations
+
+import h5py
+import numpy as np
+
+from ..config import Config
+from ..records.result import Result
+from ..records.stats import run_stats
+from ..stepping import layout as L
+from .h5files import NotARunFile, check_kind, open_file
+from .run_layout import CK_ARRAYS, CK_SCALARS, FORMAT_VERSION, KIND, TABLES
+
+__all__ = ["check_run_file", "read_config", "read_checkpoint", "read_table", "load_file"]
+
+
+def check_run_file(f: h5py.File, path=None) -> None:
+    """Raise NotARunFile unless ``f`` is a rodjit run file of a format this version reads."""
+    check_kind(f, KIND, FORMAT_VERSION, path)
+
+
+def read_config(f: h5py.File) -> Config:
+    """The configuration the file's run runs (root attribute ``config_toml``)."""
+    return Config.from_toml_string(f.attrs["config_toml"])
+
+
+def read_checkpoint(f: h5py.File) -> dict:
+    """The valid checkpoint: arrays for ``Run.from_checkpoint`` plus ``lengths`` (table
+    rows it matches, ``{"snapshots": n, ...}``) and cumulative ``compile_time``."""
+    ck = f["checkpoint"]
+    slot = int(ck["current"][()])
+    if slot not in (0, 1):
+        raise NotARunFile(f"{f.filename!r} holds no valid checkpoint yet")
+    g = ck[f"slot{slot}"]
+    out = {name: g[name][()] for name in CK_ARRAYS}
+    for name in CK_SCALARS:
+        out[name] = float(g[name][()])
+    out["lengths"] = dict(zip(TABLES, (int(n) for n in g["lengths"][()])))
+    return out
+
+
+def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str, np.ndarray]:
+    """Columns of one table (all rows, or ``rows``); a table still being written is cut to
+    the rows present in every column."""
+    g = f[group]
+    n = min(g[c].shape[0] for c in TABLES[group])
+    sel = slice(0, n) if rows is None else slice(*rows.indices(n))
+    return {c: g[c][sel] for c in TABLES[group]}
+
+
+def load_file(path):
+    """Read a whole run file into a ``rodjit.Result`` (the same object ``simulate`` returns)."""
+    with open_file(path) as f:
+        check_run_file(f, path)
+        config = read_config(f)
+        ck = read_checkpoint(f)
+        snaps = read_table(f, "snapshots")
+        stats = run_stats(steps=int(ck["count"][L.STEP]), rejected=int(ck["count"][L.REJECTED]),
+                          compile_time=ck["compile_time"], run_time=ck["run_time"],
+                          nodes=config.rod.N + 1, scheme_counts=ck["sstats"])
+        return Result(
+            config=config, x=f["grid/x"][()], t=snaps["t"], u=snaps["u"], v=snaps["v"],
+            diagnostics=read_table(f, "diagnostics"), episodes=read_table(f, "episodes"),
+            bounces=read_table(f, "bounces"), stats=stats,
+            status=str(f.attrs["status"]), message=str(f.attrs["message"]),
+            t_final=float(ck["clock"][L.T]), u_final=ck["state"][0].copy(),
+            v_final=ck["state"][1].copy(), energy0=float(ck["clock"][L.E0]),
+            dissipated=float(ck["clock"][L.DISSIPATED]))

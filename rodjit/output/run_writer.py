@@ -1,0 +1,213 @@
+"""Writing a run file: ``RunWriter`` (the HDF5 sink and its checkpoint commit) and the
+three ways a writer starts: a new file (``create_run_file``), a closed one continued
+(``reopen_run_file``), a file whose writer died rebuilt from its checkpoint (``recover``).
+
+The writer works in SWMR mode: other processes may read the file while it grows
+(``h5py.File(path, "r", swmr=True)``), and a writer killed at any moment leaves a file
+whose valid checkpoint matches the first ``lengths`` rows of every table.
+"""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from ..records.bounces import bounce_table
+from ..records.extremes import Extremes
+from ..records.sink import Sink
+from ..stepping import layout as L
+from .h5files import history_with, now, open_for_writing, writer_attrs
+from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
+                         overwrite)
+from .run_reader import check_run_file, read_checkpoint, read_config
+
+__all__ = ["RunWriter", "create_run_file", "reopen_run_file", "recover"]
+
+
+class RunWriter(Sink):
+    """The HDF5 sink: tables fed by ``Run.advance``, checkpoints by ``save``.
+
+    ``save`` writes the buffered rows and a checkpoint that records the table lengths, with
+    an HDF5 flush before and after flipping ``/checkpoint/current``: whatever moment the
+    process dies, the current slot is complete and matches rows present on disk.  The
+    writer also keeps what the end-of-run summary needs (``summary.closed_summary``), so
+    the file is not read back.
+    """
+
+    def __init__(self, f: h5py.File, path, config, checkpoint: dict, layout=None):
+        """``checkpoint``: the file's valid one, as ``read_checkpoint`` gives it; ``layout``:
+        that of a file just laid out (empty tables), else it is looked up."""
+        self.file = f
+        self.path = str(path)
+        self.config = config
+        new = layout is not None
+        layout = layout or RunLayout.of(f)
+        self.tables = layout.tables
+        self._current = layout.current
+        self._slots = layout.slots
+        self.current = int(self._current[()])
+        self.checkpoint = checkpoint
+        self.compile_time_before = float(checkpoint["compile_time"])
+        self.extremes = Extremes()
+        b = self.tables["bounces"]       # every bounce row, kept for the summary
+        self._bounces = [[np.zeros(0, buf.dtype) if new else d[:b.length]]
+                         for d, buf in zip(b.ds, b.buf)]
+        if not new:
+            self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
+        self.final = None        # what closing leaves in the file (status, bounces, ...)
+
+    # Sink interface: drained blocks of the compiled loop
+    def snapshots(self, t, step, u, v):
+        self.tables["snapshots"].append((t, step, u, v))
+
+    def diagnostics(self, rows):
+        self.tables["diagnostics"].append(list(rows.T))
+        self.extremes.update_rows(rows)
+
+    def episodes(self, rows):
+        self.tables["episodes"].append(list(rows.T))
+
+    def bounces(self, rows, pending=None):
+        """Closed bounce rows, or (``rows`` None) the ``pending`` bounce of the run."""
+        cols = list(bounce_table(() if rows is None else (rows,), pending).values())
+        self.tables["bounces"].append(cols)
+        for kept, c in zip(self._bounces, cols):
+            kept.append(np.array(c, dtype=kept[0].dtype))
+
+    def save(self, run) -> None:
+        """Write buffered rows and a checkpoint of ``run`` matching them.  A run that is not
+        ``drained`` (an error while draining) gets no new checkpoint: the last one stays
+        valid, and a resume cuts the tables back to it."""
+        for table in self.tables.values():
+            table.flush()
+        if not run.drained:
+            self.file.flush()
+            return
+        self._commit(run.checkpoint(), self.compile_time_before + run.compile_time)
+
+    def _commit(self, ck: dict, compile_time: float) -> None:
+        """Checkpoint ``ck`` into the idle slot with the current table lengths (rows already
+        written), flush, flip ``current``, flush."""
+        slot = 1 if self.current == 0 else 0
+        g = self._slots[slot]
+        for name in CK_ARRAYS:
+            overwrite(g[name], ck[name])
+        overwrite(g["run_time"], float(ck["run_time"]))
+        overwrite(g["compile_time"], compile_time)
+        lengths = [t.length for t in self.tables.values()]
+        overwrite(g["lengths"], lengths)
+        self.file.flush()
+        overwrite(self._current, slot)
+        self.file.flush()
+        self.current = slot
+        self.checkpoint = {name: ck[name] for name in CK_ARRAYS}
+        self.checkpoint.update(run_time=float(ck["run_time"]), compile_time=compile_time,
+                               lengths=dict(zip(TABLES, lengths)))
+
+    def close(self, run, status: str, message: str = "") -> None:
+        """Final checkpoint, then the provisional row of the bounce still open (listed but
+        beyond the checkpoint's lengths, so a resume drops it), then status, then close."""
+        if status not in STATUSES:
+            raise ValueError(f"status {status!r} is not one of {STATUSES}")
+        if run is not None:
+            self.save(run)
+            pending = run.pending_bounce()
+            if pending is not None:
+                self.bounces(None, pending)
+                self.tables["bounces"].flush()
+        attrs = self.file.attrs              # (each .attrs looks the root group up)
+        attrs["status"] = status
+        attrs["message"] = message
+        self.final = {
+            "status": status, "message": message,
+            "counts": {name: t.written for name, t in self.tables.items()},
+            "bounces": {c: np.concatenate(kept)[:self.tables["bounces"].written]
+                        for c, kept in zip(TABLES["bounces"], self._bounces)},
+            "attrs": {k: attrs[k] for k in SUMMARY_ATTRS if k in attrs}}
+        self.file.close()
+
+    def abandon(self, status: str, message: str) -> None:
+        """Mark and close after an unexpected error, keeping the last saved checkpoint."""
+        try:
+            if self.file.id.valid:
+                self.file.attrs["status"] = status
+                self.file.attrs["message"] = message
+                self.file.close()
+        except Exception:  # the file may be the cause (disk full); nothing more to save
+            pass
+
+
+def create_run_file(path, config, start, *, command: str) -> RunWriter:
+    """A new run file in SWMR mode whose first checkpoint is ``start``: a Run not started
+    yet, or the ``checkpoint()`` of one (taken before it started, so the run may already
+    be computing)."""
+    ck = start if isinstance(start, dict) else start.checkpoint()
+    f = open_for_writing(path, "w")
+    try:
+        layout = build_layout(f, config, ck, {"command": command,
+                                               "history": [f"{now()} created by: {command}"]})
+        f.swmr_mode = True             # flushes the file: the first checkpoint is on disk
+        writer = RunWriter(f, path, config, dict(ck, lengths=dict.fromkeys(TABLES, 0)),
+                           layout)
+    except BaseException:
+        f.close()
+        raise
+    return writer
+
+
+def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter:
+    """Open a closed run file to continue it: cut every table to the checkpoint's lengths
+    (dropping the provisional open bounce and rows written after the last checkpoint),
+    mark it running, then switch to SWMR writing."""
+    f = open_for_writing(path, "r+")
+    try:
+        ck = read_checkpoint(f)
+        lengths = ck["lengths"]
+        for name, cols in TABLES.items():
+            for col in cols:
+                ds = f[name][col]
+                if ds.shape[0] != lengths[name]:
+                    ds.resize(lengths[name], axis=0)
+        if config_toml is not None:
+            f.attrs["config_toml"] = config_toml
+        f.attrs["history"] = history_with(f, history)
+        f.attrs["status"] = "running"
+        f.attrs["message"] = ""
+        for key, value in writer_attrs().items():
+            f.attrs[key] = value
+        f.swmr_mode = True
+        return RunWriter(f, path, read_config(f), ck)
+    except BaseException:
+        f.close()
+        raise
+
+
+def recover(path) -> None:
+    """Rebuild a file whose writer died without closing it (SWMR flags still set): copy the
+    rows matched by its checkpoint into a fresh file, which then replaces it."""
+    path = Path(path)
+    tmp = path.with_name(path.name + ".recovering")
+    with h5py.File(path, "r", swmr=True) as src:
+        check_run_file(src, path)
+        config = read_config(src)
+        ck = read_checkpoint(src)
+        attrs = {k: v for k, v in src.attrs.items()}
+        t = float(ck["clock"][L.T])
+        attrs["history"] = history_with(src, f"recovered at the checkpoint t = {t!r} after the "
+                                         f"writer stopped without closing the file")
+        attrs["status"] = "interrupted"
+        attrs["message"] = (f"the writing process stopped without closing the file (killed?); "
+                            f"recovered at the checkpoint t = {t!r}")
+        with h5py.File(tmp, "w", libver="latest") as dst:
+            build_layout(dst, config, ck, attrs)       # its checkpoint in slot 0
+            for group, cols in TABLES.items():
+                n = ck["lengths"][group]
+                for col in cols:
+                    s, d = src[group][col], dst[group][col]
+                    d.resize(n, axis=0)
+                    step = d.chunks[0] * 16
+                    for i in range(0, n, step):
+                        d[i:min(n, i + step)] = s[i:min(n, i + step)]
+    os.replace(tmp, path)

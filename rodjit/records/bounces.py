@@ -1,0 +1,34 @@
+"""The bounce table: bounce rows drained from a run, plus the bounce still collecting
+episodes when it stopped (the *pending* bounce), as columns with their dtypes.
+
+Every sink that keeps bounces (memory, the run file, a sweep point) builds its table here,
+so all of them agree on the ``open`` column and the integer ``n_episodes``.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .columns import BOUNCE_ROW_COLUMNS
+
+__all__ = ["bounce_table", "empty_bounces"]
+
+
+def bounce_table(blocks, pending=None) -> dict[str, np.ndarray]:
+    """Columns (``BOUNCE_COLUMNS`` order) of the bounce rows in ``blocks`` (arrays of shape
+    (rows, len(BOUNCE_ROW_COLUMNS)), closed bounces) followed by ``pending``, the
+    ``(row, open)`` of ``Run.pending_bounce`` or None.  The columns are new arrays."""
+    rows = list(blocks)
+    is_open = [np.zeros(len(r), bool) for r in rows]
+    if pending is not None:
+        rows.append(np.asarray(pending[0])[None, :])
+        is_open.append(np.array([bool(pending[1])]))
+    b = np.concatenate(rows) if rows else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
+    out = {name: b[:, j].copy() for j, name in enumerate(BOUNCE_ROW_COLUMNS)}
+    out["n_episodes"] = out["n_episodes"].astype(np.int64)
+    out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)
+    return out
+
+
+def empty_bounces() -> dict[str, np.ndarray]:
+    """A bounce table with no rows (a point that has not run)."""
+    return bounce_table(())

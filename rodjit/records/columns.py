@@ -1,0 +1,19 @@
+"""The columns of a run's tables, in the order the compiled loop writes them.
+
+``stepping.layout`` stays the source of the names (the loop writes rows by those
+positions); this module gives the record floors one place to take them from, plus the
+columns a table of bounces adds.
+"""
+from __future__ import annotations
+
+from ..stepping.layout import BOUNCE_COLUMNS as BOUNCE_ROW_COLUMNS
+from ..stepping.layout import DIAG_COLUMNS, EPISODE_COLUMNS
+
+__all__ = ["DIAG_COLUMNS", "EPISODE_COLUMNS", "BOUNCE_ROW_COLUMNS", "BOUNCE_COLUMNS",
+           "INT_COLUMNS", "BOOL_COLUMNS"]
+
+# a bounce table: the loop's bounce row (MODEL.md §3), then whether the bounce was still
+# open (its last contact episode not ended) when the run stopped
+BOUNCE_COLUMNS = BOUNCE_ROW_COLUMNS + ("open",)
+INT_COLUMNS = frozenset({"step", "n_episodes"})      # integer columns of every table
+BOOL_COLUMNS = frozenset({"open"})

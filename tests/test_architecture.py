@@ -1,0 +1,177 @@
+"""The package's floors: every import (module level or inside a function) goes to the same
+floor or one below, and no modules import each other in a circle.
+
+Floors, lowest first (a module's floor is its first name under ``rodjit``):
+
+- ``version``, ``_jit``: no rodjit imports (the installed version; the Numba decorators);
+- ``model``: the stress laws and the rod's discrete system (MODEL.md);
+- ``kernels``: compiled forces, energies and banded solvers;
+- ``stepping``: the compiled time loop, its schemes and the layout of its arrays;
+- ``config``: the user's configuration, checked against the laws and schemes below it;
+- ``presets``: named configurations;
+- ``records``: what a run produces (columns, ``Sink``, ``Result``, bounce table, stats,
+  extremes), shared by every floor above;
+- ``output``: the run file (opening, layout, reader, writer) and its summary;
+- ``driver``: a run in progress, ``simulate``, streaming a run to a file;
+- ``sweeps``: grids of runs, their executors and the sweep file;
+- ``plotting``: figures of run and sweep files;
+- ``reports``: what ``rodjit info`` prints of either kind of file;
+- ``cli``, ``__main__``: the ``rodjit`` command;
+- the package itself (``rodjit/__init__.py``): the public API, importing from every floor.
+"""
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import rodjit
+
+PACKAGE = Path(rodjit.__file__).resolve().parent
+
+FLOORS = (
+    ("version", "_jit"),
+    ("model",),
+    ("kernels",),
+    ("stepping",),
+    ("config",),
+    ("presets",),
+    ("records",),
+    ("output",),
+    ("driver",),
+    ("sweeps",),
+    ("plotting",),
+    ("reports",),
+    ("cli", "__main__"),
+    ("",),                     # rodjit/__init__.py
+)
+FLOOR_OF = {name: level for level, names in enumerate(FLOORS) for name in names}
+
+# import circles that exist for a reason outside these floors' control, each a set of
+# modules; none may be added without its reason
+KNOWN_CYCLES = (
+    # stepping/schemes imports stepping/energy so that the energy scheme registers itself,
+    # and energy imports the registry from schemes
+    frozenset({"rodjit.stepping.schemes", "rodjit.stepping.energy"}),
+)
+
+
+def modules() -> dict[str, Path]:
+    """Every module of the package: dotted name -> file."""
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE).with_suffix("").parts
+        if parts[-1] == "__init__":
+            parts = parts[:-1]
+        out[".".join(("rodjit",) + parts)] = path
+    return out
+
+
+def imports(name: str, path: Path, known: dict) -> set[str]:
+    """The rodjit modules ``name`` imports anywhere in its file (inside functions too):
+    ``from package import module`` counts as the module, ``from module import name`` as
+    the module."""
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")
+                base = base[:len(base) - (node.level - 1)]
+                base = ".".join(base + ([node.module] if node.module else []))
+            else:
+                base = node.module or ""
+            targets = []
+            for alias in node.names:
+                sub = f"{base}.{alias.name}"
+                targets.append(sub if sub in known else base)
+        else:
+            continue
+        for target in targets:
+            while target and target not in known:      # ``import rodjit.x.y`` etc.
+                target = target.rpartition(".")[0]
+            if target.startswith("rodjit") and target != name:
+                out.add(target)
+    return out
+
+
+def floor(name: str) -> int:
+    top = name.split(".")[1] if "." in name else ""
+    if top not in FLOOR_OF:
+        raise AssertionError(f"module {name} is on no floor: add {top!r} to FLOORS in "
+                             f"{Path(__file__).name}")
+    return FLOOR_OF[top]
+
+
+@pytest.fixture(scope="module")
+def graph() -> dict[str, set[str]]:
+    known = modules()
+    return {name: imports(name, path, known) for name, path in known.items()}
+
+
+def cycles(graph: dict[str, set[str]]) -> list[frozenset[str]]:
+    """The strongly connected components of more than one module (Tarjan)."""
+    index, low, stack, on_stack, out = {}, {}, [], set(), []
+    counter = [0]
+
+    def visit(v):
+        index[v] = low[v] = counter[0]
+        counter[0] += 1
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = set()
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.add(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(frozenset(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_the_walk_sees_the_imports_it_checks(graph):
+    """The walker resolves relative, absolute and function-level imports."""
+    assert "rodjit.records.sink" in graph["rodjit.driver.run"]           # from ..records.sink
+    assert "rodjit.sweeps.sweep_file" in graph["rodjit.sweeps.run_sweep"]  # from . import x
+    assert "rodjit.model.laws" in graph["rodjit.config"]                 # inside a function
+    assert "rodjit.reports" in graph["rodjit.cli"]                       # inside a command
+    assert "rodjit.version" in graph["rodjit"]
+
+
+def test_every_module_is_on_a_floor(graph):
+    for name in graph:
+        floor(name)
+
+
+def test_no_module_imports_from_a_floor_above_its_own(graph):
+    wrong = sorted(f"{name} (floor {FLOORS[floor(name)][0] or 'rodjit'}) imports {target} "
+                   f"(floor {FLOORS[floor(target)][0] or 'rodjit'})"
+                   for name, targets in graph.items() for target in targets
+                   if floor(target) > floor(name))
+    assert not wrong, "\n".join(wrong)
+
+
+def test_no_import_circles(graph):
+    found = [sorted(c) for c in cycles(graph) if c not in KNOWN_CYCLES]
+    assert not found, f"import circles: {found}"
+
+
+def test_the_cycle_finder_finds_a_circle():
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [frozenset("abc")]
+    assert cycles({"a": {"b"}, "b": set()}) == []
