@@ -15,6 +15,7 @@ import numpy as np
 from ..model.laws import deriv, lower, max_deriv, primitive, value
 from .._jit import kernel, step_kernel
 from .reduce import nan_max, nan_min
+from .mass import node_mass
 
 # status codes of a trial state
 OK = 0
@@ -185,7 +186,7 @@ def energies(u, v, k, system, rod, floor):
     z = 0.0
     w = 0.0
     for i in range(n + 1):
-        m = h if 0 < i < n else 0.5 * h
+        m = node_mass(i, n, h)
         ke += m * v[i] * v[i]
         z += m * u[i]
         w += m * v[i]
