@@ -442,8 +442,8 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
-    Returns a ``StepResult`` with status OK, INACCURATE (valid state, error estimate > 1: retry with ``dt_suggest``),
-    NO_CONVERGENCE, or a non-admissible/non-finite code.
+    Returns a ``StepResult`` with status OK, INACCURATE (valid state, error estimate > 1:
+    retry with ``dt_suggest``), NO_CONVERGENCE, or a non-admissible/non-finite code.
     """
     n = system.n
     h = system.h
