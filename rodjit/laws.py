@@ -9,28 +9,28 @@ Numba options of every rodjit kernel, see ``rodjit._jit``: so a law must not all
     from typing import NamedTuple
     from rodjit.laws import Law, law_kernel, register
 
-    class LogRod(NamedTuple):
+    class LnRod(NamedTuple):            # f(ε) = κ ln(1 + ε), singular as ε ↓ −1
         kappa: float
 
     @law_kernel
-    def value(e, p):
-        return p.kappa * e / (1.0 + e)
+    def ln_stress(e, p):
+        return p.kappa * math.log1p(e)
 
     @law_kernel
-    def deriv(e, p):
-        return p.kappa / ((1.0 + e) * (1.0 + e))
+    def ln_slope(e, p):
+        return p.kappa / (1.0 + e)
 
     @law_kernel
-    def primitive(e, p):
-        return p.kappa * (e - math.log1p(e))
+    def ln_energy(e, p):                # zero at e = 0
+        return p.kappa * ((1.0 + e) * math.log1p(e) - e)
 
     @law_kernel
-    def lower(p):
+    def ln_lower(p):
         return -1.0
 
-    register(Law(name="log", kind="rod", params=LogRod,
-                 from_config=lambda rod: LogRod(float(rod.kappa)),
-                 value=value, deriv=deriv, primitive=primitive, lower=lower))
+    register(Law(name="ln", kind="rod", params=LnRod,
+                 from_config=lambda rod: LnRod(float(rod.kappa)), value=ln_stress,
+                 deriv=ln_slope, primitive=ln_energy, lower=ln_lower))
 
 ``Law`` documents the two optional shortcuts (``deriv_max``, ``difference``).
 """

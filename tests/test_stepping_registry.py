@@ -11,7 +11,7 @@ import pytest
 
 import rodjit
 from rodjit import config
-from rodjit.kernels.forces import INACCURATE, OK
+from rodjit.kernels.forces import OK
 from rodjit.kernels.mass import inv_node_mass, node_mass
 from rodjit.model.system import masses
 from rodjit.stepping import control, kdk, registry, schemes, workspace

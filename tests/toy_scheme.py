@@ -5,7 +5,7 @@ of cfl × 2/ω; tests/test_stepping_registry.py adds its line to the registry.
 """
 from typing import NamedTuple
 
-from rodjit.kernels.forces import OK, accel, momentum
+from rodjit.kernels.forces import accel, momentum
 from rodjit.stepping import workspace as W
 from rodjit.stepping.step_result import StepResult
 from rodjit._jit import kernel
