@@ -1,6 +1,6 @@
 """Explicit step throughput at N = 1000 against the C speed limit (issue 2, target ≤ 1.25×).
 
-The anchor ``limit.c`` (../shared/bench/limit.c) is compiled with ``gcc -O3 -march=native``
+The anchor ``limit.c`` (vendored beside this script) is compiled with ``gcc -O3 -march=native``
 and run here, interleaved with rodjit, so both see the same machine load; each figure is
 the best of ``--repeat`` runs, and every ratio divides two numbers from this run.
 
@@ -32,8 +32,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _util  # noqa: E402
 
 import rodjit  # noqa: E402
-from rodjit.stepping import verlet  # noqa: E402
-from rodjit.stepping.schemes import Verlet  # noqa: E402
+from rodjit.stepping import kdk as verlet  # noqa: E402  (the Verlet row of the stage table)
+from rodjit.stepping.kdk import Verlet  # noqa: E402
 
 try:      # rodjit's own options (no reference counting), without the disk cache
     from rodjit._jit import JIT_OPTIONS

@@ -5,6 +5,7 @@
 >>> summary = rodjit.run_to_file(rodjit.Config(), "run.h5", overwrite=True)  # streamed to HDF5
 >>> table = rodjit.sweep(rodjit.Config(), {"rod.mu": [0, 1, 10]}, output="sweep.h5")
 """
+from . import laws
 from .config import Config
 from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
 from .driver.run import SimulationError
@@ -17,4 +18,4 @@ from .version import __version__
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
-           "load_preset", "preset_names", "SweepInterrupted", "__version__"]
+           "load_preset", "preset_names", "SweepInterrupted", "laws", "__version__"]

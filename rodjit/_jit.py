@@ -4,11 +4,10 @@
 reject) instead of raising inside compiled code, and keeps loops vectorisable.
 ``fastmath={"contract"}``: LLVM may fuse a multiply and an add into one fused multiply-add
 (one rounding instead of two, as ``gcc -O3`` does by default in the C speed limit,
-../shared/bench/limit.c).  No other fast-math flag: NaN, inf, signed zeros and the order of
+benchmarks/limit.c).  No other fast-math flag: NaN, inf, signed zeros and the order of
 operations keep their IEEE meaning, so the admissibility checks and the cancellation-free
-forms of the laws stay as written.  Short rods' steps are chains of dependent multiply-adds:
-fusing them takes 6–10 % off an N = 5 step, and brings the explicit N = 1000 step ~5 %
-closer to C (benchmarks/README.md).  The price: on one machine a run still gives the same
+forms of the laws stay as written.  Short rods' steps are chains of dependent multiply-adds,
+which a fused instruction shortens (benchmarks/README.md has the measurements).  The price: on one machine a run still gives the same
 bits every time, but they differ at rounding level from the plain-Python kernels'
 (NUMBA_DISABLE_JIT=1) and from a CPU's without FMA, and a law's general path (no
 ``deriv_max``) gives the same run to rounding instead of bit for bit
@@ -26,8 +25,8 @@ so these set it to False explicitly.
 each view (``state[0]``, ``work[R]``) and each array handed to a function costs calls to
 NRT_incref/NRT_decref, which are never inlined, and every such call also makes the
 floating-point values live across it spill from their registers.  The time loop makes
-hundreds of them per step (benchmarks/README.md: up to half the time of a short rod's
-step).  rodjit's kernels never allocate and never keep an array beyond the call: they work
+hundreds of them per step, a large share of a short rod's step (benchmarks/README.md).
+rodjit's kernels never allocate and never keep an array beyond the call: they work
 in arrays their caller owns for the whole call, so there is nothing to count.  Numba
 refuses to compile an allocation, or the return of a new array, under this option, so
 that guarantee is checked at compile time.
@@ -64,8 +63,8 @@ exact_kernel = numba.njit(**{**JIT_OPTIONS, "fastmath": False})
 # event and step-size helpers, the stress laws) are also marked for inlining into the loop
 # (LLVM alwaysinline), and so are the overloads that dispatch to them (``STEP_JIT_OPTIONS``:
 # the scheme's step, the law functions): a step then makes no calls and passes no arrays,
-# which matters for short rods, where the work per step is a few dozen flops (N = 5: ~3x
-# fewer ns per step; benchmarks/bench_scipy.py).  A call also makes every live
+# which matters for short rods, where the work per step is a few dozen flops and the calls
+# would cost more than the arithmetic (benchmarks/bench_scipy.py).  A call also makes every live
 # floating-point register spill (all are caller-saved).  Numba without the option compiles
 # them as plain kernels.
 _CAN_FORCE_INLINE = hasattr(CPUTargetOptions, "forceinline")

@@ -13,10 +13,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
+from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
+
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
            "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "parse_value"]
 
-INTEGRATORS = ("verlet", "semi-implicit", "energy")
 COMPRESSIONS = ("gzip", "lzf", "none")
 
 

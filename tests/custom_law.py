@@ -5,31 +5,30 @@ f(ε) = κ ε/(1+ε): singular as ε ↓ −1, f'(0) = κ, primitive κ(ε − l
 import math
 from typing import NamedTuple
 
-from rodjit._jit import kernel
-from rodjit.model.laws import Law, register
+from rodjit.laws import Law, law_kernel, register
 
 
 class LogRod(NamedTuple):
     kappa: float
 
 
-@kernel
+@law_kernel
 def value(e, p):
     return p.kappa * e / (1.0 + e)
 
 
-@kernel
+@law_kernel
 def deriv(e, p):
     q = 1.0 + e
     return p.kappa / (q * q)
 
 
-@kernel
+@law_kernel
 def primitive(e, p):
     return p.kappa * (e - math.log1p(e))
 
 
-@kernel
+@law_kernel
 def lower(p):
     return -1.0
 

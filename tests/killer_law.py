@@ -6,7 +6,7 @@ import signal
 from typing import NamedTuple
 
 from custom_law import deriv, lower, primitive, value
-from rodjit.model.laws import Law, register
+from rodjit.laws import Law, register
 
 
 class KillRod(NamedTuple):

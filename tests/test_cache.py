@@ -10,6 +10,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 # One short run per integrator, then the cache statistics of the kernels Python calls
 # (``start`` and ``advance`` contain every other kernel of a run, inlined or linked).
 PROBE = textwrap.dedent("""
@@ -35,6 +37,7 @@ def _probe(cache_dir, *args):
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow   # compiles every kernel cold in fresh processes: minutes
 def test_a_second_process_loads_every_kernel_from_the_cache(tmp_path):
     cold = _probe(tmp_path, "verlet", "semi-implicit")
     assert all(s["misses"] == 2 and s["hits"] == 0 for s in cold.values()), cold

@@ -5,6 +5,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 HERE = Path(__file__).parent
 RUN = ("import rodjit; r = rodjit.simulate(rodjit.Config().override("
        "{'rod.law': %r, 'time.t_end': 0.05})); print(r.u_final.tolist())")
@@ -17,6 +19,7 @@ def python(code, cwd):
     return out.stdout
 
 
+@pytest.mark.slow   # three fresh processes, each compiling a law's kernels: minutes
 def test_foreign_and_same_named_laws_in_the_cache(tmp_path):
     # 1. "log-test" from tests/custom_law.py fills the cache
     first = python("import custom_law; " + RUN % "log-test", HERE)

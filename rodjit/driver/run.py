@@ -22,16 +22,17 @@ from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
 from ..records.sink import Sink
 from ..records.stats import run_stats
+from ..stepping import control
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
-from ..stepping.schemes import SCHEME_STATS, gap_control, make_scheme, work_rows
+from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
 
 __all__ = ["Block", "Run", "SimulationError", "Sink"]
 
-GAP_MAX = 0.5     # cap of the barrier-gap fraction (time.cfl sets it below that)
-GROWTH = 1.5      # per-step growth limit of the proposed step
-NODE_STEPS_PER_CALL = 20_000_000   # ~10–100 ms of work between returns to Python
+# node-steps per compiled call: long enough that returning to Python costs nothing, short
+# enough that signals, progress and checkpoints are seen promptly
+NODE_STEPS_PER_CALL = 20_000_000
 
 
 class SimulationError(RuntimeError):
@@ -74,13 +75,7 @@ class Run:
         self.system, self.rod, self.floor = build_system(config)
         self.scheme = make_scheme(config.time)
         tc = config.time
-        self.ctrl = L.Control(
-            dt_max=float(tc.dt_max) if tc.dt_max is not None else math.inf,
-            dt_min=float(tc.dt_min),
-            dt_fixed=float(tc.dt) if tc.dt is not None else 0.0,
-            growth=GROWTH,
-            gap=min(float(tc.cfl), GAP_MAX) if gap_control(self.scheme) else 0.0,
-        )
+        self.ctrl = control.build(tc, self.scheme)
         n1 = config.rod.N + 1
         u, v = initial_state(config, u0, v0)
         check_admissible(u, self.rod, self.floor, "u0" if u0 is not None else "initial state")
@@ -177,7 +172,7 @@ class Run:
     def _set_tolerance(self):
         spans = [x for x in (self.clock[L.SNAP_DT], self.clock[L.DIAG_DT],
                              self.clock[L.T_END] - self.clock[L.T]) if x > 0]
-        self.clock[L.TOL] = 1e-9 * min(spans)
+        self.clock[L.TOL] = control.output_tolerance(spans)
 
     # ---- stepping ----------------------------------------------------------------------
     def _args(self):

@@ -87,8 +87,8 @@ def sym_tridiag_solve(d, e, rhs, x, cp, pinv):
     half the length: each row waits for the division of the row before it), then the
     substitution outward from row k.  Every pivot of an SPD matrix is positive, from either
     end.  The right-hand side is eliminated in the factor's pass (the eliminations of
-    ``sym_tridiag_apply``): a factor pass and then an apply pass cost 1.5 % of an N = 5
-    ``energy`` run, whose Newton iterations mostly solve once."""
+    ``sym_tridiag_apply``): the ``energy`` step's Newton iterations mostly solve once with
+    each factor, so a factor pass followed by an apply pass would read the arrays twice."""
     n1 = d.size
     n = n1 - 1
     k = n1 // 2

@@ -38,7 +38,7 @@ import numpy as np
 from numba.extending import overload
 
 from ..model.laws import deriv, law_of, lower, primitive, value
-from ..model.laws.base import _law_for_type
+from ..model.laws import law_for_numba_type
 from .._jit import STEP_JIT_OPTIONS, step_kernel
 
 TAU = 0.02      # 4 points up to here, the exact quotient beyond
@@ -138,7 +138,7 @@ def difference(a, b, p):
 
 @overload(difference, jit_options=STEP_JIT_OPTIONS)
 def _difference_ov(a, b, p):
-    impl = _law_for_type(p).difference
+    impl = law_for_numba_type(p).difference
     if impl is None:
         return lambda a, b, p: _by_evaluations(a, b, p)
     return lambda a, b, p: impl(a, b, p)

@@ -1,6 +1,6 @@
 """Compiled forces, stiffness bound, admissibility and energies of MODEL.md §2–3.
 
-Node masses are h/2 at the ends and h inside; ``inv_m`` below means 1/m_i.
+Node masses are h/2 at the ends and h inside (``kernels.mass``).
 
 Speed (these loops are the hot path; benchmarks/bench_explicit.py): reductions inside
 the loops are NaN-propagating min/max (``kernels.reduce``) or boolean flags, never a
@@ -15,6 +15,7 @@ import numpy as np
 from ..model.laws import deriv, lower, max_deriv, primitive, value
 from .._jit import kernel, step_kernel
 from .reduce import nan_max, nan_min
+from .mass import node_mass
 
 # status codes of a trial state
 OK = 0
@@ -142,7 +143,7 @@ def momentum(v, h):
 
     The inner sum runs in four interleaved partial sums, a fixed order (the same result in
     every run) that vectorises; one running sum would be a chain of dependent additions as
-    long as the rod (~0.8 ns per node at N = 1000)."""
+    long as the rod, which no vector unit can shorten."""
     n = v.size - 1
     s0 = 0.0
     s1 = 0.0
@@ -185,7 +186,7 @@ def energies(u, v, k, system, rod, floor):
     z = 0.0
     w = 0.0
     for i in range(n + 1):
-        m = h if 0 < i < n else 0.5 * h
+        m = node_mass(i, n, h)
         ke += m * v[i] * v[i]
         z += m * u[i]
         w += m * v[i]

@@ -17,7 +17,7 @@ from h5py import h5a, h5d, h5p, h5s, h5t
 
 from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS, INT_COLUMNS
 from ..stepping import layout as L
-from ..stepping.schemes import SCHEME_STATS
+from ..stepping.registry import SCHEME_STATS
 from ..version import __version__
 from .growing_table import Table
 from .h5files import now, writer_attrs

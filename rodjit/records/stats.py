@@ -2,7 +2,7 @@
 built from a live run or from a checkpoint by the same function."""
 from __future__ import annotations
 
-from ..stepping.schemes import SCHEME_STATS
+from ..stepping.registry import SCHEME_STATS
 
 __all__ = ["run_stats", "node_steps_per_second"]
 

@@ -41,7 +41,6 @@ The state's ``a`` row carries the full acceleration (viscosity included) for the
 from __future__ import annotations
 
 import math
-import sys
 from typing import NamedTuple
 
 import numpy as np
@@ -50,16 +49,18 @@ from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_apply, sym_t
 from ..kernels.discrete_gradient import difference
 from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                               OK, accel, add_beam_term, assemble)
+from ..kernels.mass import inv_node_mass as _inv_mass, node_mass as _mass
 from ..model.laws import deriv, lower
 from .beam import add_bending
-from .schemes import register_scheme
+from .registry import counter_index
+from .step_result import StepResult
 from .._jit import step_kernel
 
-__all__ = ["Energy", "initial", "step", "WORK_ROWS", "GAP_CONTROL"]
+__all__ = ["Energy", "initial", "step", "WORK_ROWS"]
 
-# admissible for any step the Newton solve accepts: no barrier-gap limit on its steps
-GAP_CONTROL = False
-
+# the step's counters in ``sstats`` (registry.SCHEME_STATS)
+NEWTON_ITERATIONS = counter_index("newton_iterations")
+NEWTON_FAILURES = counter_index("newton_failures")
 
 NEWTON_TOL = 1e-10    # converged when the update is below this × |uⁿ⁺¹ − uⁿ| (see _newton)
 MAX_NEWTON = 30
@@ -97,25 +98,9 @@ class Energy(NamedTuple):
 
     rtol: float
     atol: float
-    newton_tol: float
-    max_newton: int
-    chord: float
-
-
-def _build(tc):
-    return Energy(float(tc.rtol), float(tc.atol), NEWTON_TOL, MAX_NEWTON, CHORD)
-
-
-@step_kernel
-def _mass(i, n, h):
-    return h if 0 < i < n else 0.5 * h
-
-
-@step_kernel
-def _inv_mass(i, n, ih):
-    """1/m_i from ih = 1/h: 2/h at the ends is 2·(1/h) exactly, so this is 1/_mass bit for
-    bit, without a division."""
-    return ih if 0 < i < n else 2.0 * ih
+    newton_tol: float = NEWTON_TOL
+    max_newton: int = MAX_NEWTON
+    chord: float = CHORD
 
 
 # the range of errors where the step factor SAFETY·err^(−1/3) is not clamped
@@ -130,8 +115,7 @@ def _step_factor(err):
     err^(−1/3) by Newton's iteration y ← y(4 − x y³)/3 on x = err·8^k ∈ [1, 8), from the
     least-squares quadratic of x^(−1/3) on [1, 8] (7 % off at worst): three iterations
     leave < 1e-7 relative, far below what a step-size heuristic needs, and cost less than
-    the libm cbrt call they replace (~8 % of an N = 5 step).  Plain arithmetic: the same
-    bits everywhere."""
+    a libm cbrt call.  Plain arithmetic: the same bits everywhere."""
     if not err > ERR_FAC_MAX:      # also err = 0
         return FAC_MAX
     if err >= ERR_FAC_MIN:
@@ -209,18 +193,17 @@ def _error_rate(scheme, u, ad):
 
 @step_kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
-    """Full acceleration of the initial state; ``(status, value, min_strain, floor_force,
-    dt_suggest)``.  The first step: the accuracy estimate from ȧ, at most the explicit limit
+    """Full acceleration of the initial state.  The first step: the accuracy estimate from ȧ, at most the explicit limit
     2/ω (the controller grows it from there)."""
     status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
     if status != OK:
-        return status, val, emin, fl, 0.0
+        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     jerk(system, rod, floor, u, v, a, work[AD], work[K], work[E1])
     dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
     rate = _error_rate(scheme, u, work[AD])
     if rate > 0.0:
         dt = min(dt, 0.5 / np.cbrt(rate))
-    return OK, 0.0, emin, fl, dt
+    return StepResult(OK, 0.0, emin, fl, dt, 0.0, 0.0)
 
 
 @step_kernel
@@ -239,8 +222,8 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
     residual's terms, plus the stress change that the rounding of u² in a strain causes,
     so 64 ε_mach × scale is the residual's rounding level.  One pass over the nodes: node i
     takes the terms of segments i − 1 (carried over) and i, and sets u²_{i+1} (a separate
-    loop u² = uⁿ + d, which LLVM vectorises, cost 6–7 % of an N = 5 run:
-    benchmarks/README.md).
+    loop u² = uⁿ + d would be vectorised by LLVM into a pass of its own over the arrays,
+    which costs more for short rods than the stores it saves).
     """
     n = system.n
     h = system.h
@@ -415,7 +398,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
             if status != OK:   # only the start can be outside: trials are backtracked
                 return status, 0.0, row, 0.0, 0.0
         _newton_update(system, work, fresh)
-        sstats[0] += 1
+        sstats[NEWTON_ITERATIONS] += 1
         dmax = 0.0
         dref = 0.0
         for i in range(n1):   # the norms and the full-step trial in one pass
@@ -451,7 +434,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
         # fast (row R holds the residual at the new iterate, from its trial evaluation)
         fresh = not (alpha == 1.0 and rt2 <= scheme.chord * scheme.chord * rn2)
         rn2 = rt2
-    sstats[1] += 1
+    sstats[NEWTON_FAILURES] += 1
     return NO_CONVERGENCE, last, row, 0.0, 0.0
 
 
@@ -459,9 +442,8 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
-    Returns ``(status, value, min_strain, floor_force, dt_suggest, w, dissipated)`` with
-    status OK, INACCURATE (valid state, error estimate > 1: retry with ``dt_suggest``),
-    NO_CONVERGENCE, or a non-admissible/non-finite code.
+    Returns a ``StepResult`` with status OK, INACCURATE (valid state, error estimate > 1:
+    retry with ``dt_suggest``), NO_CONVERGENCE, or a non-admissible/non-finite code.
     """
     n = system.n
     h = system.h
@@ -491,7 +473,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         for i in range(n1):
             d[i] = alpha * (dp[i] + c3 * ad[i])
     if status != OK:
-        return status, val, 0.0, 0.0, 0.0, 0.0, 0.0
+        return StepResult(status, val, 0.0, 0.0, 0.0, 0.0, 0.0)
     d = work[row]
     # vⁿ⁺¹ from the increment itself: 2(u2 − u)/dt would amplify the rounding of u2 by 1/dt
     # (u2 = uⁿ + d is Newton's last iterate already)
@@ -517,7 +499,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         w += _mass(i, n, h) * v2[i]
     err /= 3.0
     if not finite:
-        return NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0
+        return StepResult(NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0)
     diss = 0.0
     if system.mu > 0.0:
         for i in range(n):
@@ -525,11 +507,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             diss += dv * dv
         diss *= dt * system.mu * ih
     if not math.isfinite(err):
-        return NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0
+        return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
     fac = _step_factor(err)
     if err > 1.0:
-        return INACCURATE, err, emin, fl, dt * fac, w, diss
-    return OK, 0.0, emin, fl, dt * fac, w, diss
-
-
-register_scheme("energy", Energy, sys.modules[__name__], _build)
+        return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
+    return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)

@@ -99,8 +99,8 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
             s = release(u0a, u0b, v0b, dt)
             tc = t + s * dt
             j = count[L.N_EP]
-            episodes[j, 0] = ev[L.EP_START]
-            episodes[j, 1] = tc
+            episodes[j, L.EC_T_START] = ev[L.EP_START]
+            episodes[j, L.EC_T_END] = tc
             count[L.N_EP] += 1
             count[L.EPISODES_TOTAL] += 1
             ev[L.IN_CONTACT] = 0.0
@@ -122,20 +122,21 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
 def write_bounce(row, ev, is_open):
     """One bounce record (layout.BOUNCE_COLUMNS) from the bookkeeping; an open bounce has
     no release yet, so its release fields are NaN and its extremes run to now."""
-    row[0] = ev[L.B_T_IMPACT]
-    row[2] = ev[L.B_NEP]
-    row[3] = ev[L.B_W_IMPACT]
+    row[L.BC_T_IMPACT] = ev[L.B_T_IMPACT]
+    row[L.BC_N_EPISODES] = ev[L.B_NEP]
+    row[L.BC_W_IMPACT] = ev[L.B_W_IMPACT]
     if is_open:
-        row[1] = np.nan
-        row[4] = np.nan
-        row[5] = np.nan
-        row[6] = ev[L.CUR_MIN_U0]
-        row[7] = ev[L.CUR_MAX_FF]
-        row[8] = ev[L.CUR_MIN_EPS]
+        row[L.BC_T_RELEASE] = np.nan
+        row[L.BC_W_RELEASE] = np.nan
+        row[L.BC_RESTITUTION] = np.nan
+        row[L.BC_MIN_U0] = ev[L.CUR_MIN_U0]
+        row[L.BC_MAX_FLOOR_FORCE] = ev[L.CUR_MAX_FF]
+        row[L.BC_MIN_STRAIN] = ev[L.CUR_MIN_EPS]
     else:
-        row[1] = ev[L.B_T_RELEASE]
-        row[4] = ev[L.B_W_RELEASE]
-        row[5] = -ev[L.B_W_RELEASE] / ev[L.B_W_IMPACT] if ev[L.B_W_IMPACT] != 0.0 else np.nan
-        row[6] = ev[L.REL_MIN_U0]
-        row[7] = ev[L.REL_MAX_FF]
-        row[8] = ev[L.REL_MIN_EPS]
+        row[L.BC_T_RELEASE] = ev[L.B_T_RELEASE]
+        row[L.BC_W_RELEASE] = ev[L.B_W_RELEASE]
+        row[L.BC_RESTITUTION] = (-ev[L.B_W_RELEASE] / ev[L.B_W_IMPACT]
+                                 if ev[L.B_W_IMPACT] != 0.0 else np.nan)
+        row[L.BC_MIN_U0] = ev[L.REL_MIN_U0]
+        row[L.BC_MAX_FLOOR_FORCE] = ev[L.REL_MAX_FF]
+        row[L.BC_MIN_STRAIN] = ev[L.REL_MIN_EPS]

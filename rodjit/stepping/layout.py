@@ -1,10 +1,15 @@
-"""Index layout of the arrays that carry the loop's state between compiled calls.
+"""Index layout of the arrays that carry the loop's state between compiled calls, and the
+columns of the rows it writes.
 
 Everything the stepper needs to continue lives in ``state`` (u, v, a), ``clock`` (float64),
 ``count`` (int64), ``ev`` (float64) and ``sstats`` (int64): saving these is a checkpoint,
 restoring them resumes bit for bit.
+
+The compiled code writes output rows through the column indices ``D_*`` (diagnostics),
+``EC_*`` (episodes) and ``BC_*`` (bounces), each looked up by its column's name, so a
+column list and the code that fills it cannot disagree (``check_columns`` and the tests
+verify that every column has exactly one index).
 """
-from typing import NamedTuple
 
 # ---- clock: float64 ---------------------------------------------------------------------
 T = 0            # current time
@@ -77,12 +82,53 @@ BOUNCE_COLUMNS = (
 )
 
 
-class Control(NamedTuple):
-    """Step-size control: caps, fixed step (0: adaptive), growth and barrier-gap limits."""
+# ---- column indices of the output rows (compile-time constants of the kernels) -----------
+D_T = DIAG_COLUMNS.index("t")
+D_DT = DIAG_COLUMNS.index("dt")
+D_ENERGY_KINETIC = DIAG_COLUMNS.index("energy_kinetic")
+D_ENERGY_STRETCH = DIAG_COLUMNS.index("energy_stretch")
+D_ENERGY_BEND = DIAG_COLUMNS.index("energy_bend")
+D_ENERGY_FLOOR = DIAG_COLUMNS.index("energy_floor")
+D_ENERGY_GRAVITY = DIAG_COLUMNS.index("energy_gravity")
+D_ENERGY_TOTAL = DIAG_COLUMNS.index("energy_total")
+D_DISSIPATED = DIAG_COLUMNS.index("dissipated")
+D_U_BOTTOM = DIAG_COLUMNS.index("u_bottom")
+D_FLOOR_FORCE = DIAG_COLUMNS.index("floor_force")
+D_MIN_STRAIN = DIAG_COLUMNS.index("min_strain")
+D_CM_HEIGHT = DIAG_COLUMNS.index("cm_height")
+D_CM_VELOCITY = DIAG_COLUMNS.index("cm_velocity")
 
-    dt_max: float     # inf when unset
-    dt_min: float
-    dt_fixed: float   # > 0: fixed steps
-    growth: float     # a proposal grows at most by this factor per step
-    gap: float        # a step closes at most this fraction of the distance to a barrier
-                      # (ε = −1, u_0 = −β); 0: off (schemes admissible by construction)
+EC_T_START = EPISODE_COLUMNS.index("t_start")
+EC_T_END = EPISODE_COLUMNS.index("t_end")
+
+BC_T_IMPACT = BOUNCE_COLUMNS.index("t_impact")
+BC_T_RELEASE = BOUNCE_COLUMNS.index("t_release")
+BC_N_EPISODES = BOUNCE_COLUMNS.index("n_episodes")
+BC_W_IMPACT = BOUNCE_COLUMNS.index("w_impact")
+BC_W_RELEASE = BOUNCE_COLUMNS.index("w_release")
+BC_RESTITUTION = BOUNCE_COLUMNS.index("restitution")
+BC_MIN_U0 = BOUNCE_COLUMNS.index("min_u0")
+BC_MAX_FLOOR_FORCE = BOUNCE_COLUMNS.index("max_floor_force")
+BC_MIN_STRAIN = BOUNCE_COLUMNS.index("min_strain")
+
+_PREFIXES = {"D_": DIAG_COLUMNS, "EC_": EPISODE_COLUMNS, "BC_": BOUNCE_COLUMNS}
+
+
+def column_indices(prefix: str) -> dict[str, int]:
+    """The column indices with ``prefix`` (``D_``, ``EC_``, ``BC_``), by column name."""
+    return {k[len(prefix):].lower(): v for k, v in globals().items()
+            if k.startswith(prefix) and k[len(prefix):].isupper() and isinstance(v, int)}
+
+
+def check_columns() -> None:
+    """Raise if a column list and its indices disagree: every column needs exactly one
+    index, named after it, at its position."""
+    for prefix, columns in _PREFIXES.items():
+        idx = column_indices(prefix)
+        expected = {c: i for i, c in enumerate(columns)}
+        if idx != expected:
+            raise AssertionError(f"{prefix}* indices {idx} do not match the columns "
+                                 f"{columns}")
+
+
+check_columns()

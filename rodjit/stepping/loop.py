@@ -4,40 +4,21 @@
 steps land exactly on the output times t0 + k·Δ (integer k).  How a run is cut into calls
 never changes the steps taken, so a resumed run equals an uninterrupted one bit for bit.
 
-A trial step that fails (non-admissible, non-finite, no convergence) is retried at
-REJECT_SHRINK of its size; one that a scheme rejects for accuracy (status INACCURATE: its
-error estimate is too large) is retried at the scheme's ``dt_suggest``, and under fixed
-steps accepted as it is (a scheme then returns a valid state with INACCURATE).
+A trial step that fails (non-admissible, non-finite, no convergence) is retried shorter;
+one that a scheme rejects for accuracy (status INACCURATE: its error estimate is too
+large) is retried at the scheme's ``dt_suggest``, and under fixed steps accepted as it is
+(a scheme then returns a valid state with INACCURATE).  Every step-size rule is in
+``control``.
 """
 import numpy as np
 
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
 from ..model.laws import lower, value
+from . import control as C
 from . import layout as L
 from .events import crossing, open_contact, track
 from .schemes import initial, step
 from .._jit import kernel, step_kernel
-
-REJECT_SHRINK = 0.25   # a rejected trial step is retried at a quarter of its size
-EVENT_MIN = 1e-3       # a step that crosses u_0 = 0 beyond this fraction is redone to end there
-
-
-@step_kernel
-def _propose(ctrl, dt_suggest, dt_prev):
-    """Next step: the scheme's suggestion, capped by dt_max and by growth over the
-    previous proposal (so a step that just recovered from a rejection grows gently)."""
-    if ctrl.dt_fixed > 0.0:
-        return ctrl.dt_fixed
-    return min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
-
-
-@step_kernel
-def _gap_limit(ctrl, dt, g_old, g_new):
-    """Largest next step that closes at most ``ctrl.gap`` of the gap ``g_new`` to a barrier,
-    at the closing rate of the last step (no limit while the gap opens)."""
-    if g_new >= g_old:
-        return np.inf
-    return ctrl.gap * g_new * dt / (g_old - g_new)
 
 
 @step_kernel
@@ -75,20 +56,20 @@ def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
         j = count[L.N_DIAG]
         ke, st, be, fe, ge, emin, z, w = energies(cur[0], cur[1], work[1], system, rod, floor)
         row = diag[j]
-        row[0] = t
-        row[1] = dt_prop
-        row[2] = ke
-        row[3] = st
-        row[4] = be
-        row[5] = fe
-        row[6] = ge
-        row[7] = ke + st + be + fe + ge
-        row[8] = clock[L.DISSIPATED]
-        row[9] = cur[0][0]
-        row[10] = value(cur[0][0], floor)
-        row[11] = emin
-        row[12] = z
-        row[13] = w
+        row[L.D_T] = t
+        row[L.D_DT] = dt_prop
+        row[L.D_ENERGY_KINETIC] = ke
+        row[L.D_ENERGY_STRETCH] = st
+        row[L.D_ENERGY_BEND] = be
+        row[L.D_ENERGY_FLOOR] = fe
+        row[L.D_ENERGY_GRAVITY] = ge
+        row[L.D_ENERGY_TOTAL] = ke + st + be + fe + ge
+        row[L.D_DISSIPATED] = clock[L.DISSIPATED]
+        row[L.D_U_BOTTOM] = cur[0][0]
+        row[L.D_FLOOR_FORCE] = value(cur[0][0], floor)
+        row[L.D_MIN_STRAIN] = emin
+        row[L.D_CM_HEIGHT] = z
+        row[L.D_CM_VELOCITY] = w
         count[L.N_DIAG] += 1
         _skip_past(clock, count, L.K_DIAG, L.DIAG_DT, t)
 
@@ -101,21 +82,22 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     u = state[0]
     v = state[1]
     a = state[2]
-    status, val, emin, ff, dts = initial(scheme, system, rod, floor, u, v, a, work)
+    r = initial(scheme, system, rod, floor, u, v, a, work)
+    status = r.status
     if status != OK:
         fail[L.F_CODE] = status
         fail[L.F_T] = clock[L.T]
-        fail[L.F_VALUE] = val
+        fail[L.F_VALUE] = r.value
         fail[L.F_INDEX] = worst_segment(u, system.h) if status == BAD_STRAIN else 0
         fail[L.F_DT] = 0.0
         return L.FAILED
     ke, st, be, fe, ge, emin, z, w = energies(u, v, work[1], system, rod, floor)
     clock[L.E0] = ke + st + be + fe + ge
     clock[L.W] = w
-    clock[L.DT] = _propose(ctrl, dts, np.inf)
+    clock[L.DT] = C.propose(ctrl, r.dt_suggest, np.inf)
     clock[L.EMIN] = emin
     if u[0] < 0.0:
-        open_contact(ev, clock[L.T], w, u[0], ff, emin)
+        open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin)
     _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
           count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag)
     count[L.STARTED] = 1
@@ -161,26 +143,15 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             code = L.FULL
             break
         target = _next_target(clock, count)
-        rem = target - t
-        land = False
-        if fixed:
-            dt = dtp
-            if rem <= dtp * (1.0 + 1e-9):
-                dt = rem
-                land = True
-        elif rem <= dtp * (1.0 + 1e-6):
-            dt = rem
-            land = True
-        elif rem < 2.0 * dtp:
-            dt = 0.5 * rem   # two equal steps instead of one full and one sliver
-        else:
-            dt = dtp
+        dt, land = C.step_to(fixed, target - t, dtp)
         u = cur[0]
         v = cur[1]
         u2 = nxt[0]
         v2 = nxt[1]
-        status, val, emin, ff, dts, w2, dd = step(scheme, system, rod, floor, u, v, cur[2],
-                                                 u2, v2, nxt[2], work, sstats, dt)
+        r = step(scheme, system, rod, floor, u, v, cur[2], u2, v2, nxt[2], work, sstats, dt)
+        status = r.status
+        val = r.value
+        emin = r.min_strain
         if status == INACCURATE and fixed:
             status = OK   # fixed steps: the state is valid; the error estimate is not asked
         if (status == OK and not fixed and not refined
@@ -190,7 +161,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             # even slightly inside the floor closes with a kick at the contact stiffness.
             # Retry once, ending on the crossing, so every step sees a smooth force.
             sc = crossing(u[0], v[0], u2[0], v2[0], dt)
-            if sc > EVENT_MIN and sc * dt >= ctrl.dt_min:
+            if sc > C.EVENT_MIN and sc * dt >= ctrl.dt_min:
                 dtp = sc * dt
                 refined = True
                 continue
@@ -200,14 +171,14 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             # its start can close most of a gap and leave a state no step can recover from.
             # Approach ε = −1 and u_0 = −β geometrically: reject a step that closed more
             # than twice the allowed fraction of either gap.
-            keep = 1.0 - min(2.0 * ctrl.gap, 0.9)
+            keep = C.gap_keep(ctrl)
             if (emin - rod_lo < keep * (emin_cur - rod_lo)
                     or u2[0] - floor_lo < keep * (u[0] - floor_lo)):
                 status = TOO_CLOSE
                 val = emin
         if status != OK:
             count[L.REJECTED] += 1
-            retry = dts if status == INACCURATE else REJECT_SHRINK * dt
+            retry = C.retry(status == INACCURATE, r.dt_suggest, dt)
             if fixed or retry < ctrl.dt_min:
                 fail[L.F_CODE] = status
                 fail[L.F_T] = t
@@ -220,18 +191,18 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             continue
         t_new = target if land else t + dt
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
-              w, w2, ff, emin)
-        diss += dd
-        w = w2
+              w, r.w, r.floor_force, emin)
+        diss += r.dissipated
+        w = r.w
         t = t_new
         cur, nxt = nxt, cur
         swapped = not swapped
         count[L.STEP] += 1
         taken += 1
-        dtp = _propose(ctrl, dts, dtp)
+        dtp = C.propose(ctrl, r.dt_suggest, dtp)
         if ctrl.gap > 0.0 and not fixed:
-            dtp = min(dtp, _gap_limit(ctrl, dt, emin_cur - rod_lo, emin - rod_lo),
-                      _gap_limit(ctrl, dt, u[0] - floor_lo, u2[0] - floor_lo))
+            dtp = min(dtp, C.gap_limit(ctrl, dt, emin_cur - rod_lo, emin - rod_lo),
+                      C.gap_limit(ctrl, dt, u[0] - floor_lo, u2[0] - floor_lo))
         emin_cur = emin
         if land:
             clock[L.DISSIPATED] = diss

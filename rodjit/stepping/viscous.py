@@ -5,8 +5,8 @@ remove, computed as −Σ m (v₁−v₀)(v₁+v₀)/2 (no cancellation when it 
 """
 import math
 
-
 from ..kernels.banded import tridiag_factor, tridiag_solve
+from ..kernels.mass import node_mass
 from . import workspace as W
 from .._jit import kernel, step_kernel
 
@@ -43,7 +43,7 @@ def _factored(c, h, n, work):
 def _kinetic_drop(v0, v1, h, n):
     acc = 0.0
     for i in range(n + 1):
-        m = h if 0 < i < n else 0.5 * h
+        m = node_mass(i, n, h)
         acc += m * (v0[i] - v1[i]) * (v0[i] + v1[i])
     # both sub-steps contract the kinetic energy (|R(z)| ≤ 1 for the M-self-adjoint
     # operator), so a negative value is rounding: the dissipated energy never decreases
@@ -65,7 +65,7 @@ def viscous_cn(vin, vout, tau, system, work):
         v0[i] = vin[i]
     # rhs = (M − cK) v0
     for i in range(n + 1):
-        m = h if 0 < i < n else 0.5 * h
+        m = node_mass(i, n, h)
         kv = 0.0
         if i > 0:
             kv += v0[i] - v0[i - 1]
@@ -93,12 +93,12 @@ def viscous_sdirk2(vin, vout, tau, system, work):
     off = _factored(c, h, n, work)
     for i in range(n + 1):
         v0[i] = vin[i]
-        m = h if 0 < i < n else 0.5 * h
+        m = node_mass(i, n, h)
         rhs[i] = m * v0[i]
     tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)       # stage 1: Y1
     r = (1.0 - gs) / gs
     for i in range(n + 1):
-        m = h if 0 < i < n else 0.5 * h
+        m = node_mass(i, n, h)
         rhs[i] = m * (v0[i] + r * (vout[i] - v0[i]))
     tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)       # stage 2 = result
     return _kinetic_drop(v0, vout, h, n)

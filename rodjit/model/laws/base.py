@@ -16,8 +16,8 @@ from numba.extending import overload
 from . import registered
 from ..._jit import STEP_JIT_OPTIONS
 
-__all__ = ["Law", "register", "law_of", "get_law", "law_names", "value", "deriv", "primitive", "lower",
-           "max_deriv"]
+__all__ = ["Law", "register", "law_of", "law_for_numba_type", "get_law", "law_names", "value",
+           "deriv", "primitive", "lower", "max_deriv"]
 
 
 @dataclass(frozen=True)
@@ -120,7 +120,9 @@ def law_of(params) -> Law:
     return _BY_TYPE[type(params)]
 
 
-def _law_for_type(numba_type) -> Law:
+def law_for_numba_type(numba_type) -> Law:
+    """The law whose parameters have the Numba type ``numba_type`` (for overloads that
+    dispatch on a law at compile time)."""
     cls = getattr(numba_type, "instance_class", None)
     if cls not in _BY_TYPE:
         raise TypeError(f"{numba_type} is not the parameter type of a registered stress law")
@@ -163,31 +165,31 @@ def max_deriv(u, ih, lo, hi, p):
 
 @overload(value, jit_options=STEP_JIT_OPTIONS)
 def _value_ov(x, p):
-    impl = _law_for_type(p).value
+    impl = law_for_numba_type(p).value
     return lambda x, p: impl(x, p)
 
 
 @overload(deriv, jit_options=STEP_JIT_OPTIONS)
 def _deriv_ov(x, p):
-    impl = _law_for_type(p).deriv
+    impl = law_for_numba_type(p).deriv
     return lambda x, p: impl(x, p)
 
 
 @overload(primitive, jit_options=STEP_JIT_OPTIONS)
 def _primitive_ov(x, p):
-    impl = _law_for_type(p).primitive
+    impl = law_for_numba_type(p).primitive
     return lambda x, p: impl(x, p)
 
 
 @overload(lower, jit_options=STEP_JIT_OPTIONS)
 def _lower_ov(p):
-    impl = _law_for_type(p).lower
+    impl = law_for_numba_type(p).lower
     return lambda p: impl(p)
 
 
 @overload(max_deriv, jit_options=STEP_JIT_OPTIONS)
 def _max_deriv_ov(u, ih, lo, hi, p):
-    law = _law_for_type(p)
+    law = law_for_numba_type(p)
     if law.deriv_max is not None:
         bound = law.deriv_max
         return lambda u, ih, lo, hi, p: max(0.0, bound(lo, hi, p))

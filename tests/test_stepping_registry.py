@@ -1,0 +1,199 @@
+"""The scheme registry, the kick–drift–kick stage table and the step-control rules."""
+import ast
+import dataclasses
+import importlib
+import math
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit import config
+from rodjit.kernels.forces import OK
+from rodjit.kernels.mass import inv_node_mass, node_mass
+from rodjit.model.system import masses
+from rodjit.stepping import control, kdk, registry, schemes, workspace
+from rodjit.stepping.step_result import StepResult
+
+ROOT = Path(rodjit.__file__).resolve().parent
+
+
+def test_config_takes_the_integrator_names_from_the_registry():
+    assert config.INTEGRATORS == registry.NAMES == tuple(s.name for s in registry.SCHEMES)
+    assert len(set(registry.NAMES)) == len(registry.NAMES)
+    for name in registry.NAMES:
+        assert rodjit.Config().override({"time.integrator": name}).time.integrator == name
+    with pytest.raises(ValueError, match="time.integrator"):
+        rodjit.Config().override({"time.integrator": "rk4"})
+
+
+def test_every_entry_names_a_module_with_its_parameters_and_kernels():
+    tc = rodjit.Config().time
+    for entry in registry.SCHEMES:
+        module, params = registry.load(entry)
+        assert module is importlib.import_module(entry.module)
+        assert callable(module.initial) and callable(module.step)
+        scheme = registry.make_scheme(dataclasses.replace(tc, integrator=entry.name))
+        assert type(scheme) is params
+        assert registry.entry_of(params) is entry
+        assert schemes.gap_control(scheme) is entry.gap_control
+        assert schemes.work_rows(scheme) == entry.work_rows
+        assert set(entry.counters) <= set(registry.SCHEME_STATS)
+
+
+def test_work_rows_and_counters_match_the_scheme_modules():
+    from rodjit.stepping import energy
+    assert registry.get("energy").work_rows == energy.WORK_ROWS
+    assert registry.get("verlet").work_rows == workspace.WORK_ROWS
+    # the sstats layout of run files and Result.stats
+    assert registry.SCHEME_STATS == ("newton_iterations", "newton_failures")
+    assert (energy.NEWTON_ITERATIONS, energy.NEWTON_FAILURES) == (0, 1)
+    assert registry.get("energy").gap_control is False
+    assert registry.get("verlet").gap_control and registry.get("semi-implicit").gap_control
+
+
+def test_the_registry_imports_no_compiled_code():
+    """config imports the registry to validate names: it must not pull in the schemes."""
+    for mod in ("stepping/registry.py", "stepping/workspace.py"):
+        tree = ast.parse((ROOT / mod).read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom):
+                assert node.level == 0 or node.module in (None, "workspace"), (mod, node.module)
+                if node.level == 0:
+                    assert node.module in ("__future__", "dataclasses", "typing"), node.module
+            elif isinstance(node, ast.Import):
+                assert all(a.name in ("importlib",) for a in node.names), mod
+
+
+def test_an_unknown_integrator_is_refused_by_name():
+    with pytest.raises(ValueError, match="time.integrator = 'nope'.*energy"):
+        registry.get("nope")
+    with pytest.raises(TypeError, match="registered integrator"):
+        registry.entry_of(tuple)
+
+
+def test_adding_a_scheme_is_one_module_and_one_registry_line(monkeypatch):
+    line = registry.Scheme("toy", "toy_scheme", "Toy", lambda tc, P: P(float(tc.cfl)),
+                           workspace.WORK_ROWS, counters=("newton_iterations",))
+    monkeypatch.setattr(registry, "SCHEMES", registry.SCHEMES + (line,))
+    tc = type("TC", (), {"integrator": "toy", "cfl": 0.25})()
+    scheme = registry.make_scheme(tc)
+    assert type(scheme).__name__ == "Toy" and scheme.cfl == 0.25
+    assert schemes.gap_control(scheme) and schemes.work_rows(scheme) == workspace.WORK_ROWS
+
+    # the loop's dispatch finds the new module from the parameters' (Numba) type
+    import toy_scheme
+    assert schemes._module_for(numba.typeof(scheme)) is toy_scheme
+    # (called from Python here: the compiled dispatch's cache must not name a module that
+    # only the tests can import)
+    from rodjit.model.system import build_system, initial_state
+    cfg = rodjit.Config().override({"rod.N": 8})
+    system, rod, floor = build_system(cfg)
+    u, v = initial_state(cfg)
+    state = np.zeros((3, 9))
+    state[0], state[1] = u, v
+    trial = np.zeros((3, 9))
+    work = np.zeros((schemes.work_rows(scheme), 9))
+    sstats = np.zeros(len(registry.SCHEME_STATS), dtype=np.int64)
+    r0 = schemes.initial(scheme, system, rod, floor, state[0], state[1], state[2], work)
+    r = schemes.step(scheme, system, rod, floor, state[0], state[1], state[2],
+                     trial[0], trial[1], trial[2], work, sstats, 1e-4)
+    assert isinstance(r, StepResult) and (r0.status, r.status) == (OK, OK)
+    assert sstats[registry.counter_index("newton_iterations")] == 1
+    # symplectic Euler: one step moves every node by dt·(v + dt·a)
+    np.testing.assert_allclose(trial[0], u + 1e-4 * (v + 1e-4 * state[2]), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(r.w, (masses(8) * trial[1]).sum(), rtol=1e-14)
+
+
+# ---- the kick–drift–kick stage table --------------------------------------------------------
+def test_every_kdk_scheme_has_a_row_of_the_stage_table():
+    kdk_entries = [e for e in registry.SCHEMES if e.module == kdk.__name__]
+    assert {e.name for e in kdk_entries} == {"verlet", "semi-implicit"}
+    assert {getattr(kdk, e.params) for e in kdk_entries} == set(kdk.STAGES)
+    v = kdk.STAGES[kdk.Verlet]
+    s = kdk.STAGES[kdk.SemiImplicit]
+    assert (v.kick_bending, v.drift, v.viscous, v.viscous_limit) == (
+        True, kdk.DRIFT, kdk.CRANK_NICOLSON, True)
+    assert (s.kick_bending, s.drift, s.viscous, s.viscous_limit) == (
+        False, kdk.BEAM_MIDPOINT, kdk.SDIRK2, False)
+    assert kdk.stages(kdk.Verlet(0.1)) is v
+
+    @numba.njit
+    def row(scheme):
+        st = kdk.stages(scheme)
+        return st.kick_bending, st.drift, st.viscous, st.viscous_limit
+
+    assert row(kdk.Verlet(0.1)) == tuple(v)
+    assert row(kdk.SemiImplicit(0.1)) == tuple(s)
+
+
+def test_the_two_rows_coincide_where_their_differing_stages_are_inactive():
+    """γ = μ = 0: bending, the beam drift and the viscous sub-steps all vanish, so both
+    rows of the table are the same scheme, bit for bit."""
+    base = {"rod.N": 10, "rod.gamma": 0.0, "rod.mu": 0.0, "time.t_end": 0.4,
+            "initial.height": 0.05, "initial.velocity": -1.0}
+    a = rodjit.simulate(rodjit.Config().override({**base, "time.integrator": "verlet"}))
+    b = rodjit.simulate(rodjit.Config().override({**base, "time.integrator": "semi-implicit"}))
+    assert a.stats["steps"] == b.stats["steps"] and len(a.bounces["t_impact"]) >= 1
+    np.testing.assert_array_equal(a.u, b.u)
+    for name in a.diagnostics:
+        np.testing.assert_array_equal(a.diagnostics[name], b.diagnostics[name])
+    # with bending on, the rows differ
+    g = {**base, "rod.gamma": 1e-3}
+    c = rodjit.simulate(rodjit.Config().override({**g, "time.integrator": "verlet"}))
+    d = rodjit.simulate(rodjit.Config().override({**g, "time.integrator": "semi-implicit"}))
+    assert not np.array_equal(c.u, d.u)
+
+
+def test_step_result_is_named():
+    assert StepResult._fields == ("status", "value", "min_strain", "floor_force",
+                                  "dt_suggest", "w", "dissipated")
+
+
+# ---- step control --------------------------------------------------------------------------
+def test_control_from_the_time_config():
+    tc = rodjit.Config().override({"time.cfl": 0.9, "time.dt_max": 0.01}).time
+    c = control.build(tc, kdk.Verlet(0.9))
+    assert c == control.Control(dt_max=0.01, dt_min=tc.dt_min, dt_fixed=0.0,
+                                growth=control.GROWTH, gap=control.GAP_MAX)
+    c = control.build(rodjit.Config().time, kdk.SemiImplicit(0.05))
+    assert c.gap == 0.05 and c.dt_max == math.inf
+    from rodjit.stepping.energy import Energy
+    c = control.build(rodjit.Config().override({"time.dt": 1e-4}).time, Energy(1e-6, 1e-9))
+    assert c.gap == 0.0 and c.dt_fixed == 1e-4
+    assert control.output_tolerance([0.5, 0.001, 2.0]) == control.OUTPUT_TOL * 0.001
+
+
+def test_steps_land_on_output_times_and_never_leave_a_sliver():
+    dtp = 0.1
+    assert control.step_to(False, 0.1 * (1 + 1e-7), dtp) == (0.1 * (1 + 1e-7), True)
+    assert control.step_to(False, 0.15, dtp) == (0.075, False)     # two equal steps
+    assert control.step_to(False, 0.25, dtp) == (dtp, False)
+    assert control.step_to(True, 0.15, dtp) == (dtp, False)        # fixed: never halved
+    assert control.step_to(True, 0.1 * (1 + 1e-10), dtp) == (0.1 * (1 + 1e-10), True)
+    assert control.step_to(True, 0.1 * (1 + 1e-7), dtp) == (dtp, False)
+
+
+def test_growth_rejection_and_gap_rules():
+    c = control.Control(dt_max=1.0, dt_min=1e-12, dt_fixed=0.0, growth=1.5, gap=0.05)
+    assert control.propose(c, 10.0, 0.1) == pytest.approx(0.15)
+    assert control.propose(c, 0.01, 0.1) == 0.01
+    assert control.propose(c._replace(dt_fixed=0.3), 0.01, 0.1) == 0.3
+    assert control.retry(True, 0.02, 0.1) == 0.02
+    assert control.retry(False, 0.02, 0.1) == control.REJECT_SHRINK * 0.1
+    assert control.gap_limit(c, 0.1, 1.0, 2.0) == np.inf           # the gap opens
+    # closing 0.5 per 0.1 s with 0.5 left: 5 % of it takes 0.005 s
+    assert control.gap_limit(c, 0.1, 1.0, 0.5) == pytest.approx(0.005)
+    assert control.gap_keep(c) == pytest.approx(0.9)
+    assert control.gap_keep(c._replace(gap=0.5)) == pytest.approx(1 - control.GAP_CLOSE_MAX)
+
+
+def test_node_mass_kernel_matches_the_mass_vector():
+    for n in (1, 2, 5, 17):
+        h = 1.0 / n
+        m = np.array([node_mass(i, n, h) for i in range(n + 1)])
+        np.testing.assert_array_equal(m, masses(n))
+        im = np.array([inv_node_mass(i, n, 1.0 / h) for i in range(n + 1)])
+        np.testing.assert_array_equal(im, 1.0 / m)
