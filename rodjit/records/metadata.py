@@ -1,0 +1,77 @@
+"""What each column of rodjit's tables means and in which unit: one source for the file
+attributes (``long_name``, ``units``), ``Result.to_xarray`` and the documentation.
+
+Units (docs/MODEL.md, "Units"): the model is written for a rod of natural length 1 and
+mass 1, so every quantity is in the units its parameters are given in.  With the defaults
+(``gravity.g = -9.81``) these read as SI for a rod of 1 m and 1 kg: heights in m, times in
+s, velocities in m s-1, energies in J, forces (the stresses f and σ_b of a one-dimensional
+rod are forces) in N; strains are dimensionless ("1").  The ``units`` strings follow
+UDUNITS, as CF conventions ask.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+__all__ = ["Meaning", "COLUMN_MEANINGS", "meaning", "UNIT_SYSTEM"]
+
+UNIT_SYSTEM = ("the units of the parameters: SI (m, kg, s) for a rod of natural length 1 m "
+               "and mass 1 kg with gravity.g in m s-2")
+
+
+class Meaning(NamedTuple):
+    long_name: str
+    units: str
+
+
+# by table ("snapshots", "diagnostics", "episodes", "bounces", "grid") and column name
+COLUMN_MEANINGS: dict[str, dict[str, Meaning]] = {
+    "grid": {
+        "x": Meaning("natural position along the rod (0: bottom end, 1: top end)", "m"),
+    },
+    "snapshots": {
+        "t": Meaning("time", "s"),
+        "step": Meaning("number of accepted steps taken", "1"),
+        "u": Meaning("height of the material point", "m"),
+        "v": Meaning("velocity of the material point", "m s-1"),
+    },
+    "diagnostics": {
+        "t": Meaning("time", "s"),
+        "dt": Meaning("proposed next time step", "s"),
+        "energy_kinetic": Meaning("kinetic energy", "J"),
+        "energy_stretch": Meaning("elastic (stretch) energy of the rod", "J"),
+        "energy_bend": Meaning("bending energy of the rod", "J"),
+        "energy_floor": Meaning("elastic energy stored in the floor", "J"),
+        "energy_gravity": Meaning("gravitational potential energy", "J"),
+        "energy_total": Meaning("total discrete energy", "J"),
+        "dissipated": Meaning("energy dissipated by viscosity since the start", "J"),
+        "u_bottom": Meaning("height of the bottom end u_0", "m"),
+        "floor_force": Meaning("upward floor force sigma_b(u_0)", "N"),
+        "min_strain": Meaning("smallest segment strain", "1"),
+        "cm_height": Meaning("height of the centre of mass", "m"),
+        "cm_velocity": Meaning("velocity of the centre of mass", "m s-1"),
+    },
+    "episodes": {
+        "t_start": Meaning("start of the contact episode (u_0 < 0)", "s"),
+        "t_end": Meaning("end of the contact episode", "s"),
+    },
+    "bounces": {
+        "t_impact": Meaning("start of the bounce's first contact episode", "s"),
+        "t_release": Meaning("end of the bounce's last contact episode", "s"),
+        "n_episodes": Meaning("contact episodes in the bounce", "1"),
+        "w_impact": Meaning("centre-of-mass velocity at impact", "m s-1"),
+        "w_release": Meaning("centre-of-mass velocity at release", "m s-1"),
+        "restitution": Meaning("coefficient of restitution -w_release/w_impact", "1"),
+        "min_u0": Meaning("lowest bottom height during the bounce", "m"),
+        "max_floor_force": Meaning("largest floor force during the bounce", "N"),
+        "min_strain": Meaning("smallest segment strain during the bounce", "1"),
+        "open": Meaning("bounce still in contact when the run stopped", "1"),
+    },
+}
+
+
+def meaning(table: str, column: str) -> Meaning:
+    """The long name and unit of one column; KeyError names the table and column."""
+    try:
+        return COLUMN_MEANINGS[table][column]
+    except KeyError:
+        raise KeyError(f"no description of column {column!r} of table {table!r}") from None
