@@ -128,13 +128,15 @@ def test_stiff_floor_macroscopic_restitutions_are_explained_by_the_energies(stif
     # energy at the two ends (floor energy 0, μ = 0):
     # e² = 1 + 2(E_vib,impact − E_vib,release + g Δz)/w_impact²
     explained = 1 + 2 * (ev_i - ev_r + phys.g * dz) / w_i ** 2
-    assert np.allclose(e ** 2, explained, atol=2e-3)
+    assert np.allclose(e ** 2, explained, rtol=1e-3, atol=2e-3)
     # and the bound: rigid-body kinetic energy gained at most the vibration energy brought in
     bound = 1 + 2 * (ev_i + phys.g * dz) / w_i ** 2
-    assert np.all(e ** 2 <= bound + 2e-3)
-    assert e.max() < 2.0
-    # every macroscopic impact is a fall of the rod as a whole, not a micro-contact
-    assert np.all(-w_i > 1.0)
+    assert np.all(e ** 2 <= bound * (1 + 1e-3) + 2e-3)
+    # a restitution above 1 only where vibration energy came into the impact
+    ratio = mc["vibration_ratio"][done]
+    assert np.all(ratio[e > 1] > 0.1)
+    # the micro-contacts of the first impacts are merged (the bounce table's split is gone)
+    assert np.all(mc["n_episodes"][:5] > 1) and np.all(e[:5] < 1)
 
 
 def test_stiff_floor_first_impact_merges_its_micro_contacts(stiff_run):

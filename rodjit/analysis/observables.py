@@ -25,8 +25,12 @@ __all__ = ["Physics", "physics_of", "wave_speed", "lift_energy", "energy_vibrati
            "merge_episodes", "macroscopic_contacts", "FirstImpact", "first_impact",
            "observables", "OBSERVABLES", "STATUSES"]
 
-# merged micro-contacts: gaps shorter than this many elastic transit times 1/c
-MERGE_TRANSITS = 1.0
+# gaps shorter than this many periods π h/c of the highest semi-discrete mode are merged
+MERGE_PERIODS = 1.0
+# a flight separates two macroscopic contacts only if the bottom stays off the floor at
+# most this many times the rigid-body flight time 2 w_release/|g| (vibration may lengthen
+# a flight of the rod as a whole a little; a hop of the bottom it drives lasts far longer)
+FLIGHT_RATIO = 1.25
 # a contact still open at the end with E(t_end) below the lift-off energy can never end
 STATUSES = ("lift-off", "no lift-off", "open", "no impact")
 
@@ -111,10 +115,12 @@ def lift_energy(config) -> float:
 
 
 def physics_of(result, merge_time: float | None = None) -> Physics:
-    """The Physics of a Result (``merge_time`` default: MERGE_TRANSITS / c)."""
+    """The Physics of a Result (``merge_time`` default: MERGE_PERIODS · π h/c, the period
+    of the highest mode of the semi-discrete rod, ω_max = 2c/h)."""
     cfg = result.config
     c = wave_speed(cfg)
-    tau = MERGE_TRANSITS / c if merge_time is None else float(merge_time)
+    tau = (MERGE_PERIODS * math.pi / (cfg.rod.N * c) if merge_time is None
+           else float(merge_time))
     if not tau > 0:
         raise ValueError(f"merge_time = {merge_time!r} is out of range (seconds > 0)")
     in_contact = bool(result.u_final.size and result.u_final[0] < 0)
@@ -166,11 +172,12 @@ def merge_episodes(t_start, t_end, merge_time: float) -> list[tuple[int, int]]:
 
 
 def _join_without_apex(diag, phys: Physics, t_s, t_e, groups):
-    """Join consecutive groups when the centre of mass does not reach an apex in the
-    flight between them (g < 0): the rod did not come down as a whole, the next touch is
-    a vibration of its bottom (in free flight w = w_release + g (t - t_release), so the
-    apex lies inside the flight iff w_release > 0 and t_release + w_release/|g| is before
-    the next contact)."""
+    """Join consecutive groups unless the flight between them is one of the rod as a whole
+    (g < 0): the centre of mass reaches its apex in it (in free flight
+    w = w_release + g (t − t_release): iff w_release > 0 and t_release + w_release/|g|
+    comes before the next contact), and the bottom stays off the floor at most
+    FLIGHT_RATIO times the rigid-body flight time 2 w_release/|g|.  Otherwise the next
+    touch is a vibration of the bottom, not a new impact."""
     if phys.g >= 0 or len(groups) < 2:
         return groups
     out = [groups[0]]
@@ -178,8 +185,10 @@ def _join_without_apex(diag, phys: Physics, t_s, t_e, groups):
         a0, b0 = out[-1]
         t_rel, t_next = float(t_e[b0]), float(t_s[a])
         st = _flight_state(diag, phys.g, t_rel, t_rel, t_next, before=False)
-        apex = st is not None and st[0] > 0 and t_rel + st[0] / -phys.g < t_next
-        if apex:
+        w_r = st[0] if st is not None else -1.0
+        flight = (w_r > 0 and t_rel + w_r / -phys.g < t_next
+                  and t_next - t_rel <= FLIGHT_RATIO * 2.0 * w_r / -phys.g)
+        if flight:
             out.append((a, b))
         else:
             out[-1] = (a0, b)
@@ -229,7 +238,9 @@ def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np
     ``n_episodes``, ``w_impact``, ``w_release``, ``z_impact``, ``z_release``,
     ``ev_impact``, ``ev_release`` (energy_vibration at its ends), ``restitution``
     (-w_release/w_impact), ``restitution_apex``, ``rebound_speed`` (largest w sampled from
-    the impact to the release, or to the end), ``min_u0``, ``max_floor_force`` and
+    the impact to the release, or to the end), ``min_u0``, ``max_floor_force``,
+    ``vibration_ratio`` (energy_vibration over the rigid-body kinetic energy w²/2 at the
+    impact: above 1 the bounce is driven by the vibration more than by the fall) and
     ``open``."""
     _check_sampling(diag, phys)
     t_s = np.asarray(episodes["t_start"], float)
@@ -241,7 +252,7 @@ def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np
         t_s, np.where(np.isnan(t_e), math.inf, t_e), phys.merge_time))
     names = ("t_impact", "t_release", "n_episodes", "w_impact", "w_release", "z_impact",
              "z_release", "ev_impact", "ev_release", "restitution", "restitution_apex",
-             "rebound_speed", "min_u0", "max_floor_force", "open")
+             "rebound_speed", "min_u0", "max_floor_force", "vibration_ratio", "open")
     rows = {k: [] for k in names}
     ts, w_all = diag["t"], diag["cm_velocity"]
     b_imp, b_rel = np.asarray(bounces["t_impact"]), np.asarray(bounces["t_release"])
@@ -295,6 +306,7 @@ def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np
         rows["rebound_speed"].append(rebound)
         rows["min_u0"].append(min_u0)
         rows["max_floor_force"].append(max_ff)
+        rows["vibration_ratio"].append(ev_i / (0.5 * w_i * w_i) if w_i else math.inf)
         rows["open"].append(is_open)
     out = {k: np.asarray(v, dtype=float) for k, v in rows.items()}
     out["n_episodes"] = out["n_episodes"].astype(np.int64)
