@@ -107,10 +107,21 @@ def test_no_impact_is_reported_as_such():
     assert fi.status == "no impact" and "never touched" in fi.reason
 
 
-def test_coarse_diagnostics_are_refused_with_the_limit():
-    r = rodjit.simulate(PAPER.override({"output.diagnostics_interval": 0.1, "time.t_end": 1.0}))
+def test_without_diagnostics_the_observables_say_what_they_need():
+    r = rodjit.simulate(PAPER.override({"output.diagnostics_interval": 0.0, "time.t_end": 1.0}))
     with pytest.raises(ValueError, match="diagnostics_interval"):
         observables(r)
+
+
+def test_gaps_shorter_than_the_sample_spacing_merge():
+    # N = 200: π h/c = 1.4 ms, samples every 1 ms and every 5 ms give the same first contact
+    fine = rodjit.simulate(PAPER.override({"rod.N": 200, "time.t_end": 1.0}))
+    coarse = rodjit.simulate(PAPER.override({"rod.N": 200, "time.t_end": 1.0,
+                                             "output.diagnostics_interval": 0.005}))
+    a, b = observables(fine), observables(coarse)
+    assert a["status"] == b["status"] == "lift-off"
+    # (steps land on the output times, so the runs differ by the time-stepping error)
+    assert a["restitution_first"] == pytest.approx(b["restitution_first"], rel=1e-3)
 
 
 def test_stiff_floor_macroscopic_restitutions_are_explained_by_the_energies(stiff_run):
