@@ -8,7 +8,7 @@ import rodjit
 from rodjit.analysis.evaluate import evaluate
 from rodjit.analysis.fit_table import fit_table, read_measurements
 
-BASE = rodjit.load_preset("paper-mu100").override({"time.t_end": 1.2, "rod.mu": 1.0,
+BASE = rodjit.load_preset("paper-mu100").override({"time.t_end": 1.2, "rod.mu": 1.0, "rod.N": 20,
                                                    "output.snapshot_interval": 0.0})
 
 
