@@ -121,16 +121,20 @@ class Convergence:
         ``time_values``) and attributes value, error, order, status, message, time_error."""
         import os
 
+        from importlib.metadata import PackageNotFoundError, version
+
         import h5py
 
-        from .. import __version__
-
+        try:
+            rodjit_version = version("rodjit")
+        except PackageNotFoundError:
+            rodjit_version = "0.0.0+unknown"
         if os.path.exists(path) and not overwrite:
             raise ValueError(f"{str(path)!r} exists; use --overwrite to replace it")
         tmp = f"{path}.part"
         with h5py.File(tmp, "w") as f:
             f.attrs.update({"rodjit_kind": "convergence", "format_version": FORMAT_VERSION,
-                            "rodjit_version": __version__, "key": self.key,
+                            "rodjit_version": rodjit_version, "key": self.key,
                             "levels": np.asarray(self.levels, float),
                             "time_key": self.time_key or "",
                             "time_levels": np.asarray(self.time_levels, float),
