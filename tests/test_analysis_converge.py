@@ -70,6 +70,8 @@ def test_statuses_say_what_the_ladder_does():
     s = study("d", h, [1.0, 1.5, 1.6, 1.61])            # orders 2.3, 3.3: scatter
     assert s.status == "pre-asymptotic" and "asymptotic" in s.message
     assert study("e", h, [3.0] * 4).status == "exact"
+    s = study("never ends", h, [math.inf] * 4)           # no lift-off at every level
+    assert s.status == "exact" and s.extrapolated == math.inf and s.error == 0
     assert study("f", h, [1.0, math.nan, 1.0, 1.0]).status == "undefined"
 
 

@@ -84,6 +84,11 @@ def study(name: str, h, values) -> Study:
     h = [float(x) for x in h]
     f = [float(x) for x in values]
     s = Study(name, h, f)
+    if all(x == f[0] for x in f) and not math.isnan(f[0]):
+        # the same at every level, also ±inf (a contact that never ends at any level)
+        s.status, s.extrapolated, s.error, s.order = "exact", f[0], 0.0, math.inf
+        s.message = "every level gives the same value"
+        return s
     if any(not math.isfinite(x) for x in f):
         bad = [hh for hh, x in zip(h, f) if not math.isfinite(x)]
         s.message = f"no finite value at h = {', '.join(f'{x:g}' for x in bad)}"
