@@ -59,6 +59,7 @@ def test_a_one_crossing_non_monotone_response_is_noted():
     assert res.notes and "not monotone" in res.notes[0]
 
 
+@pytest.mark.slow
 def test_fit_of_the_continuum_value_along_a_ladder():
     cfg = BASE.override({"rod.N": 10, "time.t_end": 1.0})
     res = fit("rod.mu", {"restitution_first": 0.7}, cfg, bracket=(0.3, 2), converged=True,
