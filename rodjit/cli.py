@@ -419,3 +419,139 @@ def plot_command(file, output, kind, quantity, x_key, y_key, at):
 
 if __name__ == "__main__":  # pragma: no cover
     main()
+
+
+# ---- rodjit converge / rodjit fit -----------------------------------------------------------
+def _key_values(option: str, text: str, allow_many: bool = False) -> dict[str, str]:
+    """``KEY=V1,V2,...`` of --ladder / --also / --target as {key: text}."""
+    key, sep, values = text.partition("=")
+    if not sep or not key.strip() or not values.strip():
+        raise ValueError(f"{option} expects KEY=VALUES (e.g. {option} rod.N=25,50,100), "
+                         f"got {text!r}")
+    return {key.strip(): values.strip()}
+
+
+def _base_config(config, sets):
+    cfg, _ = _load_config(config)
+    overrides = _overrides(sets)
+    return cfg.override(overrides) if overrides else cfg
+
+
+@main.command("converge")
+@click.argument("config", required=False, metavar="[CONFIG.toml | PRESET]")
+@click.option("--ladder", default="rod.N=25,50,100,200,400", show_default=True,
+              metavar="KEY=VALUES", help="The resolution ladder, coarse to fine.")
+@click.option("--also", metavar="KEY=VALUES",
+              help="A tolerance ladder (time.cfl=..., time.rtol=... for the energy "
+                   "integrator, time.dt=...), run at the second finest level: its "
+                   "contribution to the error is reported on its own.")
+@click.option("--observable", "observables",
+              default="restitution_first,contact_time_first,min_u0,max_floor_force",
+              show_default=True, help="Comma-separated observables to study.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Write the study to this HDF5 file (rodjit_kind = convergence).")
+@click.option("--overwrite", is_flag=True, help="Replace an existing output file.")
+@click.option("-j", "--jobs", type=int, help="Worker processes [default: every core].")
+@click.option("--scheduler", metavar="local|tcp://HOST:PORT",
+              help="As for rodjit sweep: Dask 'local', tcp://HOST:PORT, or 'inline'.")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="Override a key of the configuration (repeatable).")
+def converge_command(config, ladder, also, observables, output, overwrite, jobs, scheduler,
+                     sets):
+    """Run CONFIG.toml, a preset or the default along a resolution ladder and report, per
+    observable, the values, the observed order of convergence, the Richardson-extrapolated
+    continuum value and an error estimate; warns when the ladder is not in the asymptotic
+    range and does not extrapolate values that do not settle.
+
+    Exit codes: 0 done, 2 usage or configuration error (nothing run or written).
+    """
+    import os
+
+    from .analysis.converge import converge
+
+    try:
+        cfg = _base_config(config, sets)
+        if output and os.path.exists(output) and not overwrite:
+            raise ValueError(f"{output!r} exists; use --overwrite to replace it")
+        names = [o.strip() for o in observables.split(",") if o.strip()]
+        result = converge(cfg, _key_values("--ladder", ladder),
+                          also=_key_values("--also", also) if also else None,
+                          observables=names, jobs=jobs, scheduler=scheduler)
+        if output:
+            result.save(output, overwrite=True)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(repr(result))
+    if output:
+        click.echo(f"wrote {output}")
+
+
+@main.command("fit")
+@click.argument("key", metavar="KEY[,KEY...]")
+@click.argument("config", required=False, metavar="[CONFIG.toml | PRESET]")
+@click.option("--target", metavar="OBSERVABLE=VALUE",
+              help="The observable and the value to reach, e.g. restitution_first=0.8.")
+@click.option("--bracket", default="0,1000", show_default=True, metavar="LO,HI",
+              help="The range of KEY searched.")
+@click.option("--points", type=int, help="Values scanning the bracket in parallel [default 8].")
+@click.option("--ftol", type=float, default=1e-4, show_default=True,
+              help="Stop when the observable is this close to the target.")
+@click.option("--converged", is_flag=True,
+              help="Fit the extrapolated continuum value along --ladder.")
+@click.option("--ladder", metavar="KEY=VALUES",
+              help="With --converged: the resolution ladder [default rod.N = N/2, N, 2N].")
+@click.option("--table", type=click.Path(dir_okay=False),
+              help="Least squares of the comma-separated KEYs against a CSV of measurements "
+                   "(a drop condition per row, e.g. initial.height, and measured "
+                   "restitution_first and/or contact_time_first, optional sigma_<name>).")
+@click.option("-j", "--jobs", type=int, help="Worker processes [default: every core].")
+@click.option("--scheduler", metavar="local|tcp://HOST:PORT",
+              help="As for rodjit sweep: Dask 'local', tcp://HOST:PORT, or 'inline'.")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="Override a key of the configuration (repeatable).")
+def fit_command(key, config, target, bracket, points, ftol, converged, ladder, table, jobs,
+                scheduler, sets):
+    """Find the value of KEY for which an observable takes a target (--target), or fit
+    several KEYs to a table of measurements (--table).
+
+    Exit codes: 0 done, 1 the target cannot be fitted (unreachable, or crossed more than
+    once in the bracket: the message says where), 2 usage or configuration error.
+    """
+    from .analysis.fit import FitError, fit
+    from .analysis.fit_table import fit_table
+
+    try:
+        cfg = _base_config(config, sets)
+        keys = [k.strip() for k in key.split(",") if k.strip()]
+        if table:
+            if target:
+                raise ValueError("--target and --table exclude each other")
+            result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler)
+        else:
+            if not target:
+                raise ValueError("fit needs --target OBSERVABLE=VALUE (or --table FILE.csv)")
+            if len(keys) != 1:
+                raise ValueError("--target fits one KEY; several keys need --table")
+            name, _, value = target.partition("=")
+            try:
+                goal = {name.strip(): float(value)}
+            except ValueError:
+                raise ValueError(f"--target expects OBSERVABLE=NUMBER, got {target!r}") from None
+            try:
+                lo, hi = (float(b) for b in bracket.split(","))
+            except ValueError:
+                raise ValueError(f"--bracket expects LO,HI, got {bracket!r}") from None
+            result = fit(keys[0], goal, cfg, bracket=(lo, hi), points=points, ftol=ftol,
+                         converged=converged,
+                         ladder=_key_values("--ladder", ladder) if ladder else None,
+                         jobs=jobs, scheduler=scheduler)
+    except FitError as exc:
+        raise RunFailed(str(exc)) from None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(repr(result))
+    for note in getattr(result, "notes", []):
+        click.echo(f"note: {note}")
+    for row in getattr(result, "residuals", []):
+        click.echo(f"  row {row['row']} {row['observable']}: measured {row['measured']:.6g}, "
+                   f"model {row['model']:.6g}, residual {row['residual']:+.3g}")

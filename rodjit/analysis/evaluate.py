@@ -1,0 +1,100 @@
+"""Observables of many configurations, run in parallel on the sweep engine's executors.
+
+Each configuration becomes one sweep point that writes its full run file to a private
+temporary directory (the executors move only summaries; the observables need the
+diagnostics and episodes); the parent reads each file back as it arrives, computes the
+observables, and deletes it.  One configuration, or ``scheduler="inline"``, runs in this
+process without any file.
+"""
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+
+__all__ = ["evaluate", "Extractor"]
+
+# an observable beside the built-in ones: name -> function(Result) -> float
+Extractor = "Callable[[rodjit.Result], float]"
+
+
+def _values(result, extra, merge_time) -> dict:
+    from .observables import observables
+
+    try:
+        out = observables(result, merge_time)
+    except ValueError as exc:         # too coarse diagnostics: say it per point
+        out = _failed(str(exc))
+        out.update(status="undefined", run_status=result.status)
+    for name, fn in (extra or {}).items():
+        out[name] = float(fn(result))
+    out["run_status"] = result.status
+    out["message"] = result.message
+    return out
+
+
+def _failed(message: str, extra=None) -> dict:
+    from .observables import OBSERVABLES
+
+    out = {name: math.nan for name in (*OBSERVABLES, *(extra or {}))}
+    out.update(status="failed", reason=message, run_status="failed", message=message)
+    return out
+
+
+def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
+             merge_time: float | None = None, extra: dict | None = None) -> list[dict]:
+    """The observables (``rodjit.analysis.observables``, and ``extra``: name ->
+    function(Result) -> float) of every Config in ``configs``, in their order.
+
+    ``jobs``/``scheduler`` as for ``rodjit.sweep``.  A run that fails gives
+    ``status = "failed"`` and its message as ``reason`` (observables missing)."""
+    from ..driver.run import SimulationError
+    from ..driver.simulate import simulate
+    from ..sweeps.executors import check_scheduler, default_jobs, make_executor
+    from ..sweeps.point import PointTask, law_modules
+
+    configs = list(configs)
+    check_scheduler(scheduler)
+    jobs = default_jobs() if jobs is None else jobs
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
+        raise ValueError(f"jobs = {jobs!r} is out of range (a whole number >= 1)")
+    if not configs:
+        return []
+    if scheduler == "inline" or len(configs) == 1 or jobs == 1 and scheduler is None:
+        out = []
+        for cfg in configs:
+            try:
+                out.append(_values(simulate(cfg), extra, merge_time))
+            except SimulationError as exc:
+                out.append(_failed(str(exc), extra))
+        return out
+
+    from ..output.hdf5 import load_file
+
+    results: list[dict | None] = [None] * len(configs)
+    with tempfile.TemporaryDirectory(prefix="rodjit-evaluate-") as tmp:
+        paths = [os.path.join(tmp, f"{i:06d}.h5") for i in range(len(configs))]
+        tasks = (PointTask(i, cfg, paths[i], law_modules(cfg)) for i, cfg in enumerate(configs))
+        warm = configs[0] if not law_modules(configs[0]) else None
+        executor = make_executor(scheduler, min(jobs, len(configs)), warm)
+        try:
+            for res in executor.results(tasks, total=len(configs)):
+                if res is None:
+                    continue
+                i = res.index
+                if os.path.exists(paths[i]):
+                    try:
+                        results[i] = _values(load_file(paths[i]), extra, merge_time)
+                    except Exception as exc:
+                        results[i] = _failed(f"{type(exc).__name__}: {exc}", extra)
+                    os.remove(paths[i])
+                else:
+                    results[i] = _failed(res.values.get("message") or "the point did not run", extra)
+                if res.status == "failed":
+                    results[i].update(status="failed", run_status="failed",
+                                      reason=res.values["message"],
+                                      message=res.values["message"])
+        finally:
+            executor.close(cancel=True)
+    return [r if r is not None else _failed("no result", extra) for r in results]
+

@@ -1,0 +1,262 @@
+"""``rodjit.fit``: the value of one configuration key at which an observable takes a
+target, by a parallel bracket scan and a safeguarded root finder (Illinois false position
+with bisection); ``fit_table``: least squares of several keys against measurements."""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .evaluate import evaluate
+
+__all__ = ["fit", "FitResult", "FitError", "scan_points"]
+
+SCAN_POINTS = 8
+
+
+class FitError(ValueError):
+    """The target cannot be fitted in the bracket (unreachable, or crossed more than once);
+    ``samples`` holds the scanned ``(value, observable)`` pairs."""
+
+    def __init__(self, message: str, samples=()):
+        super().__init__(message)
+        self.samples = list(samples)
+
+
+@dataclass
+class FitResult:
+    """``value`` of ``key`` where ``observable`` = ``target`` (reached: ``achieved``);
+    ``sensitivity`` d(observable)/d(key) there; ``resolution_shift`` how far the answer
+    moves from the coarser resolution (``coarse``: its resolution) to the one fitted
+    (estimated by linearisation at the answer); ``evaluations`` runs (ladders count as
+    one), ``samples`` every (value, observable) evaluated."""
+
+    key: str
+    observable: str
+    target: float
+    value: float
+    achieved: float
+    sensitivity: float
+    bracket: tuple
+    resolution_shift: float = math.nan
+    coarse: str = ""
+    converged: bool = False
+    evaluations: int = 0
+    iterations: int = 0
+    samples: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        shift = (f", moves {self.resolution_shift:+.3g} from {self.coarse}"
+                 if math.isfinite(self.resolution_shift) else "")
+        return (f"FitResult({self.key} = {self.value:.6g}: {self.observable} = "
+                f"{self.achieved:.6g} (target {self.target:g}), d/d{self.key.split('.')[-1]}"
+                f" = {self.sensitivity:.3g}{shift}; {self.evaluations} evaluations)")
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def scan_points(lo: float, hi: float, n: int) -> list[float]:
+    """``n`` values spanning [lo, hi]: geometric when the bracket spans two decades or more
+    (0 kept as the first point), else even."""
+    if n < 2:
+        raise ValueError(f"points = {n!r} is out of range (>= 2)")
+    if lo >= 0 and hi > 0 and (lo == 0 or hi / lo >= 100):
+        if lo == 0:
+            return [0.0] + [float(x) for x in np.geomspace(hi * 1e-3, hi, n - 1)]
+        return [float(x) for x in np.geomspace(lo, hi, n)]
+    return [float(x) for x in np.linspace(lo, hi, n)]
+
+
+class _Objective:
+    """observable(key = x) at the given resolution, or its extrapolated continuum value
+    along ``ladder``; cached, evaluated in parallel batches."""
+
+    def __init__(self, base, key, name, ladder, jobs, scheduler, merge_time):
+        self.base, self.key, self.name = base, key, name
+        self.ladder, self.jobs, self.scheduler = ladder, jobs, scheduler
+        self.merge_time = merge_time
+        self.cache: dict[float, tuple[float, str]] = {}
+        self.evaluations = 0
+
+    def config(self, x):
+        cfg = self.base.override({self.key: x})
+        return cfg
+
+    def batch(self, xs) -> list[float]:
+        todo = [x for x in dict.fromkeys(xs) if x not in self.cache]
+        if todo:
+            if self.ladder is None:
+                runs = evaluate([self.config(x) for x in todo], jobs=self.jobs,
+                                scheduler=self.scheduler, merge_time=self.merge_time)
+                for x, r in zip(todo, runs):
+                    self.cache[x] = (float(r.get(self.name, math.nan)), r.get("reason", ""))
+            else:
+                from .converge import _check_ladder, _levels
+                from .richardson import study
+
+                lkey, levels = _check_ladder("ladder", self.ladder, self.base)
+                cfgs = [self.config(x).override({lkey: v}) for x in todo for v in levels]
+                runs = evaluate(cfgs, jobs=self.jobs, scheduler=self.scheduler,
+                                merge_time=self.merge_time)
+                n = len(levels)
+                for i, x in enumerate(todo):
+                    part = runs[i * n:(i + 1) * n]
+                    s = study(self.name, _levels(lkey, levels),
+                              [r.get(self.name, math.nan) for r in part])
+                    value = s.extrapolated if s.status in ("converged", "exact",
+                                                           "pre-asymptotic") else math.nan
+                    self.cache[x] = (float(value), s.message or part[-1].get("reason", ""))
+            self.evaluations += len(todo)
+        return [self.cache[x][0] for x in xs]
+
+    def reason(self, x) -> str:
+        return self.cache.get(x, (math.nan, ""))[1]
+
+
+def _check_target(target) -> tuple[str, float]:
+    from .observables import OBSERVABLES
+
+    if not isinstance(target, dict) or len(target) != 1:
+        raise ValueError(f"target must be one observable and its value, e.g. "
+                         f"{{'restitution_first': 0.8}}, not {target!r}")
+    (name, value), = target.items()
+    if name not in OBSERVABLES:
+        raise ValueError(f"unknown observable {name!r}; choose from {', '.join(OBSERVABLES)}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"target {name} = {value!r} is not finite")
+    return name, value
+
+
+def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=None,
+        ftol: float = 1e-4, xtol: float | None = None, max_iter: int = 60,
+        converged: bool = False, ladder=None, coarse=None, jobs=None, scheduler=None,
+        merge_time=None) -> FitResult:
+    """The value of ``key`` in ``bracket`` at which ``target``'s observable (e.g.
+    ``{"restitution_first": 0.8}``) takes its value, at the resolution of ``config``.
+
+    ``points`` values (default 8) scan the bracket in parallel (``jobs``, ``scheduler`` as
+    for ``rodjit.sweep``); exactly one crossing of the target must be found, then Illinois
+    false position, safeguarded by bisection, narrows it until the observable is within
+    ``ftol`` of the target or the bracket narrower than ``xtol`` (default 1e-9 of it).
+    ``converged=True`` fits the Richardson-extrapolated continuum value along ``ladder``
+    (default rod.N = N/2, N, 2N of ``config``).  ``coarse``: the resolution
+    (``{"rod.N": n}``) the answer is compared with (default N/2, or the ladder without its
+    finest level).  Raises FitError when the target is outside the range the bracket
+    reaches (naming that range) or is crossed more than once (naming where)."""
+    from ..config import Config
+
+    base = Config() if config is None else config
+    if not isinstance(base, Config):
+        raise TypeError(f"config must be a rodjit.Config, not {type(base).__name__}")
+    name, goal = _check_target(target)
+    try:
+        lo, hi = (float(b) for b in bracket)
+    except (TypeError, ValueError):
+        raise ValueError(f"bracket must be two numbers (lo, hi), not {bracket!r}") from None
+    if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+        raise ValueError(f"bracket = {bracket!r} is out of range (finite lo < hi)")
+    base.override({key: lo}), base.override({key: hi})       # key and range valid
+    if isinstance(base.get(key), int) or isinstance(base.get(key), str):
+        raise ValueError(f"{key} is not a real-valued key; fit needs a continuous parameter")
+    n_scan = points if points is not None else SCAN_POINTS
+    if converged and ladder is None:
+        n = base.rod.N
+        ladder = {"rod.N": [max(1, n // 2), n, 2 * n]}
+    obj = _Objective(base, key, name, ladder if converged else None, jobs, scheduler,
+                     merge_time)
+    xs = scan_points(lo, hi, n_scan)
+    fs = obj.batch(xs)
+    bad = [(x, obj.reason(x)) for x, f in zip(xs, fs) if not math.isfinite(f)]
+    if bad:
+        x, why = bad[0]
+        raise FitError(f"{name} is undefined at {key} = {x:g} ({why or 'no value'}); narrow "
+                       f"the bracket or lengthen the run", list(zip(xs, fs)))
+    g = [f - goal for f in fs]
+    cross = [i for i in range(len(xs) - 1) if g[i] == 0 or g[i] * g[i + 1] < 0]
+    if g[-1] == 0:
+        cross.append(len(xs) - 1)
+    samples = list(zip(xs, fs))
+    if not cross:
+        raise FitError(f"target {name} = {goal:g} is outside the range {min(fs):.6g} .. "
+                       f"{max(fs):.6g} that {key} in [{lo:g}, {hi:g}] reaches (sampled at "
+                       f"{', '.join(f'{x:.4g}' for x in xs)})", samples)
+    if len(cross) > 1:
+        where = ", ".join(f"[{xs[i]:.4g}, {xs[min(i + 1, len(xs) - 1)]:.4g}]" for i in cross)
+        raise FitError(f"{name} is not monotone in {key}: it crosses {goal:g} in {where}; "
+                       f"narrow the bracket to one of them", samples)
+    notes = []
+    d = np.diff(fs)
+    nz = [i for i in range(len(d)) if d[i] != 0]          # plateaus do not turn
+    turns = [xs[j] for i, j in zip(nz, nz[1:]) if d[i] * d[j] < 0]
+    if turns:
+        notes.append(f"{name} is not monotone in {key} (turns near "
+                     f"{', '.join(f'{x:.4g}' for x in turns)}); one crossing of the target")
+    i = cross[0]
+    if g[i] == 0:
+        a = b = xs[i]
+        fa = fb = g[i]
+    else:
+        a, b, fa, fb = xs[i], xs[i + 1], g[i], g[i + 1]
+    xtol = (1e-9 * (hi - lo)) if xtol is None else float(xtol)
+    x, fx, it, side = a, fa, 0, 0
+    while a != b and it < max_iter:
+        it += 1
+        x = b - fb * (b - a) / (fb - fa)                 # false position
+        if not (min(a, b) < x < max(a, b)) or it % 6 == 0:
+            x = 0.5 * (a + b)                            # safeguard: bisect now and then
+        fx = obj.batch([x])[0] - goal
+        if not math.isfinite(fx):
+            raise FitError(f"{name} is undefined at {key} = {x:g} ({obj.reason(x)})",
+                           samples + list(obj.cache.items()))
+        if fx * fb < 0:
+            a, fa = b, fb
+            b, fb = x, fx
+            side = 0
+        else:
+            b, fb = x, fx
+            side += 1
+            if side >= 1:
+                fa *= 0.5                                # Illinois: halve the stale end
+        if abs(fx) <= ftol or abs(b - a) <= xtol:
+            break
+    x_best = b if abs(fb) <= abs(fa) else a
+    f_best = (fb if x_best == b else fa) + goal
+    f_near = obj.batch([a, b])
+    slope = (f_near[1] - f_near[0]) / (b - a) if a != b else math.nan
+    if abs(f_best - goal) > ftol and abs(b - a) > xtol:
+        notes.append(f"stopped after {max_iter} iterations, {name} within "
+                     f"{abs(f_best - goal):.3g} of the target")
+    out = FitResult(key, name, goal, float(x_best), float(f_best), float(slope), (lo, hi),
+                    converged=converged, evaluations=obj.evaluations, iterations=it,
+                    samples=sorted((float(k), float(v[0])) for k, v in obj.cache.items()),
+                    notes=notes)
+    _resolution_shift(out, obj, base, key, name, coarse, ladder if converged else None,
+                      jobs, scheduler, merge_time)
+    return out
+
+
+def _resolution_shift(out: FitResult, obj, base, key, name, coarse, ladder, jobs, scheduler,
+                      merge_time) -> None:
+    """The answer at a coarser resolution, by linearisation at the fitted value:
+    x_coarse ≈ x − (f_coarse(x) − target)/slope, one run (or ladder) more."""
+    if not math.isfinite(out.sensitivity) or out.sensitivity == 0:
+        return
+    if ladder is not None:
+        from .converge import _check_ladder
+
+        lkey, levels = _check_ladder("ladder", ladder, base)
+        if coarse is None:
+            coarse = {lkey: levels[-1]}        # the finest level alone vs the continuum
+    if coarse is None:
+        coarse = {"rod.N": max(1, base.rod.N // 2)}
+    cfg = base.override({key: out.value}).override(coarse)
+    r = evaluate([cfg], jobs=1, merge_time=merge_time)[0]
+    f_c = float(r.get(name, math.nan))
+    if math.isfinite(f_c):
+        out.resolution_shift = float((f_c - out.target) / out.sensitivity)
+        out.coarse = ", ".join(f"{k} = {v}" for k, v in coarse.items())
+        out.evaluations += 1

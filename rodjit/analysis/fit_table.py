@@ -1,0 +1,202 @@
+"""Least squares of several configuration keys against a table of measurements.
+
+Each row of the table is a drop condition (any configuration keys, e.g.
+``initial.height`` or ``initial.velocity``) and measured observables (columns named as
+``rodjit.analysis.OBSERVABLES``, e.g. ``restitution_first``, ``contact_time_first``), with
+optional uncertainties in ``sigma_<observable>`` columns.  Levenberg–Marquardt on the
+weighted residuals (model − measured)/σ, the Jacobian by forward differences with every
+run of one iteration evaluated in one parallel batch; the parameter covariance is
+(JᵀJ)⁻¹, scaled by the residual variance χ²/(m − p) when no σ is given.
+"""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .evaluate import evaluate
+
+__all__ = ["fit_table", "TableFit", "read_measurements"]
+
+
+def read_measurements(path) -> list[dict]:
+    """Rows of a CSV file: configuration keys and observables as floats."""
+    from ..config import valid_keys
+    from .observables import OBSERVABLES
+
+    try:
+        with open(path, newline="") as fh:
+            reader = csv.DictReader(fh)
+            rows = list(reader)
+            header = reader.fieldnames or []
+    except FileNotFoundError:
+        raise ValueError(f"measurement table {str(path)!r} does not exist") from None
+    keys = set(valid_keys())
+    known = set(OBSERVABLES) | {f"sigma_{o}" for o in OBSERVABLES} | keys
+    bad = [h for h in header if h.strip() not in known]
+    if bad:
+        raise ValueError(f"measurement table {str(path)!r}: unknown column {bad[0]!r} "
+                         f"(configuration keys, observables, sigma_<observable>)")
+    if not rows:
+        raise ValueError(f"measurement table {str(path)!r} has no rows")
+    out = []
+    for n, row in enumerate(rows, start=2):
+        parsed = {}
+        for k, v in row.items():
+            k = k.strip()
+            if v is None or v.strip() == "":
+                continue
+            try:
+                parsed[k] = float(v)
+            except ValueError:
+                raise ValueError(f"measurement table {str(path)!r} line {n}: {k} = {v!r} "
+                                 f"is not a number") from None
+        out.append(parsed)
+    return out
+
+
+@dataclass
+class TableFit:
+    """Fitted ``values`` of ``keys`` with standard ``errors`` and ``covariance``;
+    ``residuals`` (model − measured, per row and observable), ``chi2``, iterations,
+    runs."""
+
+    keys: list
+    values: list
+    errors: list
+    covariance: list
+    residuals: list
+    chi2: float
+    iterations: int
+    evaluations: int
+    converged: bool
+    notes: list = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        parts = ", ".join(f"{k} = {v:.6g} ± {e:.2g}" for k, v, e in
+                          zip(self.keys, self.values, self.errors))
+        return f"TableFit({parts}; chi2 = {self.chi2:.3g}, {self.evaluations} runs)"
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def fit_table(keys, table, config=None, *, start=None, bounds=None, jobs=None,
+              scheduler=None, max_iter: int = 20, rtol: float = 1e-6, step: float = 1e-3,
+              merge_time=None) -> TableFit:
+    """Fit ``keys`` (e.g. ``["rod.mu", "floor.kappa_b"]``) to ``table`` (a CSV path or a
+    list of row dicts, see the module docstring), from ``start`` (default: the values in
+    ``config``), within ``bounds`` (key -> (lo, hi), default the key's valid range).
+    ``step``: relative forward-difference step of the Jacobian."""
+    from ..config import Config
+    from .observables import OBSERVABLES
+
+    base = Config() if config is None else config
+    rows = read_measurements(table) if not isinstance(table, list) else table
+    keys = list(keys)
+    if not keys:
+        raise ValueError("fit_table needs at least one key to fit")
+    for k in keys:
+        base.override({k: base.get(k)})
+        if not isinstance(base.get(k), float):
+            raise ValueError(f"{k} is not a real-valued key; fit needs continuous parameters")
+    targets = [(i, o) for i, r in enumerate(rows) for o in OBSERVABLES if o in r]
+    if len(targets) < len(keys):
+        raise ValueError(f"{len(targets)} measurements cannot determine {len(keys)} keys")
+    sigma = np.array([rows[i].get(f"sigma_{o}", 1.0) for i, o in targets])
+    if np.any(sigma <= 0):
+        raise ValueError("sigma_<observable> columns must be > 0")
+    weighted = any(f"sigma_{o}" in rows[i] for i, o in targets)
+    measured = np.array([rows[i][o] for i, o in targets])
+    x = np.array([float((start or {}).get(k, base.get(k))) for k in keys])
+    lo = np.array([(bounds or {}).get(k, (0.0, math.inf))[0] for k in keys], float)
+    hi = np.array([(bounds or {}).get(k, (0.0, math.inf))[1] for k in keys], float)
+    conds = [{k: v for k, v in r.items() if k not in OBSERVABLES and not k.startswith("sigma_")}
+             for r in rows]
+    runs_total = 0
+
+    def configs(theta):
+        over = dict(zip(keys, (float(t) for t in theta)))
+        return [base.override({**c, **over}) for c in conds]
+
+    def residual(results):
+        model = np.array([results[i].get(o, math.nan) for i, o in targets])
+        return (model - measured) / sigma
+
+    def batch(thetas):
+        nonlocal runs_total
+        cfgs = [c for th in thetas for c in configs(th)]
+        res = evaluate(cfgs, jobs=jobs, scheduler=scheduler, merge_time=merge_time)
+        runs_total += len(cfgs)
+        n = len(rows)
+        out = [residual(res[j * n:(j + 1) * n]) for j in range(len(thetas))]
+        for j, r in enumerate(out):
+            if not np.all(np.isfinite(r)):
+                k = int(np.flatnonzero(~np.isfinite(r))[0])
+                i, o = targets[k]
+                raise ValueError(f"{o} is undefined for row {i + 1} at "
+                                 f"{dict(zip(keys, thetas[j]))}: "
+                                 f"{res[j * n + i].get('reason', '')}")
+        return out
+
+    def with_jacobian(theta):
+        hs = step * np.maximum(np.abs(theta), 1e-3)
+        hs = np.where(theta + hs > hi, -hs, hs)          # stay inside the bounds
+        thetas = [theta] + [theta + h * e for h, e in zip(hs, np.eye(len(theta)))]
+        r = batch(thetas)
+        J = np.column_stack([(r[j + 1] - r[0]) / hs[j] for j in range(len(theta))])
+        return r[0], J
+
+    lam = 1e-3
+    r, J = with_jacobian(x)
+    chi2 = float(r @ r)
+    it, converged, notes = 0, False, []
+    while it < max_iter:
+        it += 1
+        A = J.T @ J
+        g = J.T @ r
+        accepted = False
+        for _ in range(8):
+            try:
+                dx = -np.linalg.solve(A + lam * np.diag(np.diag(A) + 1e-300), g)
+            except np.linalg.LinAlgError:
+                lam *= 10
+                continue
+            x_new = np.clip(x + dx, lo, hi)
+            r_new, J_new = with_jacobian(x_new)
+            chi2_new = float(r_new @ r_new)
+            if chi2_new < chi2:
+                step_rel = np.max(np.abs(x_new - x) / np.maximum(np.abs(x), 1e-12))
+                x, r, J, lam = x_new, r_new, J_new, max(lam / 10, 1e-12)
+                accepted = True
+                if chi2 - chi2_new <= rtol * max(chi2, 1e-300) or step_rel <= rtol:
+                    converged = True
+                chi2 = chi2_new
+                break
+            lam *= 10
+        if not accepted:
+            converged = True         # no descent left: at the minimum to the step's accuracy
+            notes.append("no step reduced chi2 further")
+            break
+        if converged:
+            break
+    m, p = len(measured), len(keys)
+    try:
+        cov = np.linalg.inv(J.T @ J)
+    except np.linalg.LinAlgError:
+        cov = np.full((p, p), math.inf)
+        notes.append("the Jacobian is singular: the keys are not all determined by the data")
+    if not weighted:
+        if m > p:
+            cov = cov * chi2 / (m - p)
+        else:
+            notes.append("as many measurements as keys: no residual variance, errors "
+                         "assume unit measurement errors")
+    errors = np.sqrt(np.clip(np.diag(cov), 0, None))
+    res_rows = [{"row": i + 1, "observable": o, "measured": float(measured[k]),
+                 "model": float(measured[k] + r[k] * sigma[k]),
+                 "residual": float(r[k] * sigma[k])} for k, (i, o) in enumerate(targets)]
+    return TableFit(keys, [float(v) for v in x], [float(e) for e in errors],
+                    cov.tolist(), res_rows, chi2, it, runs_total, converged, notes)

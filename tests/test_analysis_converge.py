@@ -1,0 +1,208 @@
+"""Convergence ladders: the Richardson machinery on known answers (the free-free modes of
+MODEL.md §4, the spring-wall impact), its statuses, and the convergence file."""
+from __future__ import annotations
+
+import math
+
+import h5py
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit.analysis.converge import converge, load_convergence
+from rodjit.analysis.known import free_free_frequencies, spring_wall_impact
+from rodjit.analysis.richardson import observed_order, study
+from rodjit.model import reference
+from rodjit.model.system import build_system, masses
+
+E = 5 * 100.0 / 4
+
+
+def _stiffness_eigenfrequencies(n: int) -> np.ndarray:
+    """ω_k of the semi-discrete rod from the NumPy reference forces: the Jacobian of
+    m_i u_i'' at the natural state (g = 0, far above the floor) by central differences
+    against the lumped masses."""
+    cfg = rodjit.Config().override({"rod.N": n, "gravity.g": 0.0})
+    system, rod, floor = build_system(cfg)
+    u = 1.0 + np.arange(n + 1) / n
+    v = np.zeros(n + 1)
+    d = 1e-6
+    K = np.empty((n + 1, n + 1))
+    for j in range(n + 1):
+        up, um = u.copy(), u.copy()
+        up[j] += d
+        um[j] -= d
+        K[:, j] = -(reference.forces(up, v, system, rod, floor)
+                    - reference.forces(um, v, system, rod, floor)) / (2 * d)
+    m = masses(n)
+    s = 1 / np.sqrt(m)
+    lam = np.sort(np.linalg.eigvalsh(s[:, None] * K * s[None, :]))
+    return np.sqrt(np.clip(lam, 0, None))      # lam[0] = 0: the rigid motion
+
+
+def test_semi_discrete_modes_converge_at_second_order_to_k_pi_sqrt_E():
+    ns = [8, 16, 32, 64]
+    for k in (1, 2, 3):
+        om = [_stiffness_eigenfrequencies(n)[k] for n in ns]
+        assert om == pytest.approx(free_free_frequencies(np.array(ns), E, k), rel=1e-6)
+        s = study(f"omega_{k}", [1 / n for n in ns], om)
+        assert s.status == "converged"
+        assert s.orders == pytest.approx([2, 2], abs=0.05)
+        assert s.extrapolated == pytest.approx(k * math.pi * math.sqrt(E), rel=2e-5)
+        assert abs(s.extrapolated - k * math.pi * math.sqrt(E)) <= s.error
+
+
+def test_observed_order_of_a_known_power_law_with_uneven_levels():
+    h = [0.3, 0.17, 0.05]
+    f = [2 + 3 * x ** 1.5 for x in h]
+    assert observed_order(h, f) == pytest.approx(1.5, rel=1e-9)
+    s = study("x", [0.4, 0.2, 0.1, 0.05], [2 + 3 * x ** 2 for x in [0.4, 0.2, 0.1, 0.05]])
+    assert s.extrapolated == pytest.approx(2.0, abs=1e-12)
+
+
+def test_statuses_say_what_the_ladder_does():
+    h = [1 / 25, 1 / 50, 1 / 100, 1 / 200]
+    assert study("a", h, [1.0, 2.0, 1.0, 2.0]).status == "not converging"
+    s = study("b", h, [1.0, 1.5, 1.25, 1.375])
+    assert s.status == "oscillating" and s.extrapolated == 1.375 and s.error == 0.125
+    s = study("c", h, [1.0, 1.1, 1.101, 1.15])          # does not settle
+    assert s.status == "not converging" and math.isnan(s.extrapolated)
+    s = study("d", h, [1.0, 1.5, 1.6, 1.61])            # orders 2.3, 3.3: scatter
+    assert s.status == "pre-asymptotic" and "asymptotic" in s.message
+    assert study("e", h, [3.0] * 4).status == "exact"
+    s = study("never ends", h, [math.inf] * 4)           # no lift-off at every level
+    assert s.status == "exact" and s.extrapolated == math.inf and s.error == 0
+    assert study("f", h, [1.0, math.nan, 1.0, 1.0]).status == "undefined"
+
+
+def _omega1(result) -> float:
+    """Frequency of the first mode from the zero crossings of its modal coordinate: the
+    displacement from the natural shape projected with the lumped masses on cos(πx_i),
+    the first discrete mode shape of the free-free chain."""
+    n = result.config.rod.N
+    x = result.x
+    m = masses(n)
+    phi = np.cos(math.pi * x)
+    d = result.u - x[None, :]
+    q = (d - (d @ m)[:, None]) @ (m * phi)
+    t = result.t
+    idx = np.flatnonzero(np.sign(q[:-1]) != np.sign(q[1:]))
+    tz = t[idx] - q[idx] * (t[idx + 1] - t[idx]) / (q[idx + 1] - q[idx])
+    return math.pi * (len(tz) - 1) / (tz[-1] - tz[0])
+
+
+def test_free_vibration_runs_converge_to_the_first_continuum_mode():
+    # a small uniform pre-strain in free flight without gravity: odd modes, the first
+    # dominating; its modal coordinate is harmonic in the linearised chain
+    cfg = rodjit.Config().override({"gravity.g": 0.0, "initial.strain": 1e-6,
+                                    "initial.height": 1.0, "time.t_end": 1.0,
+                                    "output.snapshot_interval": 2e-4,
+                                    "output.diagnostics_interval": 1e-3, "time.cfl": 0.02})
+    conv = converge(cfg, {"rod.N": [8, 16, 32]}, observables=["omega_1"],
+                    extra={"omega_1": _omega1}, jobs=1)
+    oc = conv["omega_1"]
+    exact = math.pi * math.sqrt(E)
+    assert oc.space.values == pytest.approx(free_free_frequencies(np.array([8, 16, 32]), E, 1),
+                                            rel=2e-4)
+    assert oc.space.order == pytest.approx(2, abs=0.2)
+    assert oc.value == pytest.approx(exact, rel=1e-3)
+
+
+def test_spring_wall_reference_limits():
+    # a rigid-wall limit: contact time 2/c, restitution 1; a soft spring: the rigid bar on
+    # a spring, c T = π/√α, restitution 1
+    s, e = spring_wall_impact(1e4)
+    assert s == pytest.approx(2.0, rel=1e-3) and e == pytest.approx(1.0, abs=1e-4)
+    s, e = spring_wall_impact(1e-3, steps_per_transit=200)
+    assert s == pytest.approx(math.pi / math.sqrt(1e-3), rel=2e-3)
+    assert e == pytest.approx(1.0, abs=1e-3)
+    # finer grids agree (second order)
+    a, b = spring_wall_impact(5.0, 2000), spring_wall_impact(5.0, 8000)
+    assert a == pytest.approx(b, rel=1e-7)
+
+
+def _spring_wall_config(alpha: float, V: float = 1e-6) -> rodjit.Config:
+    """The linear limit of MODEL.md's model: g = 0, impact speed V ≪ c (strain V/c), the
+    floor linearised, σ_b ≈ 3κ_b/β·(−u_0): k = 3κ_b/β = α E."""
+    beta = 0.05
+    s, _ = spring_wall_impact(alpha)
+    return rodjit.Config().override({
+        "gravity.g": 0.0, "floor.kappa_b": alpha * E * beta / 3, "floor.beta": beta,
+        "initial.height": V * 1e-3, "initial.velocity": -V,
+        "time.t_end": 1e-3 + s / math.sqrt(E) + 0.02, "output.snapshot_interval": 0.0,
+        "output.diagnostics_interval": 1e-4})
+
+
+def test_spring_wall_impact_extrapolates_to_the_dalembert_solution():
+    alpha = 5.0
+    s, e = spring_wall_impact(alpha)
+    conv = converge(_spring_wall_config(alpha), {"rod.N": [25, 50, 100, 200]},
+                    observables=["contact_time_first", "restitution_first"], jobs=2)
+    ct, rs = conv["contact_time_first"], conv["restitution_first"]
+    assert ct.value * math.sqrt(E) == pytest.approx(s, rel=1e-3)
+    assert rs.value == pytest.approx(e, rel=1e-3)
+    assert ct.space.status == rs.space.status == "converged"
+    assert ct.error * math.sqrt(E) < 1e-3 * s and rs.error < 1e-3 * e
+    # the coarsest level is off by more than the extrapolated value
+    assert abs(ct.space.values[0] * math.sqrt(E) - s) > 10 * abs(ct.value * math.sqrt(E) - s)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("alpha, ladder", [(1.0, [25, 50, 100, 200, 400]),
+                                           (10.0, [25, 50, 100, 200, 400]),
+                                           (100.0, [400, 800, 1600, 3200])])
+def test_spring_wall_table(alpha, ladder):
+    s, e = spring_wall_impact(alpha)
+    conv = converge(_spring_wall_config(alpha), {"rod.N": ladder},
+                    observables=["contact_time_first", "restitution_first"], jobs=2)
+    assert conv["contact_time_first"].value * math.sqrt(E) == pytest.approx(s, rel=1e-3)
+    assert conv["restitution_first"].value == pytest.approx(e, rel=1e-3)
+
+
+def test_shock_forming_ladder_is_reported_not_extrapolated():
+    # μ = 0, γ = 0 on the paper's floor: without viscosity the impact's fronts stay sharp
+    # and the first restitution does not settle (0.868, 0.854, 0.848, 0.840)
+    cfg = rodjit.load_preset("paper-mu0").override({"time.t_end": 0.7,
+                                                    "output.snapshot_interval": 0.0})
+    conv = converge(cfg, {"rod.N": [25, 50, 100, 200]}, observables=["restitution_first"],
+                    jobs=2)
+    oc = conv["restitution_first"]
+    assert oc.space.status == "not converging"
+    assert math.isnan(oc.value) and oc.error == math.inf
+    assert any("restitution_first" in w and "do not shrink" in w for w in conv.warnings)
+
+
+def test_convergence_file_round_trip_and_repr(tmp_path):
+    cfg = rodjit.load_preset("paper-mu100").override({"rod.mu": 1.0, "time.t_end": 0.7,
+                                                      "output.snapshot_interval": 0.0})
+    conv = converge(cfg, {"rod.N": "10,20,40"}, also={"time.cfl": [0.05, 0.0125]},
+                    observables=["restitution_first", "contact_time_first"], jobs=2)
+    text = repr(conv)
+    assert "restitution_first" in text and "±" in text and text.count("\n") < 12
+    path = tmp_path / "conv.h5"
+    conv.save(path)
+    with h5py.File(path) as f:
+        assert f.attrs["rodjit_kind"] == "convergence"
+        assert list(f["observables"]) == ["contact_time_first", "restitution_first"]
+    back = load_convergence(path)
+    oc = conv["restitution_first"]
+    assert back["observables"]["restitution_first"]["values"] == pytest.approx(oc.space.values)
+    assert back["observables"]["restitution_first"]["value"] == pytest.approx(oc.value)
+    assert math.isfinite(oc.time_error)
+    assert back["key"] == "rod.N" and back["time_key"] == "time.cfl"
+    d = conv.to_dict()
+    assert d["observables"]["restitution_first"]["space"]["values"] == oc.space.values
+    with pytest.raises(ValueError, match="exists"):
+        conv.save(path)
+
+
+def test_bad_ladders_are_one_line_errors():
+    cfg = rodjit.Config()
+    with pytest.raises(ValueError, match="refine"):
+        converge(cfg, {"rod.N": [50, 25, 100]})
+    with pytest.raises(ValueError, match="rod.N"):
+        converge(cfg, {"rod.N": [0, 25, 100]})
+    with pytest.raises(ValueError, match="unknown observable"):
+        converge(cfg, {"rod.N": [5, 10, 20]}, observables=["nope"])
+    with pytest.raises(ValueError, match="time.cfl"):
+        converge(cfg, {"rod.N": [5, 10, 20]}, also={"time.rtol": [1e-6, 1e-7]})
