@@ -6,6 +6,8 @@
 >>> table = rodjit.sweep(rodjit.Config(), {"rod.mu": [0, 1, 10]}, output="sweep.h5")
 """
 from . import laws
+from .analysis import (Convergence, FitError, FitResult, TableFit, converge, fit, fit_table,
+                       load_convergence, observables)
 from .config import Config
 from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
 from .driver.run import SimulationError
@@ -18,4 +20,5 @@ from .version import __version__
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
-           "load_preset", "preset_names", "SweepInterrupted", "laws", "__version__"]
+           "load_preset", "preset_names", "SweepInterrupted", "laws", "converge", "fit", "fit_table", "observables",
+           "Convergence", "FitResult", "FitError", "TableFit", "load_convergence", "__version__"]

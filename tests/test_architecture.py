@@ -41,6 +41,7 @@ FLOORS = (
     ("output",),
     ("driver",),
     ("sweeps",),
+    ("analysis",),
     ("plotting",),
     ("reports",),
     ("cli", "__main__"),
