@@ -123,3 +123,52 @@ def test_cvode_callback_equals_reference():
         dyi = np.zeros_like(yi)
         bench_peers._cvode_rhs(0.0, yi, dyi, (p,))
         _close(peer_rhs.deinterleave(dyi), reference_rhs(0.0, y, system, rod, floor))
+
+
+# ---- the prototype integrators of benchmarks/proto_high_order.py ------------------------
+def _flight_problem():
+    """The rod in free flight with a stretched start (it vibrates; no contact before
+    t = 0.3 s), snapshots every 5 ms."""
+    import bench_peers
+    from scipy.integrate import solve_ivp
+
+    pb = bench_peers.Problem("paper-mu0")
+    cfg = pb.cfg.override({"initial.strain": 0.05})
+    pb.p = peer_rhs.params(cfg)
+    from rodjit.model.system import initial_state
+    pb.y0 = np.concatenate(initial_state(cfg))
+    pb.t_eval = pb.t_eval[:61]                       # t ≤ 0.3 s
+
+    def fun(t, y):
+        dy = np.empty_like(y)
+        peer_rhs.rhs_split(t, y, dy, pb.p)
+        return dy
+
+    ref = solve_ivp(fun, (0.0, pb.t_eval[-1]), pb.y0, method="DOP853", rtol=1e-13,
+                    atol=1e-13, t_eval=pb.t_eval).y
+    return pb, ref
+
+
+@pytest.mark.parametrize("name,order", [("verlet", 2), ("yoshida4", 4), ("yoshida6", 6)])
+def test_prototype_compositions_reach_their_order(name, order):
+    import proto_high_order as proto
+
+    pb, ref = _flight_problem()
+    assert ref[0].min() > 0.0                        # no contact in the window
+    method = proto.Proto(name)
+    cfl = {2: 0.05, 4: 0.1, 6: 0.1}[order]      # in the asymptotic range
+    errs = [pb.error(method.run(pb, c)[1], ref) for c in (cfl, cfl / 2)]
+    measured = np.log2(errs[0] / errs[1])
+    assert abs(measured - order) < 0.3, (errs, measured)
+
+
+@pytest.mark.parametrize("name", ["dp54", "dop853"])
+def test_prototype_pairs_meet_tolerance_and_land_on_outputs(name):
+    import proto_high_order as proto
+
+    pb, ref = _flight_problem()
+    method = proto.Proto(name)
+    for tol in (1e-3, 1e-6, 1e-9):
+        _, y, info = method.run(pb, tol)
+        assert pb.error(y, ref) < 30 * tol, (tol, pb.error(y, ref))
+    assert info["steps"] >= pb.t_eval.size - 1          # at least one step per output
