@@ -439,10 +439,14 @@ def main(argv=None):
     budget = args.budget if args.budget is not None else (0.5 if args.quick else 20.0)
     vers = versions()
     print("versions: " + ", ".join(f"{k} {v}" for k, v in vers.items()))
-    results = {n: run_setting(n, args.quick, rounds, budget) for n in names}
-    path = _util.save("peers_quick" if args.quick else "peers",
-                      {"versions": vers, "quick": args.quick, "repeat": args.repeat,
-                       "budget_seconds": budget, "settings": results})
+    results = {}
+    for n in names:
+        results[n] = run_setting(n, args.quick, rounds, budget)
+        # written after every setting (a long run interrupted keeps what it measured)
+        path = _util.save("peers_quick" if args.quick else "peers",
+                          {"versions": vers, "quick": args.quick, "repeat": args.repeat,
+                           "budget_seconds": budget, "complete": len(results) == len(names),
+                           "settings": results})
     print(f"\nwrote {path}")
 
 
