@@ -1,0 +1,109 @@
+"""What a fresh install pays before the first step: cold and warm `rodjit run` per
+integrator, and which compiled functions the cold compile spends its time in.
+
+Per integrator (``time.integrator`` of the default run, data/paper_mu0.toml): a fresh
+process runs ``rodjit run paper-mu0 --t-end 0.01`` with NUMBA_CACHE_DIR an empty temporary
+directory (cold), then twice more with the cache it filled (warm); the process wall time is
+measured from outside.  A second cold process per integrator records Numba's compile events
+(``numba.core.event``, "numba:compile"): each compiled function's inclusive time, and its
+exclusive time (inclusive minus the compiles nested inside it, i.e. of the functions it
+calls), so the table shows where the time goes.
+
+    python benchmarks/cold_start.py [--integrators verlet,semi-implicit,energy]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import _util  # noqa: E402
+
+RECORD = textwrap.dedent("""
+    import json, sys, time
+    from numba.core import event
+    stack, rows = [], {}
+    class L(event.Listener):
+        def on_start(self, ev):
+            stack.append([time.perf_counter(), 0.0])
+        def on_end(self, ev):
+            t0, child = stack.pop()
+            dt = time.perf_counter() - t0
+            if stack:
+                stack[-1][1] += dt
+            d = ev.data["dispatcher"]
+            name = d.py_func.__module__ + "." + d.py_func.__qualname__
+            r = rows.setdefault(name, [0.0, 0.0, 0])
+            r[0] += dt; r[1] += dt - child; r[2] += 1
+    event.register("numba:compile", L())
+    t0 = time.perf_counter()
+    from rodjit.cli import main
+    try:
+        main(["run", "paper-mu0", "--t-end", "0.01", "-q", "--overwrite", "-o", sys.argv[2],
+              "--set", "time.integrator=" + sys.argv[1]], standalone_mode=False)
+    except SystemExit:
+        pass
+    print(json.dumps({"total": time.perf_counter() - t0, "rows": rows}))
+""")
+
+
+def cli_run(cache: Path, integrator: str, out: Path) -> float:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    t0 = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "rodjit", "run", "paper-mu0", "--t-end", "0.01",
+                    "-q", "--overwrite", "-o", str(out), "--set",
+                    f"time.integrator={integrator}"], env=env, check=True, timeout=3600)
+    return time.perf_counter() - t0
+
+
+def recorded(cache: Path, integrator: str, out: Path) -> dict:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    p = subprocess.run([sys.executable, "-c", RECORD, integrator, str(out)], env=env,
+                       check=True, timeout=3600, capture_output=True, text=True)
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--integrators", default="verlet,semi-implicit,energy")
+    ap.add_argument("--top", type=int, default=12)
+    args = ap.parse_args(argv)
+    _util.header("cold start: rodjit run paper-mu0 --t-end 0.01, fresh Numba cache")
+    results = {}
+    for integ in args.integrators.split(","):
+        with tempfile.TemporaryDirectory(prefix="rodjit-cold-") as tmp:
+            tmp = Path(tmp)
+            cold = cli_run(tmp / "cache", integ, tmp / "a.h5")
+            warm = [cli_run(tmp / "cache", integ, tmp / "a.h5") for _ in range(2)]
+        with tempfile.TemporaryDirectory(prefix="rodjit-cold-") as tmp:
+            rec = recorded(Path(tmp) / "cache", integ, Path(tmp) / "a.h5")
+        rows = sorted(rec["rows"].items(), key=lambda kv: -kv[1][1])
+        compiled = sum(r[1] for _, r in rows)
+        print(f"\n   {integ}: cold {cold:.1f} s, warm {min(warm):.2f}–{max(warm):.2f} s; "
+              f"recorded process {rec['total']:.1f} s, {len(rows)} functions compiled, "
+              f"{compiled:.1f} s in Numba compiles")
+        print("   " + _util.table([[n.replace("rodjit.", ""), r[1], r[0], r[2]]
+                                   for n, r in rows[:args.top]],
+                                  ["function", "exclusive s", "inclusive s", "compiles"])
+              .replace("\n", "\n   "))
+        results[integ] = {"cold_seconds": cold, "warm_seconds": warm,
+                          "recorded_total_seconds": rec["total"],
+                          "compile_seconds": compiled,
+                          "functions": {n: {"exclusive": r[1], "inclusive": r[0],
+                                            "compiles": r[2]} for n, r in rows}}
+        sys.stdout.flush()
+    path = _util.save("cold_start", {"integrators": results})
+    print(f"\nwrote {path}")
+
+
+if __name__ == "__main__":
+    main()
