@@ -1,4 +1,4 @@
-"""Observables of a run that are always defined (docs/OBSERVABLES.md).
+"""Observables of a run that are always defined (docs/MODEL.md §3).
 
 The compiled event tracking splits a run into contact *episodes* (``u_0 < 0``) and
 *bounces* (episodes between apexes of the centre of mass).  With few nodes the bottom node
@@ -354,7 +354,7 @@ class FirstImpact:
 
 
 def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
-    """The first macroscopic contact and its restitutions (see docs/OBSERVABLES.md).
+    """The first macroscopic contact and its restitutions (see docs/MODEL.md §3).
 
     ``lift-off``: the contact ended; ``no lift-off``: it is still running at the end and the
     energy left is below ``phys.lift_energy``, so it can never end (restitution 0, apex
