@@ -251,7 +251,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
-    from .sweeps import SweepInterrupted, sweep
+    from .sweeps import SweepFailed, SweepInterrupted, sweep
     from .sweeps.grid import parse_grid_option
     from .driver.files import OutputExists
 
@@ -299,6 +299,13 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             click.echo(exc.table.headline())
         click.echo(str(exc), err=True)
         sys.exit(128 + (exc.signum or 2))
+    except SweepFailed as exc:
+        _close(progress)
+        if not quiet:
+            click.echo(exc.table.headline())
+            click.echo(exc.table.report(max_rows=40))
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(1)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     _close(progress)

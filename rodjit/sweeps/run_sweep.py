@@ -23,10 +23,11 @@ from ..output.h5files import FileBusy, check_output, writer_alive
 from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import Grid
+from .main_guard import check_main
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules
 from .sweep_table import SweepTable
 
-__all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
+__all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
 
 FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
@@ -39,6 +40,15 @@ class SweepInterrupted(RuntimeError):
     def __init__(self, message: str, signum: int | None, table: SweepTable):
         super().__init__(message)
         self.signum = signum
+        self.table = table
+
+
+class SweepFailed(RuntimeError):
+    """Every point of a sweep failed; ``table`` holds their messages (and the file, if any,
+    was closed with them)."""
+
+    def __init__(self, message: str, table: SweepTable):
+        super().__init__(message)
         self.table = table
 
 
@@ -166,6 +176,8 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         table.stats = _stats(0.0, 0, 0, None)
         sweep_file.finish(output, "completed")
         return table
+    if scheduler != "inline":
+        check_main()
     t_start = time.perf_counter()
     first = grid.config(base, todo[0])
     # workers load the first point's kernels before they report ready, unless that means
@@ -273,4 +285,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         sweep_file.finish(output, status, message)
     if status == "interrupted":
         raise SweepInterrupted(message, signum, table)
+    if table.counts["completed"] == 0 and table.counts["failed"] == n:
+        raise SweepFailed(f"every point of the sweep failed ({n}); the first: "
+                          f"{grid.describe(0)}: {cols['message'][0]}", table)
     return table
