@@ -11,11 +11,14 @@ from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
 from .driver.run import SimulationError
 from .driver.simulate import simulate
 from .output.hdf5 import load_file
+from .output.run_view import open_run
 from .presets import load_preset, preset_names
 from .records.result import Result
-from .sweeps import SweepInterrupted, SweepTable, load_sweep, sweep
+from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepTable, load_sweep,
+                     sweep)
 from .version import __version__
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
-           "load_preset", "preset_names", "SweepInterrupted", "laws", "__version__"]
+           "load_preset", "preset_names", "SweepInterrupted", "SweepFailed", "MissingMainGuard",
+           "open_run", "laws", "__version__"]

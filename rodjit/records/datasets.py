@@ -53,8 +53,9 @@ def run_dataset(*, x, t, u, v, strain, diagnostics: dict, episodes: dict, bounce
                       {"long_name": "natural position of the segment midpoint", "units": "m"}),
         "t_diag": ("t_diag", np.asarray(diagnostics["t"], float),
                    _attrs("diagnostics", "t", description="time of the diagnostics samples")),
-        "episode": ("episode", np.arange(len(episodes["t_start"]))),
+        "episode": ("episode", np.arange(len(episodes["t_start"])),
+                    {"long_name": "contact episode number (from 0)", "units": "1"}),
         "bounce": ("bounce", np.arange(1, len(bounces["t_impact"]) + 1),
-                   {"long_name": "bounce number"}),
+                   {"long_name": "bounce number (from 1)", "units": "1"}),
     }
     return xr.Dataset(data, coords, {"units_system": UNIT_SYSTEM, "N": n, **attrs})
