@@ -12,6 +12,8 @@ from .driver.run import SimulationError
 from .driver.simulate import simulate
 from .output.hdf5 import load_file
 from .output.run_view import open_run
+from .plotting.animation import animate
+from .plotting.dispatch import plot
 from .presets import load_preset, preset_names
 from .records.result import Result
 from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepTable, load_sweep,
@@ -21,4 +23,4 @@ from .version import __version__
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
            "load_preset", "preset_names", "SweepInterrupted", "SweepFailed", "MissingMainGuard",
-           "open_run", "laws", "__version__"]
+           "open_run", "plot", "animate", "laws", "__version__"]

@@ -341,22 +341,24 @@ def _kind(path: str) -> str:
 
 def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
     """``plot(path, image, kind, **options)`` into ``output`` (default FILE_KIND.png)."""
-    from .plotting import MissingMatplotlib
+    from .plotting import MissingMatplotlib, NothingToDraw
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
     try:
         written = plot(path, out, kind, **options)
     except MissingMatplotlib as exc:
         raise RunFailed(str(exc)) from None
+    except NothingToDraw as exc:
+        raise RunFailed(str(exc)) from None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     click.echo(f"wrote {written}")
 
 
-def plot_run(path: str, output: str | None, kind: str) -> None:
+def plot_run(path: str, output: str | None, kind: str, options: dict) -> None:
     from .plotting import plot_file
 
-    _draw(plot_file, path, output, kind)
+    _draw(plot_file, path, output, kind, **options)
 
 
 def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
@@ -367,9 +369,22 @@ def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
 
 # copies of plotting.KINDS and plotting.sweep.KINDS (tests/test_cli.py checks they agree):
 # importing those modules would load numpy, h5py and Numba before every command
-RUN_KINDS = ("heights", "energy", "bounces")
+RUN_KINDS = ("heights", "energy", "bounces", "spacetime", "contact")
 SWEEP_KINDS = ("restitution", "heatmap")
 PLOT_KINDS = RUN_KINDS + SWEEP_KINDS
+
+
+def _figsize(text: str | None):
+    """``--figsize W,H`` (inches) as a tuple, or None."""
+    if text is None:
+        return None
+    try:
+        w, h = (float(p) for p in text.split(","))
+    except ValueError:
+        raise UsageError(f"--figsize {text!r}: give WIDTH,HEIGHT in inches, e.g. 8,5") from None
+    if not (0 < w <= 100 and 0 < h <= 100):
+        raise UsageError(f"--figsize {text!r} is out of range (inches > 0 and <= 100)")
+    return (w, h)
 
 
 @main.command("info")
@@ -391,27 +406,37 @@ def info_command(file):
               help="Image to write [default: FILE_KIND.png next to FILE].")
 @click.option("--kind", type=click.Choice(PLOT_KINDS),
               help="Run files: heights (all nodes against time, the paper's figures; the "
-                   "default), energy (components and dissipation), bounces (restitution per "
-                   "bounce).  Sweep files: restitution (against --x, one line per value of "
+                   "default), energy (components, and the drift or balance error), bounces "
+                   "(restitution per bounce), spacetime (strain over time and x, contact "
+                   "marked), contact (u_0 with -beta, and the floor force).  Sweep files: restitution (against --x, one line per value of "
                    "the other keys; the default), heatmap (over two keys at --at values).")
 @click.option("--quantity", metavar="COLUMN",
-              help="Sweep files: the summary column drawn [default: restitution_first].")
+              help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
+                   "Sweep files: the summary column drawn [default: restitution_first].")
 @click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
               "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
 @click.option("--at", "at", multiple=True, metavar="KEY=VALUE",
               help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "
                    "the first value of each other key].")
-def plot_command(file, output, kind, quantity, x_key, y_key, at):
-    """Draw a figure of a rodjit file (a run or a sweep)."""
+@click.option("--dpi", type=click.IntRange(10, 2400), default=150, show_default=True,
+              help="Resolution of PNG images.")
+@click.option("--figsize", metavar="W,H", help="Figure size in inches, e.g. 8,5.")
+def plot_command(file, output, kind, quantity, x_key, y_key, at, dpi, figsize):
+    """Draw a figure of a rodjit file (a run or a sweep) as PNG, PDF or SVG (by the suffix
+    of -o)."""
     kind_of_file = _kind(file)
+    style = {"dpi": dpi, "figsize": _figsize(figsize)}
     if kind_of_file == "run":
         if kind is not None and kind not in RUN_KINDS:
             raise UsageError(f"--kind {kind} is for sweep files; a run file takes one of "
                              f"{', '.join(RUN_KINDS)}")
-        if quantity or x_key or y_key or at:
-            raise UsageError("--quantity, --x, --y and --at are for sweep files")
-        plot_run(file, output, kind or "heights")
+        if x_key or y_key or at:
+            raise UsageError("--x, --y and --at are for sweep files")
+        if quantity and kind != "spacetime":
+            raise UsageError("--quantity is for --kind spacetime on a run file")
+        plot_run(file, output, kind or "heights",
+                 dict(style, **({"quantity": quantity} if quantity else {})))
         return
     if kind is not None and kind not in SWEEP_KINDS:
         raise UsageError(f"--kind {kind} is for run files; a sweep file takes one of "
@@ -421,7 +446,36 @@ def plot_command(file, output, kind, quantity, x_key, y_key, at):
     except ValueError as exc:
         raise UsageError(str(exc).replace("--set", "--at")) from None
     plot_sweep(file, output, kind or "restitution",
-               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed})
+               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed, **style})
+
+
+@main.command("animate")
+@click.argument("file", type=click.Path(dir_okay=True))
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Movie to write, .gif or .mp4 (needs ffmpeg) [default: FILE.gif].")
+@click.option("--fps", type=click.IntRange(1, 120), default=20, show_default=True,
+              help="Frames per second.")
+@click.option("--duration", type=click.FloatRange(0, None, min_open=True), default=5.0,
+              show_default=True, help="Length of the movie in seconds (frames: fps x "
+              "duration, sampled evenly from the snapshots).")
+@click.option("--quantity", type=click.Choice(("strain", "v")), default="strain",
+              show_default=True, help="What colours the rod.")
+@click.option("--dpi", type=click.IntRange(10, 600), default=100, show_default=True)
+def animate_command(file, output, fps, duration, quantity, dpi):
+    """A movie of a run file: the rod over the floor, coloured by strain."""
+    if _kind(file) != "run":
+        raise UsageError(f"{file!r} is a sweep file; animate draws run files")
+    from .plotting import MissingMatplotlib, NothingToDraw
+    from .plotting.animation import MissingWriter, animate
+
+    out = output or str(Path(file).with_suffix(".gif"))
+    try:
+        written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
+    except (MissingMatplotlib, MissingWriter, NothingToDraw) as exc:
+        raise RunFailed(str(exc)) from None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(f"wrote {written}")
 
 
 if __name__ == "__main__":  # pragma: no cover
