@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import shlex
 import sys
-import time
 from pathlib import Path
 
 import click
@@ -80,43 +79,24 @@ def _command_line(verb: str, config, options, flags) -> str:
     return shlex.join(words)
 
 
-class _Bar:
-    """A one-line progress bar on stderr, redrawn at most every 0.1 s."""
+def _Progress():
+    """The run bar on stderr (``driver.progress.RunBar``)."""
+    from .driver.progress import RunBar
 
-    WIDTH = 24
-
-    def __init__(self):
-        self.last = 0.0
-        self.shown = False
-
-    def _due(self, final: bool = False) -> bool:
-        now = time.monotonic()
-        if now - self.last < 0.1 and not final:
-            return False
-        self.last = now
-        return True
-
-    def _show(self, frac: float, head: str, tail: str) -> None:
-        fill = int(round(frac * self.WIDTH))
-        click.echo(f"\r  {head} [{'#' * fill}{'.' * (self.WIDTH - fill)}] {100 * frac:3.0f}%  "
-                   f"{tail}", err=True, nl=False)
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            click.echo("\r" + " " * 100 + "\r", err=True, nl=False)
+    return RunBar(file=sys.stderr)
 
 
-class _Progress(_Bar):
-    """Of a run: simulated time, steps/s, bounces so far."""
+def _progress(flag: bool | None, quiet: bool, bar):
+    """The CLI's bar (``driver.progress``): on a terminal unless --no-progress or --quiet;
+    says once when the kernels are being compiled."""
+    show = (sys.stderr.isatty() if flag is None else flag) and not quiet
+    if not show:
+        return None
+    from .driver.progress import COMPILING, kernels_cold
 
-    def __call__(self, run) -> None:
-        if not self._due():
-            return
-        frac = min(1.0, max(0.0, run.t / run.t_end)) if run.t_end > 0 else 1.0
-        rate = run.steps / run.run_time if run.run_time > 0 else 0.0   # compiled-loop rate
-        self._show(frac, f"t = {run.t:.4g} / {run.t_end:g}",
-                   f"{rate:.3g} steps/s  {run.bounces_total} bounces")
+    if kernels_cold():
+        click.echo(COMPILING, err=True)
+    return bar()
 
 
 @main.command("run")
@@ -133,7 +113,10 @@ class _Progress(_Bar):
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--flush-interval", type=float, default=2.0, show_default=True,
               metavar="SECONDS", help="Wall time between checkpoints.")
-def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval):
+@click.option("--progress/--no-progress", "show_progress", default=None,
+              help="Show a progress bar [default: on a terminal].")
+def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval,
+                show_progress):
     """Run CONFIG.toml, a preset (see 'rodjit presets') or the built-in default, streaming
     snapshots, diagnostics, contact episodes and bounces to an HDF5 file.
 
@@ -147,7 +130,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         "run", config, [("-o", output), ("--set", sets),
                         ("--t-end", repr(t_end) if t_end is not None else None)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
-    progress = None if quiet or not sys.stderr.isatty() else _Progress()
+    progress = _progress(show_progress, quiet, _Progress)
     try:
         if resume:
             if sets:
@@ -201,22 +184,11 @@ def _close(progress) -> None:
 
 
 # ---- rodjit sweep -------------------------------------------------------------------------
-class _SweepProgress(_Bar):
-    """Of a sweep: points done / total, failures, elapsed and estimated time left."""
+def _SweepProgress():
+    """The sweep bar on stderr (``driver.progress.SweepBar``)."""
+    from .driver.progress import SweepBar
 
-    def __call__(self, p) -> None:
-        if not self._due(final=p.done == p.total):
-            return
-        eta = "-" if p.eta != p.eta else _duration(p.eta)
-        self._show(p.done / p.total if p.total else 1.0, f"{p.done}/{p.total} points",
-                   f"{p.failed} failed  {_duration(p.elapsed)} elapsed, {eta} left ")
-
-
-def _duration(seconds: float) -> str:
-    seconds = int(round(seconds))
-    h, rem = divmod(seconds, 3600)
-    m, s = divmod(rem, 60)
-    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+    return SweepBar(file=sys.stderr)
 
 
 @main.command("sweep")
@@ -242,8 +214,10 @@ def _duration(seconds: float) -> str:
 @click.option("--overwrite", is_flag=True, help="Replace an existing sweep file (and run "
                                                 "files in --save-runs).")
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.option("--progress/--no-progress", "show_progress", default=None,
+              help="Show a progress bar [default: on a terminal].")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
-                  quiet):
+                  quiet, show_progress):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -259,7 +233,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         "sweep", config, [("--grid", grids), ("--set", sets), ("-o", output), ("--jobs", jobs),
                           ("--scheduler", scheduler), ("--save-runs", save_runs)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
-    progress = None if quiet or not sys.stderr.isatty() else _SweepProgress()
+    progress = _progress(show_progress, quiet, _SweepProgress)
     try:
         if resume:
             if overwrite:

@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..config import Config
+from ..driver.progress import close as close_progress
+from ..driver.progress import sweep_progress
 from ..driver.signals import StopFlag
 from ..output.h5files import FileBusy, check_output, writer_alive
 from . import sweep_file
@@ -136,8 +138,9 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     core).  ``scheduler``: None/"processes" (local pool), "local" (a Dask LocalCluster of
     ``jobs`` workers), "tcp://HOST:PORT" (an existing Dask cluster) or "inline" (this
     process).  ``save_runs``: a directory for one full run file per point.  ``resume``:
-    continue ``output``, running only its pending and failed points.  ``progress(p)`` gets
-    a SweepProgress.  Bad input raises ValueError before anything is written; SIGINT or
+    continue ``output``, running only its pending and failed points.  ``progress``: True
+    for a bar (tqdm), or a callable ``progress(p)`` that gets a SweepProgress.  Bad input
+    raises ValueError before anything is written; SIGINT or
     SIGTERM raise SweepInterrupted after the file is closed with every finished point.
     """
     if config is not None and not isinstance(config, Config):
@@ -233,6 +236,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     busy = False           # the last write found the file held by a reader
     last = time.monotonic()
     status, message, signum = "completed", "", None
+    progress = sweep_progress(progress)
     results = executor.results(tasks(), total=len(todo))
     with StopFlag(handle_signals) as stop:
         try:
@@ -273,6 +277,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         finally:
             results.close()
             executor.close(cancel=status != "completed")
+            close_progress(progress)
     now = time.perf_counter()
     table.stats = _stats(now - t0, ran, failed, executor, teardown=now - t_last)
     if status == "interrupted":
