@@ -184,7 +184,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
                     calls.launch()
         finally:
             calls.close()
-            close_progress(progress)
+            close_progress(progress, run)
     except SimulationError as exc:
         open_once().close(run, "failed", str(exc))
         exc.summary = closed_summary(writer)

@@ -37,7 +37,7 @@ class RunBar:
     def __init__(self, file=None, leave: bool = True):
         self.bar = _tqdm()(total=1.0, desc=COMPILING if kernels_cold() else "run",
                            unit="", file=file, leave=leave,
-                           bar_format="{desc} {percentage:3.0f}%|{bar}| {postfix}")
+                           bar_format="{desc}{percentage:3.0f}%|{bar}|{postfix}")
         self.started = False
 
     def __call__(self, run) -> None:
@@ -61,8 +61,8 @@ class SweepBar:
     def __init__(self, file=None, leave: bool = True):
         self.bar = _tqdm()(total=None, desc=COMPILING if kernels_cold() else "sweep",
                            file=file, leave=leave,
-                           bar_format="{desc} {n_fmt}/{total_fmt} points |{bar}| "
-                                      "{percentage:3.0f}%  {postfix}")
+                           bar_format="{desc}{n_fmt}/{total_fmt} points |{bar}| "
+                                      "{percentage:3.0f}%{postfix}")
 
     def __call__(self, p) -> None:
         if self.bar.total != p.total:
@@ -96,7 +96,10 @@ def sweep_progress(progress):
     return SweepBar() if progress is True else (progress or None)
 
 
-def close(callback) -> None:
-    """Close ``callback`` if it is a bar (a user's callable is left alone)."""
+def close(callback, run=None) -> None:
+    """Close ``callback`` if it is a bar, first showing where ``run`` ended (a user's
+    callable is left alone)."""
+    if isinstance(callback, RunBar) and run is not None:
+        callback(run)
     if isinstance(callback, (RunBar, SweepBar)):
         callback.close()

@@ -36,5 +36,5 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
         exc.result = sink.result(run, status="failed", message=str(exc))
         raise
     finally:
-        close_progress(progress)
+        close_progress(progress, run)
     return sink.result(run)
