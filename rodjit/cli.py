@@ -393,10 +393,12 @@ def info_command(file):
 @click.option("--at", "at", multiple=True, metavar="KEY=VALUE",
               help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "
                    "the first value of each other key].")
+@click.option("--panels", "panels", metavar="KEY", help="Sweep files (restitution): one "
+              "panel per value of this swept key.")
 @click.option("--dpi", type=click.IntRange(10, 2400), default=150, show_default=True,
               help="Resolution of PNG images.")
 @click.option("--figsize", metavar="W,H", help="Figure size in inches, e.g. 8,5.")
-def plot_command(file, output, kind, quantity, x_key, y_key, at, dpi, figsize):
+def plot_command(file, output, kind, quantity, x_key, y_key, at, panels, dpi, figsize):
     """Draw a figure of a rodjit file (a run or a sweep) as PNG, PDF or SVG (by the suffix
     of -o)."""
     kind_of_file = _kind(file)
@@ -405,8 +407,8 @@ def plot_command(file, output, kind, quantity, x_key, y_key, at, dpi, figsize):
         if kind is not None and kind not in RUN_KINDS:
             raise UsageError(f"--kind {kind} is for sweep files; a run file takes one of "
                              f"{', '.join(RUN_KINDS)}")
-        if x_key or y_key or at:
-            raise UsageError("--x, --y and --at are for sweep files")
+        if x_key or y_key or at or panels:
+            raise UsageError("--x, --y, --at and --panels are for sweep files")
         if quantity and kind != "spacetime":
             raise UsageError("--quantity is for --kind spacetime on a run file")
         plot_run(file, output, kind or "heights",
@@ -420,7 +422,8 @@ def plot_command(file, output, kind, quantity, x_key, y_key, at, dpi, figsize):
     except ValueError as exc:
         raise UsageError(str(exc).replace("--set", "--at")) from None
     plot_sweep(file, output, kind or "restitution",
-               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed, **style})
+               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed, "panels": panels,
+                **style})
 
 
 @main.command("animate")

@@ -237,3 +237,19 @@ def test_a_sweep_plot_of_only_nan_says_so_and_exits_1(tmp_path):
     assert r.exit_code == 1
     assert "every value of restitution_first in this figure is NaN" in r.output
     assert not (tmp_path / "p.png").exists()
+
+
+def test_sweep_panels_one_per_value(sweep_file, tmp_path):
+    table = rodjit.load_sweep(sweep_file)
+    fig = rodjit.plot(table, "restitution", panels="floor.beta")
+    axes = [ax for ax in fig.axes if ax.get_lines()]
+    assert len(axes) == 2
+    assert "β = 0.02" in axes[0].get_title() and "β = 0.05" in axes[1].get_title()
+    for ax, beta in zip(axes, (0.02, 0.05)):
+        line = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")] or \
+            [ln for ln in ax.get_lines() if ln.get_marker() != "None"]
+        mask = table["floor.beta"] == beta
+        np.testing.assert_array_equal(line[0].get_ydata(), table["restitution_first"][mask])
+    r = CliRunner().invoke(main, ["plot", str(sweep_file), "--panels", "floor.beta", "-o",
+                                  str(tmp_path / "p.png")])
+    assert r.exit_code == 0, r.output

@@ -18,6 +18,7 @@ __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
 KINDS = ("restitution", "heatmap")
 DEFAULT_QUANTITY = "restitution_first"
 MAX_LINES = 24
+MAX_PANELS = 6
 MARKERS = "osD^vP*X"   # one per line, so lines can be told apart without colour
 MAX_ANNOTATED = 15     # cells per side up to which a heatmap prints its values
 _SYMBOLS = {"rod.mu": "μ", "rod.kappa": "κ", "rod.gamma": "γ", "floor.kappa_b": "κ_b",
@@ -100,9 +101,23 @@ def _check_values(table, quantity, mask) -> None:
                             f"points, {failed} failed); nothing to draw")
 
 
-def _restitution(fig, table, quantity, x, at, ax=None) -> None:
+def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     grid = table.grid
     x = _check_key(grid, x, "--x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
+    if panels is not None:             # one panel per value of that key, side by side
+        _check_key(grid, panels, "--panels")
+        if panels == x or panels in (at or {}):
+            raise ValueError(f"--panels {panels} is already the x axis or fixed by --at")
+        if ax is not None:
+            raise ValueError("panels need a figure of their own (drop ax)")
+        values = grid.values[grid.keys.index(panels)]
+        if len(values) > MAX_PANELS:
+            raise ValueError(f"--panels {panels}: {len(values)} values are too many panels "
+                             f"(at most {MAX_PANELS})")
+        axes = fig.subplots(1, len(values), sharey=True, squeeze=False)[0]
+        for a, value in zip(axes, values):
+            _restitution(fig, table, quantity, x, {**(at or {}), panels: value}, a)
+        return
     fixed = _fixed(grid, at, (x,), default_first=False)
     others = [k for k in grid.keys if k != x and k not in fixed]
     combos = list(itertools.product(*(grid.values[grid.keys.index(k)] for k in others)))
@@ -182,9 +197,10 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
 
 
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
-                 at=None, ax=None, figsize=None):
+                 at=None, panels=None, ax=None, figsize=None):
     """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable; with
-    ``ax``, drawn into that axes.  NothingToDraw if every value shown would be NaN."""
+    ``ax``, drawn into that axes; ``panels`` (restitution): one panel per value of that
+    key.  NothingToDraw if every value shown would be NaN."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
@@ -194,8 +210,10 @@ def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=
     if kind == "restitution":
         if y:
             raise ValueError("--y is for heatmaps")
-        _restitution(fig, table, quantity, x, at, ax)
+        _restitution(fig, table, quantity, x, at, ax, panels)
     else:
+        if panels:
+            raise ValueError("--panels is for the restitution kind")
         _heatmap(fig, table, quantity, x, y, at, ax)
     if ax is None:
         fig.suptitle(f"sweep of {len(table)} points, N = {table.base.rod.N}", fontsize=10)
