@@ -13,12 +13,17 @@ from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
 from .driver.run import SimulationError
 from .driver.simulate import simulate
 from .output.hdf5 import load_file
+from .output.run_view import open_run
+from .plotting.animation import animate
+from .plotting.dispatch import plot
 from .presets import load_preset, preset_names
 from .records.result import Result
-from .sweeps import SweepInterrupted, SweepTable, load_sweep, sweep
+from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepTable, load_sweep,
+                     sweep)
 from .version import __version__
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
-           "load_preset", "preset_names", "SweepInterrupted", "laws", "converge", "fit", "fit_table", "observables",
+           "load_preset", "preset_names", "SweepInterrupted", "SweepFailed", "MissingMainGuard",
+           "open_run", "plot", "animate", "laws", "converge", "fit", "fit_table", "observables",
            "Convergence", "FitResult", "FitError", "TableFit", "load_convergence", "__version__"]

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import shlex
 import sys
-import time
 from pathlib import Path
 
 import click
@@ -80,43 +79,24 @@ def _command_line(verb: str, config, options, flags) -> str:
     return shlex.join(words)
 
 
-class _Bar:
-    """A one-line progress bar on stderr, redrawn at most every 0.1 s."""
+def _Progress():
+    """The run bar on stderr (``driver.progress.RunBar``)."""
+    from .driver.progress import RunBar
 
-    WIDTH = 24
-
-    def __init__(self):
-        self.last = 0.0
-        self.shown = False
-
-    def _due(self, final: bool = False) -> bool:
-        now = time.monotonic()
-        if now - self.last < 0.1 and not final:
-            return False
-        self.last = now
-        return True
-
-    def _show(self, frac: float, head: str, tail: str) -> None:
-        fill = int(round(frac * self.WIDTH))
-        click.echo(f"\r  {head} [{'#' * fill}{'.' * (self.WIDTH - fill)}] {100 * frac:3.0f}%  "
-                   f"{tail}", err=True, nl=False)
-        self.shown = True
-
-    def close(self) -> None:
-        if self.shown:
-            click.echo("\r" + " " * 100 + "\r", err=True, nl=False)
+    return RunBar(file=sys.stderr)
 
 
-class _Progress(_Bar):
-    """Of a run: simulated time, steps/s, bounces so far."""
+def _progress(flag: bool | None, quiet: bool, bar):
+    """The CLI's bar (``driver.progress``): on a terminal unless --no-progress or --quiet;
+    says once when the kernels are being compiled."""
+    show = (sys.stderr.isatty() if flag is None else flag) and not quiet
+    if not show:
+        return None
+    from .driver.progress import COMPILING, kernels_cold
 
-    def __call__(self, run) -> None:
-        if not self._due():
-            return
-        frac = min(1.0, max(0.0, run.t / run.t_end)) if run.t_end > 0 else 1.0
-        rate = run.steps / run.run_time if run.run_time > 0 else 0.0   # compiled-loop rate
-        self._show(frac, f"t = {run.t:.4g} / {run.t_end:g}",
-                   f"{rate:.3g} steps/s  {run.bounces_total} bounces")
+    if kernels_cold():
+        click.echo(COMPILING, err=True)
+    return bar()
 
 
 @main.command("run")
@@ -133,7 +113,10 @@ class _Progress(_Bar):
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--flush-interval", type=float, default=2.0, show_default=True,
               metavar="SECONDS", help="Wall time between checkpoints.")
-def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval):
+@click.option("--progress/--no-progress", "show_progress", default=None,
+              help="Show a progress bar [default: on a terminal].")
+def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval,
+                show_progress):
     """Run CONFIG.toml, a preset (see 'rodjit presets') or the built-in default, streaming
     snapshots, diagnostics, contact episodes and bounces to an HDF5 file.
 
@@ -147,7 +130,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         "run", config, [("-o", output), ("--set", sets),
                         ("--t-end", repr(t_end) if t_end is not None else None)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
-    progress = None if quiet or not sys.stderr.isatty() else _Progress()
+    progress = _progress(show_progress, quiet, _Progress)
     try:
         if resume:
             if sets:
@@ -201,22 +184,11 @@ def _close(progress) -> None:
 
 
 # ---- rodjit sweep -------------------------------------------------------------------------
-class _SweepProgress(_Bar):
-    """Of a sweep: points done / total, failures, elapsed and estimated time left."""
+def _SweepProgress():
+    """The sweep bar on stderr (``driver.progress.SweepBar``)."""
+    from .driver.progress import SweepBar
 
-    def __call__(self, p) -> None:
-        if not self._due(final=p.done == p.total):
-            return
-        eta = "-" if p.eta != p.eta else _duration(p.eta)
-        self._show(p.done / p.total if p.total else 1.0, f"{p.done}/{p.total} points",
-                   f"{p.failed} failed  {_duration(p.elapsed)} elapsed, {eta} left ")
-
-
-def _duration(seconds: float) -> str:
-    seconds = int(round(seconds))
-    h, rem = divmod(seconds, 3600)
-    m, s = divmod(rem, 60)
-    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+    return SweepBar(file=sys.stderr)
 
 
 @main.command("sweep")
@@ -242,8 +214,10 @@ def _duration(seconds: float) -> str:
 @click.option("--overwrite", is_flag=True, help="Replace an existing sweep file (and run "
                                                 "files in --save-runs).")
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+@click.option("--progress/--no-progress", "show_progress", default=None,
+              help="Show a progress bar [default: on a terminal].")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
-                  quiet):
+                  quiet, show_progress):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -251,7 +225,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
-    from .sweeps import SweepInterrupted, sweep
+    from .sweeps import SweepFailed, SweepInterrupted, sweep
     from .sweeps.grid import parse_grid_option
     from .driver.files import OutputExists
 
@@ -259,7 +233,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         "sweep", config, [("--grid", grids), ("--set", sets), ("-o", output), ("--jobs", jobs),
                           ("--scheduler", scheduler), ("--save-runs", save_runs)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
-    progress = None if quiet or not sys.stderr.isatty() else _SweepProgress()
+    progress = _progress(show_progress, quiet, _SweepProgress)
     try:
         if resume:
             if overwrite:
@@ -299,6 +273,13 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             click.echo(exc.table.headline())
         click.echo(str(exc), err=True)
         sys.exit(128 + (exc.signum or 2))
+    except SweepFailed as exc:
+        _close(progress)
+        if not quiet:
+            click.echo(exc.table.headline())
+            click.echo(exc.table.report(max_rows=40))
+        click.echo(f"error: {exc}", err=True)
+        sys.exit(1)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     _close(progress)
@@ -334,22 +315,24 @@ def _kind(path: str) -> str:
 
 def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
     """``plot(path, image, kind, **options)`` into ``output`` (default FILE_KIND.png)."""
-    from .plotting import MissingMatplotlib
+    from .plotting import MissingMatplotlib, NothingToDraw
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
     try:
         written = plot(path, out, kind, **options)
     except MissingMatplotlib as exc:
         raise RunFailed(str(exc)) from None
+    except NothingToDraw as exc:
+        raise RunFailed(str(exc)) from None
     except ValueError as exc:
         raise UsageError(str(exc)) from None
     click.echo(f"wrote {written}")
 
 
-def plot_run(path: str, output: str | None, kind: str) -> None:
+def plot_run(path: str, output: str | None, kind: str, options: dict) -> None:
     from .plotting import plot_file
 
-    _draw(plot_file, path, output, kind)
+    _draw(plot_file, path, output, kind, **options)
 
 
 def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
@@ -360,9 +343,22 @@ def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
 
 # copies of plotting.KINDS and plotting.sweep.KINDS (tests/test_cli.py checks they agree):
 # importing those modules would load numpy, h5py and Numba before every command
-RUN_KINDS = ("heights", "energy", "bounces")
+RUN_KINDS = ("heights", "energy", "bounces", "spacetime", "contact")
 SWEEP_KINDS = ("restitution", "heatmap")
 PLOT_KINDS = RUN_KINDS + SWEEP_KINDS
+
+
+def _figsize(text: str | None):
+    """``--figsize W,H`` (inches) as a tuple, or None."""
+    if text is None:
+        return None
+    try:
+        w, h = (float(p) for p in text.split(","))
+    except ValueError:
+        raise UsageError(f"--figsize {text!r}: give WIDTH,HEIGHT in inches, e.g. 8,5") from None
+    if not (0 < w <= 100 and 0 < h <= 100):
+        raise UsageError(f"--figsize {text!r} is out of range (inches > 0 and <= 100)")
+    return (w, h)
 
 
 @main.command("info")
@@ -384,27 +380,39 @@ def info_command(file):
               help="Image to write [default: FILE_KIND.png next to FILE].")
 @click.option("--kind", type=click.Choice(PLOT_KINDS),
               help="Run files: heights (all nodes against time, the paper's figures; the "
-                   "default), energy (components and dissipation), bounces (restitution per "
-                   "bounce).  Sweep files: restitution (against --x, one line per value of "
+                   "default), energy (components, and the drift or balance error), bounces "
+                   "(restitution per bounce), spacetime (strain over time and x, contact "
+                   "marked), contact (u_0 with -beta, and the floor force).  Sweep files: restitution (against --x, one line per value of "
                    "the other keys; the default), heatmap (over two keys at --at values).")
 @click.option("--quantity", metavar="COLUMN",
-              help="Sweep files: the summary column drawn [default: restitution_first].")
+              help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
+                   "Sweep files: the summary column drawn [default: restitution_first].")
 @click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
               "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
 @click.option("--at", "at", multiple=True, metavar="KEY=VALUE",
               help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "
                    "the first value of each other key].")
-def plot_command(file, output, kind, quantity, x_key, y_key, at):
-    """Draw a figure of a rodjit file (a run or a sweep)."""
+@click.option("--panels", "panels", metavar="KEY", help="Sweep files (restitution): one "
+              "panel per value of this swept key.")
+@click.option("--dpi", type=click.IntRange(10, 2400), default=150, show_default=True,
+              help="Resolution of PNG images.")
+@click.option("--figsize", metavar="W,H", help="Figure size in inches, e.g. 8,5.")
+def plot_command(file, output, kind, quantity, x_key, y_key, at, panels, dpi, figsize):
+    """Draw a figure of a rodjit file (a run or a sweep) as PNG, PDF or SVG (by the suffix
+    of -o)."""
     kind_of_file = _kind(file)
+    style = {"dpi": dpi, "figsize": _figsize(figsize)}
     if kind_of_file == "run":
         if kind is not None and kind not in RUN_KINDS:
             raise UsageError(f"--kind {kind} is for sweep files; a run file takes one of "
                              f"{', '.join(RUN_KINDS)}")
-        if quantity or x_key or y_key or at:
-            raise UsageError("--quantity, --x, --y and --at are for sweep files")
-        plot_run(file, output, kind or "heights")
+        if x_key or y_key or at or panels:
+            raise UsageError("--x, --y, --at and --panels are for sweep files")
+        if quantity and kind != "spacetime":
+            raise UsageError("--quantity is for --kind spacetime on a run file")
+        plot_run(file, output, kind or "heights",
+                 dict(style, **({"quantity": quantity} if quantity else {})))
         return
     if kind is not None and kind not in SWEEP_KINDS:
         raise UsageError(f"--kind {kind} is for run files; a sweep file takes one of "
@@ -414,7 +422,37 @@ def plot_command(file, output, kind, quantity, x_key, y_key, at):
     except ValueError as exc:
         raise UsageError(str(exc).replace("--set", "--at")) from None
     plot_sweep(file, output, kind or "restitution",
-               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed})
+               {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed, "panels": panels,
+                **style})
+
+
+@main.command("animate")
+@click.argument("file", type=click.Path(dir_okay=True))
+@click.option("-o", "--output", type=click.Path(dir_okay=False),
+              help="Movie to write, .gif or .mp4 (needs ffmpeg) [default: FILE.gif].")
+@click.option("--fps", type=click.IntRange(1, 120), default=20, show_default=True,
+              help="Frames per second.")
+@click.option("--duration", type=click.FloatRange(0, None, min_open=True), default=5.0,
+              show_default=True, help="Length of the movie in seconds (frames: fps x "
+              "duration, sampled evenly from the snapshots).")
+@click.option("--quantity", type=click.Choice(("strain", "v")), default="strain",
+              show_default=True, help="What colours the rod.")
+@click.option("--dpi", type=click.IntRange(10, 600), default=100, show_default=True)
+def animate_command(file, output, fps, duration, quantity, dpi):
+    """A movie of a run file: the rod over the floor, coloured by strain."""
+    if _kind(file) != "run":
+        raise UsageError(f"{file!r} is a sweep file; animate draws run files")
+    from .plotting import MissingMatplotlib, NothingToDraw
+    from .plotting.animation import MissingWriter, animate
+
+    out = output or str(Path(file).with_suffix(".gif"))
+    try:
+        written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
+    except (MissingMatplotlib, MissingWriter, NothingToDraw) as exc:
+        raise RunFailed(str(exc)) from None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(f"wrote {written}")
 
 
 if __name__ == "__main__":  # pragma: no cover

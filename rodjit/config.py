@@ -322,6 +322,22 @@ class Config:
         section, name = key.split(".", 1)
         return getattr(getattr(self, section), name)
 
+    # ---- display ------------------------------------------------------------------------
+    def _overview(self) -> tuple[str, list[tuple[str, str]]]:
+        title = (f"rodjit.Config: N = {self.rod.N}, mu = {self.rod.mu:g}, "
+                 f"{self.time.integrator}, t_end = {self.time.t_end:g}")
+        rows = [(name, ", ".join(f"{k} = {v}" for k, v in dataclasses.asdict(
+                    getattr(self, name)).items() if v is not None)) for name in _SECTIONS]
+        return title, rows
+
+    def __repr__(self) -> str:
+        from ._display import text
+        return text(*self._overview())
+
+    def _repr_html_(self) -> str:
+        from ._display import html_table
+        return html_table(*self._overview())
+
 
 def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}

@@ -26,12 +26,15 @@ def test_console_script_and_dependencies():
     project = PYPROJECT["project"]
     assert project["scripts"] == {"rodjit": "rodjit.cli:main"}
     runtime = {d.split(">")[0].split("=")[0].strip() for d in project["dependencies"]}
-    assert runtime == {"numpy", "numba", "h5py", "click"}
+    assert runtime == {"numpy", "numba", "h5py", "click", "tqdm"}
     extras = project["optional-dependencies"]
     test = " ".join(extras["test"])
     for name in ("xarray", "h5netcdf", "psutil", "rodjit[plot]"):
         assert name in test
     assert any(d.startswith("matplotlib") for d in extras["plot"])
+    assert {d.split(">")[0] for d in extras["analysis"]} == {"xarray", "h5netcdf", "pandas"}
+    assert set(extras["all"]) == {f"rodjit[{name}]" for name in extras
+                                  if name not in ("all", "test")}
 
 
 def test_ci_runs_exactly_the_readme_test_command():

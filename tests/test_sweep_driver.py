@@ -93,8 +93,9 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
     assert list(df.columns) == list(loaded.columns) and len(df) == 4
     assert df.loc[3, "status"] == "completed" and df["steps"].dtype == np.int64
     ds = loaded.to_xarray()
-    assert ds["restitution_first"].dims == ("rod.mu", "floor.beta")
-    assert float(ds["steps"].sel({"rod.mu": 10.0, "floor.beta": 0.05})) == loaded["steps"][3]
+    assert ds["restitution_first"].dims == ("mu", "beta")      # identifiers: ds.sel(mu=...)
+    assert (ds["mu"].attrs["key"], ds["beta"].attrs["key"]) == ("rod.mu", "floor.beta")
+    assert float(ds["steps"].sel({"mu": 10.0, "beta": 0.05})) == loaded["steps"][3]
 
 
 def test_a_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):

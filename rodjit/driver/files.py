@@ -21,6 +21,8 @@ from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
+from .progress import close as close_progress
+from .progress import run_progress
 from .run import Run, SimulationError
 from .signals import StopFlag
 
@@ -46,7 +48,8 @@ def run_to_file(config, path, *, overwrite: bool = False,
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
-    ``t_end`` overrides ``time.t_end``; ``progress(run)`` is called between compiled calls;
+    ``t_end`` overrides ``time.t_end``; ``progress``: True for a bar (tqdm), or ``progress(run)`` is called
+    between compiled calls;
     ``command`` is recorded in the file (default: this call); ``overlap`` (default
     ``OVERLAP``) computes in a worker thread while writing, False keeps to one thread (the
     file is the same bit for bit).  Bad input raises ValueError
@@ -136,6 +139,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
     returns (called once the first compiled call is under way); close the file."""
     calls = (Pipeline if (OVERLAP if overlap is None else overlap) else Inline)(run)
+    progress = run_progress(progress)
     writer = None
     opened = False
 
@@ -180,6 +184,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
                     calls.launch()
         finally:
             calls.close()
+            close_progress(progress, run)
     except SimulationError as exc:
         open_once().close(run, "failed", str(exc))
         exc.summary = closed_summary(writer)

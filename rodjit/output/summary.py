@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..records.extremes import Extremes
+from ..records.overview import RunFacts, energy_label
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive
@@ -51,62 +52,29 @@ class RunSummary:
         return int(self.bounces["t_impact"].size)
 
     def energy_label(self) -> str:
-        return "energy drift" if self.config.rod.mu == 0 else "energy balance error"
+        return energy_label(self.config.rod.mu)
+
+    def facts(self) -> RunFacts:
+        """What ``repr``, ``_repr_html_`` and ``report`` print (``records.overview``)."""
+        return RunFacts(
+            name=self.path, status=self.status, message=self.message, config=self.config,
+            t_start=0.0,
+            t=self.t, t_end=self.t_end, bounces=self.bounces,
+            n_episodes=self.counts["episodes"], energy_error=self.energy_error,
+            min_strain=self.min_strain, min_u0=self.min_u0, steps=self.steps,
+            rejected=self.rejected_steps, compile_time=self.compile_time,
+            run_time=self.run_time, node_steps_per_second=self.node_steps_per_second)
 
     def report(self, max_bounces: int | None = 20) -> str:
         """A short plain-text report: bounces (at most ``max_bounces`` rows, None: all),
         energy, extremes, steps and timings."""
-        c = self.config
-        lines = [f"{self.path}: {self.status} at t = {self.t:.6g} of {self.t_end:.6g} "
-                 f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
-        if self.message:
-            lines.append(f"  {self.message}")
-        b = self.bounces
-        n = self.n_bounces
-        lines.append(f"  {n} bounce{'s' if n != 1 else ''}, "
-                     f"{self.counts['episodes']} finished contact episodes")
-        if n:
-            lines.append("      #   t_impact  t_release  episodes   w_impact  w_release  "
-                         "restitution")
-            show = list(range(n))
-            if max_bounces is not None and n > max_bounces:
-                half = max_bounces // 2
-                show = show[:half] + [-1] + show[n - half:]
-            for i in show:
-                if i < 0:
-                    lines.append("    ...")
-                    continue
-                e = "open" if b["open"][i] else _num(b["restitution"][i], ".4f")
-                lines.append(f"  {i + 1:5d} {_num(b['t_impact'][i], '10.4f')} "
-                             f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
-                             f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
-                             f"  {e:>11}")
-        if math.isnan(self.energy_error):
-            lines.append(f"  {self.energy_label():<22}not measured (no diagnostics: "
-                         f"output.diagnostics_interval = 0)")
-        else:
-            lines.append(f"  {self.energy_label():<22}{self.energy_error:.3g}  "
-                         f"(max |E + dissipated - E0| / max(|E0|, kinetic))")
-        lines.append(f"  {'smallest strain':<22}{_num(self.min_strain, '.6g')}")
-        if self.min_u0 < 0:
-            lines.append(f"  {'deepest penetration':<22}{-self.min_u0:.6g}  "
-                         f"(u_0 = {self.min_u0:.6g}; floor limit -beta = {-c.floor.beta:g})")
-        else:
-            lines.append(f"  {'deepest penetration':<22}none (no contact)")
-        lines.append(f"  {'steps':<22}{self.steps} ({self.rejected_steps} rejected)")
-        lines.append(f"  {'compile time':<22}{self.compile_time:.3g} s")
-        lines.append(f"  {'run time':<22}{self.run_time:.3g} s "
-                     f"({self.node_steps_per_second:.3g} node-steps/s)")
-        return "\n".join(lines)
+        return self.facts().report(max_bounces)
 
+    def __repr__(self) -> str:
+        return self.facts().text()
 
-def _num(value, spec: str) -> str:
-    """Format a number; NaN (no value, e.g. the release of an open bounce) prints as '-'."""
-    value = float(value)
-    if math.isnan(value):
-        width = spec.split(".")[0]
-        return "-".rjust(int(width) if width else 1)
-    return format(value, spec)
+    def _repr_html_(self) -> str:
+        return self.facts().html()
 
 
 def summarize(path) -> RunSummary:

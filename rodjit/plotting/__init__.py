@@ -1,6 +1,8 @@
-"""Figures of rodjit files: runs (node heights, energies, restitution per bounce) and
-sweeps (a summary column against a key, heatmaps over two keys)."""
-from .mpl import MissingMatplotlib
-from .run import KINDS, MAX_CURVES, MAX_POINTS, figure, plot_file
+"""Figures of runs and sweeps (``rodjit.plot``): node heights, energies, restitution per
+bounce, space-time maps, the floor contact, animations of the rod; a summary column against
+a key, heatmaps over two keys."""
+from .mpl import MissingMatplotlib, NothingToDraw
+from .run import KINDS, MAX_CURVES, MAX_POINTS, QUANTITIES, figure, plot_file
 
-__all__ = ["KINDS", "MAX_CURVES", "MAX_POINTS", "MissingMatplotlib", "figure", "plot_file"]
+__all__ = ["KINDS", "MAX_CURVES", "MAX_POINTS", "QUANTITIES", "MissingMatplotlib",
+           "NothingToDraw", "figure", "plot_file"]

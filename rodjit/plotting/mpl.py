@@ -1,19 +1,44 @@
-"""matplotlib on demand: it lives in the ``plot`` extra, and figures are drawn without
-pyplot, so nothing depends on a display or a backend."""
+"""matplotlib on demand (it lives in the ``plot`` extra): figures go through pyplot when a
+program uses it (so Jupyter shows them inline), and are plain Figures otherwise (the
+command line: no display, no backend)."""
 from __future__ import annotations
 
-__all__ = ["MissingMatplotlib", "new_figure"]
+import sys
+from pathlib import Path
+
+__all__ = ["MissingMatplotlib", "NothingToDraw", "new_figure", "save", "IMAGE_SUFFIXES"]
+
+IMAGE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
 class MissingMatplotlib(ImportError):
     pass
 
 
+class NothingToDraw(ValueError):
+    """The data hold nothing the figure could show (no samples, every value NaN)."""
+
+
 def new_figure(**kwargs):
-    """A matplotlib Figure (not registered with pyplot), or MissingMatplotlib."""
+    """A matplotlib Figure: from pyplot when it is imported (inline in notebooks), else a
+    plain Figure; MissingMatplotlib without matplotlib."""
     try:
         from matplotlib.figure import Figure
     except ImportError:
         raise MissingMatplotlib("plotting needs matplotlib; install it with: "
                                 "pip install 'rodjit[plot]'") from None
+    if "matplotlib.pyplot" in sys.modules:
+        return sys.modules["matplotlib.pyplot"].figure(**kwargs)
     return Figure(**kwargs)
+
+
+def save(fig, output, dpi: int = 150) -> Path:
+    """Write ``fig`` to ``output`` (PNG, PDF or SVG by its suffix)."""
+    output = Path(output)
+    if output.suffix.lower() not in IMAGE_SUFFIXES:
+        raise ValueError(f"output {str(output)!r}: the image type is taken from the suffix, "
+                         f"one of {', '.join(IMAGE_SUFFIXES)}")
+    if not (isinstance(dpi, int) and 10 <= dpi <= 2400):
+        raise ValueError(f"dpi = {dpi!r} is out of range (whole number from 10 to 2400)")
+    fig.savefig(output, dpi=dpi)
+    return output

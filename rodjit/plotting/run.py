@@ -1,104 +1,148 @@
-"""Figures of a run file: node heights (the paper's figures), energies, restitution."""
+"""Figures of a run (a ``Result`` or a run file): node heights (the paper's figures),
+energies, restitution per bounce, the space-time map of strain (or height, velocity), and
+the bottom's contact with the floor.
+
+Units are those of ``records.metadata`` (SI for a rod of 1 m and 1 kg with the defaults).
+"""
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import numpy as np
 
-from ..output import hdf5
-from .mpl import MissingMatplotlib, new_figure
+from ..records.datasets import strain_of
+from ..records.metadata import meaning
+from .mpl import MissingMatplotlib, NothingToDraw, new_figure, save
+from .source import MAX_POINTS, RunSource
 
-__all__ = ["KINDS", "figure", "plot_file", "MissingMatplotlib"]
+__all__ = ["KINDS", "QUANTITIES", "figure", "plot_file", "MissingMatplotlib"]
 
-KINDS = ("heights", "energy", "bounces")
+KINDS = ("heights", "energy", "bounces", "spacetime", "contact")
+QUANTITIES = ("strain", "u", "v")      # what a space-time map colours
 MAX_CURVES = 11        # node curves drawn at most (evenly spaced along the rod)
-MAX_POINTS = 20_000    # time samples drawn at most per curve (strided read)
+MAX_ROWS = 2_000       # snapshot rows a space-time map draws at most (strided)
+
+_ENERGY = (("energy_kinetic", "kinetic"), ("energy_stretch", "stretch"),
+           ("energy_bend", "bending"), ("energy_floor", "floor"),
+           ("energy_gravity", "gravity"))
 
 
-def figure(path, kind: str = "heights"):
-    """The matplotlib Figure of kind ``kind`` for the run file ``path``."""
+def _label(symbol: str, table: str, column: str) -> str:
+    """``symbol [units]`` with the unit of ``records.metadata``."""
+    units = meaning(table, column).units
+    return f"{symbol} [{units}]" if units != "1" else symbol
+
+
+def _title(config) -> str:
+    return (f"N = {config.rod.N}, μ = {config.rod.mu:g}, κ = {config.rod.kappa:g}, "
+            f"κ_b = {config.floor.kappa_b:g}, β = {config.floor.beta:g}")
+
+
+def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
+           t_range=None, figsize=None):
+    """The matplotlib Figure of kind ``kind`` for a run (a ``Result`` or a run file path);
+    with ``ax``, drawn into that axes (and its figure returned).  ``quantity`` (strain, u,
+    v) is what ``spacetime`` colours; ``t_range=(t0, t1)`` limits the time axis."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
-    fig = new_figure(figsize=(7.5, 4.5), layout="constrained")
-    with hdf5.open_file(path) as f:
-        hdf5.check_run_file(f, path)
-        config = hdf5.read_config(f)
-        ax = fig.add_subplot()
-        {"heights": _heights, "energy": _energy, "bounces": _bounces}[kind](f, config, ax)
-    ax.set_title(f"{Path(path).name}: N = {config.rod.N}, μ = {config.rod.mu:g}, "
-                 f"κ = {config.rod.kappa:g}, κ_b = {config.floor.kappa_b:g}, "
-                 f"β = {config.floor.beta:g}", fontsize=10)
+    if kind == "spacetime" and quantity not in QUANTITIES:
+        raise ValueError(f"quantity = {quantity!r} is not allowed (one of "
+                         f"{', '.join(QUANTITIES)})")
+    with RunSource(source) as src:
+        if ax is None:
+            fig = new_figure(figsize=figsize or (7.5, 4.5), layout="constrained")
+        else:
+            fig = ax.figure
+        draw = {"heights": _heights, "energy": _energy, "bounces": _bounces,
+                "spacetime": _spacetime, "contact": _contact}[kind]
+        axes = draw(src, fig, ax, quantity=quantity, t_range=t_range)
+        axes[0].set_title(_title(src.config), fontsize=10)
     return fig
 
 
-def plot_file(path, output, kind: str = "heights", *, dpi: int = 150) -> Path:
-    """Draw figure ``kind`` of the run file ``path`` into the image file ``output``."""
-    fig = figure(path, kind)
-    output = Path(output)
-    fig.savefig(output, dpi=dpi)
-    return output
+def plot_file(path, output, kind: str = "heights", *, dpi: int = 150, figsize=None,
+              **options) -> Path:
+    """Draw figure ``kind`` of the run file ``path`` into the image file ``output`` (PNG,
+    PDF or SVG by its suffix)."""
+    return save(figure(path, kind, figsize=figsize, **options), output, dpi)
 
 
-def _stride(n: int) -> int:
-    return max(1, math.ceil(n / MAX_POINTS))
+def _one_axes(fig, ax):
+    return ax if ax is not None else fig.add_subplot()
 
 
-def _heights(f, config, ax) -> None:
-    g = f["snapshots"]
-    n = min(g["t"].shape[0], g["u"].shape[0])
+def _window(ax, t, t_range):
+    ax.set_xlim(*(t_range if t_range is not None else (t[0], t[-1])))
+
+
+def _heights(src, fig, ax, *, t_range, **_):
+    n = src.n_snapshots()
     if n == 0:
-        raise ValueError("the file has no snapshots (output.snapshot_interval = 0); nothing to "
-                         "draw for kind 'heights'")
-    nodes = np.unique(np.round(np.linspace(0, config.rod.N, min(MAX_CURVES, config.rod.N + 1)))
-                      .astype(int))
-    s = _stride(n)
-    t = g["t"][0:n:s]
-    u = g["u"][0:n:s, list(nodes)]
-    x = f["grid/x"][()]
+        raise NothingToDraw("the run has no snapshots (output.snapshot_interval = 0); "
+                            "nothing to draw for kind 'heights'")
+    N = src.config.rod.N
+    nodes = list(np.unique(np.round(np.linspace(0, N, min(MAX_CURVES, N + 1))).astype(int)))
+    rows = src.strided_rows(MAX_POINTS, t_range)
+    t = src.snapshot_times()[rows]
+    u = src.snapshots("u", rows, nodes)
     import matplotlib
 
-    colors = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.9, nodes.size))
+    ax = _one_axes(fig, ax)
+    colors = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.9, len(nodes)))
     for j, i in enumerate(nodes):
-        ax.plot(t, u[:, j], color=colors[j], lw=1.0, label=f"x = {x[i]:.3g}")
+        ax.plot(t, u[:, j], color=colors[j], lw=1.0, label=f"x = {src.x[i]:.3g}")
     ax.axhline(0.0, color="0.3", lw=0.8, ls="--")
-    ax.set_xlabel("time t")
-    ax.set_ylabel("height u(t, x)")
-    ax.set_xlim(t[0], t[-1])
-    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8, title="node",
-              title_fontsize=8)
+    ax.set_xlabel(_label("time t", "snapshots", "t"))
+    ax.set_ylabel(_label("height u(t, x)", "snapshots", "u"))
+    _window(ax, t, t_range)
+    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8,
+              title="node at", title_fontsize=8)
+    return [ax]
 
 
-def _energy(f, config, ax) -> None:
-    g = f["diagnostics"]
-    n = min(g[c].shape[0] for c in hdf5.TABLES["diagnostics"])
-    if n == 0:
-        raise ValueError("the file has no diagnostics (output.diagnostics_interval = 0); "
-                         "nothing to draw for kind 'energy'")
-    s = _stride(n)
-    d = {c: g[c][0:n:s] for c in ("t", "energy_kinetic", "energy_stretch", "energy_bend",
-                                  "energy_floor", "energy_gravity", "energy_total",
-                                  "dissipated")}
+def _energy(src, fig, ax, *, t_range, **_):
+    cols = ("t", "energy_total", "dissipated") + tuple(c for c, _ in _ENERGY)
+    d = src.diagnostics(cols)
     t = d["t"]
-    for key, label in (("energy_kinetic", "kinetic"), ("energy_stretch", "stretch"),
-                       ("energy_bend", "bending"), ("energy_floor", "floor"),
-                       ("energy_gravity", "gravity")):
-        if key == "energy_bend" and config.rod.gamma == 0:
+    if t.size == 0:
+        raise NothingToDraw("the run has no diagnostics (output.diagnostics_interval = 0); "
+                            "nothing to draw for kind 'energy'")
+    c = src.config
+    if ax is None:
+        top, bottom = fig.subplots(2, 1, sharex=True, height_ratios=(2, 1))
+    else:
+        top, bottom = ax, None
+    for key, label in _ENERGY:
+        if key == "energy_bend" and c.rod.gamma == 0:
             continue
-        ax.plot(t, d[key], lw=1.0, label=label)
-    ax.plot(t, d["energy_total"], color="k", lw=1.4, label="total E")
-    if config.rod.mu > 0:
-        ax.plot(t, d["dissipated"], color="0.5", lw=1.2, ls="--", label="dissipated")
-        ax.plot(t, d["energy_total"] + d["dissipated"], color="r", lw=1.0, ls=":",
-                label="E + dissipated")
-    ax.set_xlabel("time t")
-    ax.set_ylabel("energy")
-    ax.set_xlim(t[0], t[-1])
-    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+        top.plot(t, d[key], lw=1.0, label=label)
+    top.plot(t, d["energy_total"], color="k", lw=1.4, label="total E")
+    if c.rod.mu > 0:
+        top.plot(t, d["dissipated"], color="0.5", lw=1.2, ls="--", label="dissipated")
+        top.plot(t, d["energy_total"] + d["dissipated"], color="r", lw=1.0, ls=":",
+                 label="E + dissipated")
+    top.set_ylabel(_label("energy", "diagnostics", "energy_total"))
+    top.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
+    _window(top, t, t_range)
+    if bottom is None:
+        top.set_xlabel(_label("time t", "diagnostics", "t"))
+        return [top]
+    e0 = d["energy_total"][0]
+    scale = max(abs(e0), float(np.max(d["energy_kinetic"])), 1e-300)
+    error = np.abs(d["energy_total"] + d["dissipated"] - e0) / scale
+    what = "relative energy drift" if c.rod.mu == 0 else "energy balance error"
+    positive = error > 0
+    bottom.semilogy(t[positive], error[positive], color="C3", lw=1.0,
+                    label=f"max {error.max():.2g}")
+    bottom.set_ylabel(what, fontsize=8)
+    bottom.set_xlabel(_label("time t", "diagnostics", "t"))
+    bottom.legend(loc="lower right", fontsize=8)
+    return [top, bottom]
 
 
-def _bounces(f, config, ax) -> None:
-    b = hdf5.read_table(f, "bounces")
+def _bounces(src, fig, ax, **_):
+    b = src.table("bounces")
+    ax = _one_axes(fig, ax)
     k = np.arange(1, b["t_impact"].size + 1)
     closed = ~b["open"]
     ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
@@ -113,3 +157,83 @@ def _bounces(f, config, ax) -> None:
         ax.legend(loc="best", fontsize=8)
     ax.set_xlabel("bounce")
     ax.set_ylabel("restitution e = -w_release / w_impact")
+    return [ax]
+
+
+def _mark_episodes(ax, src, t_range, t):
+    """Shade the contact episodes along the time axis (one legend entry)."""
+    ep = src.table("episodes")
+    lo, hi = t_range if t_range is not None else (t[0], t[-1])
+    first = True
+    for a, b in zip(ep["t_start"], ep["t_end"]):
+        if b < lo or a > hi:
+            continue
+        ax.axvspan(a, b, ymin=0.0, ymax=0.03, color="k", lw=0,
+                   label="contact (u₀ < 0)" if first else None)
+        first = False
+    return not first
+
+
+def _spacetime(src, fig, ax, *, quantity, t_range, **_):
+    n = src.n_snapshots()
+    if n == 0:
+        raise NothingToDraw("the run has no snapshots (output.snapshot_interval = 0); "
+                            "nothing to draw for kind 'spacetime'")
+    rows = src.strided_rows(MAX_ROWS, t_range)
+    t = src.snapshot_times()[rows]
+    if t.size < 2:
+        raise NothingToDraw(f"fewer than two snapshots in t_range = {t_range}; nothing to "
+                            f"draw for kind 'spacetime'")
+    x = src.x
+    if quantity == "strain":
+        z = strain_of(src.snapshots("u", rows), x.size - 1)
+        y_edges = x                                  # a segment spans its two nodes
+        label = "strain ε = u_x − 1"
+    else:
+        z = src.snapshots(quantity, rows)
+        mid = (x[:-1] + x[1:]) / 2
+        y_edges = np.concatenate([[x[0]], mid, [x[-1]]])
+        label = _label("height u" if quantity == "u" else "velocity v", "snapshots", quantity)
+    t_mid = (t[:-1] + t[1:]) / 2
+    t_edges = np.concatenate([[t[0] - (t[1] - t[0]) / 2], t_mid, [t[-1] + (t[-1] - t[-2]) / 2]])
+    ax = _one_axes(fig, ax)
+    if quantity == "u":
+        mesh = ax.pcolormesh(t_edges, y_edges, z.T, cmap="viridis", shading="flat")
+    else:
+        lim = float(np.nanmax(np.abs(z))) or 1.0
+        mesh = ax.pcolormesh(t_edges, y_edges, z.T, cmap="RdBu_r", vmin=-lim, vmax=lim,
+                             shading="flat")
+    fig.colorbar(mesh, ax=ax, label=label)
+    if _mark_episodes(ax, src, t_range, t):
+        ax.legend(loc="upper right", fontsize=8)
+    ax.set_xlabel(_label("time t", "snapshots", "t"))
+    ax.set_ylabel(_label("natural coordinate x (0: bottom)", "grid", "x"))
+    ax.set_xlim(t_edges[0], t_edges[-1])
+    return [ax]
+
+
+def _contact(src, fig, ax, *, t_range, **_):
+    d = src.diagnostics(("t", "u_bottom", "floor_force"))
+    t = d["t"]
+    if t.size == 0:
+        raise NothingToDraw("the run has no diagnostics (output.diagnostics_interval = 0); "
+                            "nothing to draw for kind 'contact'")
+    beta = src.config.floor.beta
+    if ax is None:
+        top, bottom = fig.subplots(2, 1, sharex=True)
+    else:
+        top, bottom = ax, ax.twinx()
+    top.plot(t, d["u_bottom"], color="C0", lw=1.0, label="bottom height u₀")
+    top.axhline(0.0, color="0.3", lw=0.8, ls="--", label="floor surface")
+    top.axhline(-beta, color="C3", lw=1.0, ls="-.", label=f"bending limit −β = {-beta:g}")
+    top.set_ylabel(_label("u₀", "diagnostics", "u_bottom"))
+    top.legend(loc="upper right", fontsize=8)
+    bottom.plot(t, d["floor_force"], color="C1", lw=1.0, label="floor force σ_b(u₀)")
+    bottom.set_ylabel(_label("σ_b", "diagnostics", "floor_force"))
+    if ax is None:
+        bottom.set_xlabel(_label("time t", "diagnostics", "t"))
+        bottom.legend(loc="upper right", fontsize=8)
+    else:
+        top.set_xlabel(_label("time t", "diagnostics", "t"))
+    _window(top, t, t_range)
+    return [top, bottom]

@@ -11,13 +11,15 @@ from ..config import parse_value
 from ..sweeps.grid import format_value
 from ..sweeps.point import SUMMARY_COLUMNS
 from ..sweeps.sweep_table import SweepTable, load_sweep
-from .mpl import new_figure
+from .mpl import NothingToDraw, new_figure, save
 
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
 
 KINDS = ("restitution", "heatmap")
 DEFAULT_QUANTITY = "restitution_first"
 MAX_LINES = 24
+MAX_PANELS = 6
+MARKERS = "osD^vP*X"   # one per line, so lines can be told apart without colour
 MAX_ANNOTATED = 15     # cells per side up to which a heatmap prints its values
 _SYMBOLS = {"rod.mu": "μ", "rod.kappa": "κ", "rod.gamma": "γ", "floor.kappa_b": "κ_b",
             "floor.beta": "β", "gravity.g": "g", "rod.N": "N", "initial.height": "height",
@@ -90,25 +92,53 @@ def _label(quantity: str) -> str:
     return f"{quantity}: {SUMMARY_COLUMNS[quantity][1]}"
 
 
-def _restitution(fig, table, quantity, x, at) -> None:
+def _check_values(table, quantity, mask) -> None:
+    """NothingToDraw when every value the figure would show is NaN."""
+    values = np.asarray(table[quantity], float)[mask]
+    if not np.any(np.isfinite(values)):
+        failed = int(np.sum(table["status"][mask] == "failed"))
+        raise NothingToDraw(f"every value of {quantity} in this figure is NaN ({values.size} "
+                            f"points, {failed} failed); nothing to draw")
+
+
+def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     grid = table.grid
     x = _check_key(grid, x, "--x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
+    if panels is not None:             # one panel per value of that key, side by side
+        _check_key(grid, panels, "--panels")
+        if panels == x or panels in (at or {}):
+            raise ValueError(f"--panels {panels} is already the x axis or fixed by --at")
+        if ax is not None:
+            raise ValueError("panels need a figure of their own (drop ax)")
+        values = grid.values[grid.keys.index(panels)]
+        if len(values) > MAX_PANELS:
+            raise ValueError(f"--panels {panels}: {len(values)} values are too many panels "
+                             f"(at most {MAX_PANELS})")
+        axes = fig.subplots(1, len(values), sharey=True, squeeze=False)[0]
+        for a, value in zip(axes, values):
+            _restitution(fig, table, quantity, x, {**(at or {}), panels: value}, a)
+        return
     fixed = _fixed(grid, at, (x,), default_first=False)
     others = [k for k in grid.keys if k != x and k not in fixed]
     combos = list(itertools.product(*(grid.values[grid.keys.index(k)] for k in others)))
     if len(combos) > MAX_LINES:
         raise ValueError(f"{len(combos)} lines (one per value of {', '.join(others)}) are too "
                          f"many to draw; fix some keys with --at KEY=VALUE")
-    ax = fig.add_subplot()
+    ax = ax or fig.add_subplot()
     xs = np.asarray(grid.values[grid.keys.index(x)])
     base = _select(table, fixed)
-    for combo in combos:
+    _check_values(table, quantity, base)
+    import matplotlib
+
+    colors = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.85, max(1, len(combos))))
+    for j, combo in enumerate(combos):
         mask = base & _select(table, dict(zip(others, combo)))
         order = np.argsort(table[x][mask])
         xv = np.asarray(table[x][mask])[order]
         yv = np.asarray(table[quantity][mask], float)[order]
         label = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in zip(others, combo))
-        ax.plot(xv, yv, "o-", ms=4, lw=1.0, label=label or None)
+        ax.plot(xv, yv, MARKERS[j % len(MARKERS)] + "-", ms=5, lw=1.0, color=colors[j],
+                label=label or None)
     _scale(ax.set_xscale, xs)
     ax.set_xlabel(_name(x) if _name(x) == x else f"{_name(x)} ({x})")
     ax.set_ylabel(quantity)
@@ -120,7 +150,7 @@ def _restitution(fig, table, quantity, x, at) -> None:
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
 
 
-def _heatmap(fig, table, quantity, x, y, at) -> None:
+def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
     grid = table.grid
     varied = [k for k, v in zip(grid.keys, grid.values) if len(v) > 1 and k not in (at or {})]
     prefer = [k for k in ("floor.kappa_b", "floor.beta") if k in varied]
@@ -139,11 +169,12 @@ def _heatmap(fig, table, quantity, x, y, at) -> None:
     z = np.full((len(ys), len(xs)), np.nan)
     status = np.full((len(ys), len(xs)), "pending", dtype=object)
     mask = _select(table, fixed)
+    _check_values(table, quantity, mask)
     for i in np.flatnonzero(mask):
         r, c = ys.index(table[y][i]), xs.index(table[x][i])
         z[r, c] = table[quantity][i]
         status[r, c] = table["status"][i]
-    ax = fig.add_subplot()
+    ax = ax or fig.add_subplot()
     mesh = ax.pcolormesh(np.ma.masked_invalid(z), cmap="viridis", shading="flat")
     ax.set_facecolor("0.85")
     fig.colorbar(mesh, ax=ax, label=quantity)
@@ -166,28 +197,31 @@ def _heatmap(fig, table, quantity, x, y, at) -> None:
 
 
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
-                 at=None):
-    """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable."""
+                 at=None, panels=None, ax=None, figsize=None):
+    """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable; with
+    ``ax``, drawn into that axes; ``panels`` (restitution): one panel per value of that
+    key.  NothingToDraw if every value shown would be NaN."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
     quantity = _check_quantity(quantity)
-    fig = new_figure(figsize=(7.5, 4.8), layout="constrained")
+    fig = ax.figure if ax is not None else new_figure(figsize=figsize or (7.5, 4.8),
+                                                      layout="constrained")
     if kind == "restitution":
         if y:
             raise ValueError("--y is for heatmaps")
-        _restitution(fig, table, quantity, x, at)
+        _restitution(fig, table, quantity, x, at, ax, panels)
     else:
-        _heatmap(fig, table, quantity, x, y, at)
-    name = Path(table.path).name if table.path else "sweep"
-    fig.suptitle(f"{name}: {len(table)} points, N = {table.base.rod.N}", fontsize=10)
+        if panels:
+            raise ValueError("--panels is for the restitution kind")
+        _heatmap(fig, table, quantity, x, y, at, ax)
+    if ax is None:
+        fig.suptitle(f"sweep of {len(table)} points, N = {table.base.rod.N}", fontsize=10)
     return fig
 
 
 def plot_sweep_file(path, output, kind: str = "restitution", *, dpi: int = 150,
-                    **options) -> Path:
-    """Draw figure ``kind`` of the sweep file ``path`` into the image file ``output``."""
-    fig = sweep_figure(path, kind, **options)
-    output = Path(output)
-    fig.savefig(output, dpi=dpi)
-    return output
+                    figsize=None, **options) -> Path:
+    """Draw figure ``kind`` of the sweep file ``path`` into the image file ``output`` (PNG,
+    PDF or SVG by its suffix)."""
+    return save(sweep_figure(path, kind, figsize=figsize, **options), output, dpi)

@@ -6,15 +6,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._extras import need
 from .bounces import bounce_table
 from .columns import DIAG_COLUMNS, EPISODE_COLUMNS
+from .datasets import run_dataset, strain_of
 from .extremes import Extremes
+from .overview import RunFacts
 from .sink import Sink
 
 __all__ = ["Result", "MemorySink"]
 
 
-@dataclass
+@dataclass(repr=False)
 class Result:
     """Everything a run produced.
 
@@ -54,6 +57,59 @@ class Result:
         ext = Extremes()
         ext.update(*(self.diagnostics[c] for c in Extremes.COLUMNS))
         return ext.energy_error(self.energy0)
+
+    # ---- showing it ---------------------------------------------------------------------
+    def facts(self) -> RunFacts:
+        """What ``repr``, ``_repr_html_`` and ``report`` print (``records.overview``)."""
+        ext = Extremes()
+        ext.update(*(self.diagnostics[c] for c in Extremes.COLUMNS))
+        ext = ext.with_bounces(self.bounces)
+        s = self.stats
+        return RunFacts(
+            name="rodjit.Result", status=self.status, message=self.message,
+            config=self.config, t_start=float(self.t[0]) if self.t.size else 0.0,
+            t=self.t_final, t_end=self.config.time.t_end, bounces=self.bounces,
+            n_episodes=int(self.episodes["t_start"].size),
+            energy_error=ext.energy_error(self.energy0),
+            min_strain=ext.strain_min if np.isfinite(ext.strain_min) else np.nan,
+            min_u0=ext.u0_min, steps=int(s.get("steps", 0)),
+            rejected=int(s.get("rejected_steps", 0)),
+            compile_time=float(s.get("compile_time", 0.0)),
+            run_time=float(s.get("run_time", 0.0)),
+            node_steps_per_second=float(s.get("node_steps_per_second", 0.0)))
+
+    def report(self, max_bounces: int | None = 20) -> str:
+        """The plain-text report ``rodjit run`` prints: bounces (at most ``max_bounces``
+        rows, None: all), energy, extremes, steps and timings."""
+        return self.facts().report(max_bounces)
+
+    def __repr__(self) -> str:
+        return self.facts().text()
+
+    def _repr_html_(self) -> str:
+        return self.facts().html()
+
+    # ---- converting it ------------------------------------------------------------------
+    def to_xarray(self):
+        """An ``xarray.Dataset``: ``u``, ``v`` on (``t``, ``x``), ``strain`` on (``t``,
+        ``x_segment``), the diagnostics on ``t_diag``, episodes along ``episode``, bounces
+        along ``bounce`` (``records.datasets``); every variable with units and long_name."""
+        return run_dataset(
+            x=self.x, t=self.t, u=self.u, v=self.v, strain=strain_of(self.u, self.x.size - 1),
+            diagnostics=self.diagnostics, episodes=self.episodes, bounces=self.bounces,
+            attrs={"status": self.status, "config_toml": self.config.to_toml()},
+            what="Result.to_xarray")
+
+    def to_pandas(self) -> dict:
+        """``{"diagnostics": DataFrame indexed by t, "bounces": DataFrame indexed by bounce
+        number (from 1), "episodes": DataFrame}``."""
+        pd = need("pandas", "analysis", "Result.to_pandas")
+        diag = pd.DataFrame(self.diagnostics).set_index("t")
+        bounces = pd.DataFrame(self.bounces,
+                               index=pd.RangeIndex(1, self.n_bounces + 1, name="bounce"))
+        episodes = pd.DataFrame(self.episodes)
+        episodes.index.name = "episode"
+        return {"diagnostics": diag, "bounces": bounces, "episodes": episodes}
 
 
 class MemorySink(Sink):

@@ -1,7 +1,9 @@
 """Parameter sweeps: a grid of configurations run on every core or on a Dask cluster, one
 summary row per point in one HDF5 file (``rodjit sweep`` on the command line)."""
 from .grid import Grid
-from .run_sweep import SweepInterrupted, SweepProgress, sweep
+from .main_guard import MissingMainGuard
+from .run_sweep import SweepFailed, SweepInterrupted, SweepProgress, sweep
 from .sweep_table import SweepTable, load_sweep
 
-__all__ = ["sweep", "Grid", "SweepTable", "load_sweep", "SweepInterrupted", "SweepProgress"]
+__all__ = ["sweep", "Grid", "SweepTable", "load_sweep", "SweepInterrupted", "SweepProgress",
+           "SweepFailed", "MissingMainGuard"]

@@ -18,15 +18,18 @@ from pathlib import Path
 import numpy as np
 
 from ..config import Config
+from ..driver.progress import close as close_progress
+from ..driver.progress import sweep_progress
 from ..driver.signals import StopFlag
 from ..output.h5files import FileBusy, check_output, writer_alive
 from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import Grid
+from .main_guard import check_main
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules
 from .sweep_table import SweepTable
 
-__all__ = ["sweep", "SweepInterrupted", "SweepProgress"]
+__all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
 
 FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
@@ -39,6 +42,15 @@ class SweepInterrupted(RuntimeError):
     def __init__(self, message: str, signum: int | None, table: SweepTable):
         super().__init__(message)
         self.signum = signum
+        self.table = table
+
+
+class SweepFailed(RuntimeError):
+    """Every point of a sweep failed; ``table`` holds their messages (and the file, if any,
+    was closed with them)."""
+
+    def __init__(self, message: str, table: SweepTable):
+        super().__init__(message)
         self.table = table
 
 
@@ -126,8 +138,9 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     core).  ``scheduler``: None/"processes" (local pool), "local" (a Dask LocalCluster of
     ``jobs`` workers), "tcp://HOST:PORT" (an existing Dask cluster) or "inline" (this
     process).  ``save_runs``: a directory for one full run file per point.  ``resume``:
-    continue ``output``, running only its pending and failed points.  ``progress(p)`` gets
-    a SweepProgress.  Bad input raises ValueError before anything is written; SIGINT or
+    continue ``output``, running only its pending and failed points.  ``progress``: True
+    for a bar (tqdm), or a callable ``progress(p)`` that gets a SweepProgress.  Bad input
+    raises ValueError before anything is written; SIGINT or
     SIGTERM raise SweepInterrupted after the file is closed with every finished point.
     """
     if config is not None and not isinstance(config, Config):
@@ -166,6 +179,8 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         table.stats = _stats(0.0, 0, 0, None)
         sweep_file.finish(output, "completed")
         return table
+    if scheduler != "inline":
+        check_main()
     t_start = time.perf_counter()
     first = grid.config(base, todo[0])
     # workers load the first point's kernels before they report ready, unless that means
@@ -221,6 +236,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     busy = False           # the last write found the file held by a reader
     last = time.monotonic()
     status, message, signum = "completed", "", None
+    progress = sweep_progress(progress)
     results = executor.results(tasks(), total=len(todo))
     with StopFlag(handle_signals) as stop:
         try:
@@ -261,6 +277,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         finally:
             results.close()
             executor.close(cancel=status != "completed")
+            close_progress(progress)
     now = time.perf_counter()
     table.stats = _stats(now - t0, ran, failed, executor, teardown=now - t_last)
     if status == "interrupted":
@@ -273,4 +290,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         sweep_file.finish(output, status, message)
     if status == "interrupted":
         raise SweepInterrupted(message, signum, table)
+    if table.counts["completed"] == 0 and table.counts["failed"] == n:
+        raise SweepFailed(f"every point of the sweep failed ({n}); the first: "
+                          f"{grid.describe(0)}: {cols['message'][0]}", table)
     return table

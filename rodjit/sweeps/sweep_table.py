@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._display import html_table, number, text
+from .._extras import need
 from ..records.bounces import empty_bounces
 from . import sweep_file
 from .grid import Grid, format_value
@@ -19,7 +21,15 @@ TABLE_COLUMNS = ("status", "n_bounces", "restitution_first", "restitution_mean",
                  "energy_error", "steps", "wall_time")
 
 
-@dataclass
+# units of the numeric summary columns (records.metadata's unit system)
+SUMMARY_UNITS = {"n_bounces": "1", "n_complete_bounces": "1", "restitution_first": "1",
+                 "restitution_mean": "1", "contact_time_first": "s", "min_u0": "m",
+                 "max_floor_force": "N", "min_strain": "1", "energy_error": "1",
+                 "steps": "1", "rejected_steps": "1", "wall_time": "s", "compile_time": "s",
+                 "run_time": "s", "t_final": "s"}
+
+
+@dataclass(repr=False)
 class SweepTable:
     """One row per grid point, in grid order: the swept keys, then ``SUMMARY_COLUMNS``.
 
@@ -69,15 +79,72 @@ class SweepTable:
 
     def to_pandas(self):
         """A pandas DataFrame, one row per point (index: the point number)."""
-        import pandas as pd
-
+        pd = need("pandas", "analysis", "SweepTable.to_pandas")
         df = pd.DataFrame(self.columns)
         df.index.name = "point"
         return df
 
+    def dimension_names(self) -> dict[str, str]:
+        """Swept key -> its dimension name in ``to_xarray``: a Python identifier (``rod.mu``
+        -> ``mu``; ``rod_mu`` when two keys share their last part)."""
+        last = [k.rpartition(".")[2] for k in self.grid.keys]
+        return {k: (short if last.count(short) == 1 else k.replace(".", "_"))
+                for k, short in zip(self.grid.keys, last)}
+
     def to_xarray(self):
-        """An xarray Dataset over the grid: one dimension per swept key."""
-        return self.to_pandas().set_index(list(self.grid.keys)).to_xarray()
+        """An xarray Dataset over the grid: one dimension per swept key, named by
+        ``dimension_names`` (``ds.sel(mu=10)``) with the full key as the ``key``
+        attribute; every summary column with its ``description`` (and ``units``)."""
+        xr = need("xarray", "analysis", "SweepTable.to_xarray")
+        dims = self.dimension_names()
+        shape = tuple(len(v) for v in self.grid.values)
+        coords = {dims[k]: (dims[k], np.asarray(values), {"key": k, "long_name": k})
+                  for k, values in zip(self.grid.keys, self.grid.values)}
+        data = {}
+        for name, values in self.columns.items():
+            if name in self.grid.keys:
+                continue
+            kind, description = SUMMARY_COLUMNS.get(name, ("", ""))
+            attrs = {"long_name": name, "description": description}
+            if name in SUMMARY_UNITS:
+                attrs["units"] = SUMMARY_UNITS[name]
+            data[name] = (tuple(dims[k] for k in self.grid.keys),
+                          np.asarray(values).reshape(shape), attrs)
+        return xr.Dataset(data, coords, {"status": self.status, "points": len(self),
+                                         "base_config_toml": self.base.to_toml(),
+                                         **({"source": self.path} if self.path else {})})
+
+    # ---- showing it ---------------------------------------------------------------------
+    def _overview(self) -> tuple[str, list[tuple[str, str]]]:
+        c = self.counts
+        title = (f"rodjit.SweepTable: {self.status}, {len(self)} points ({c['completed']} "
+                 f"completed, {c['failed']} failed, {c['pending']} not run)")
+        b = self.base
+        rows = [(k, ", ".join(format_value(v) for v in values))
+                for k, values in zip(self.grid.keys, self.grid.values)]
+        rows.append(("base", f"N = {b.rod.N}, mu = {b.rod.mu:g}, {b.time.integrator}, "
+                             f"t_end = {b.time.t_end:g} s"))
+        for name in ("restitution_first", "energy_error", "steps", "wall_time"):
+            values = np.asarray(self.columns[name], float)
+            finite = values[np.isfinite(values)]
+            if name == "wall_time" and finite.size:
+                text = f"{finite.sum():.3g} s in all"
+            elif finite.size:
+                text = f"{number(finite.min())} to {number(finite.max())}"
+            else:
+                text = "-"
+            rows.append((name, text))
+        if self.path:
+            rows.append(("file", self.path))
+        if self.message:
+            rows.append(("message", self.message))
+        return title, rows
+
+    def __repr__(self) -> str:
+        return text(*self._overview())
+
+    def _repr_html_(self) -> str:
+        return html_table(*self._overview())
 
     def report(self, max_rows: int | None = None) -> str:
         """The table as text: one line per point, then the failures' messages."""

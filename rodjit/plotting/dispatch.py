@@ -1,0 +1,35 @@
+"""``rodjit.plot``: one entry point for every figure, whatever the run or sweep is held in."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..output.h5files import file_kind
+from ..records.result import Result
+from ..sweeps.sweep_table import SweepTable
+from . import run, sweep
+
+__all__ = ["plot"]
+
+
+def plot(obj, kind: str | None = None, ax=None, **style):
+    """Draw ``obj`` — a ``Result``, a run file path, a sweep file path or a ``SweepTable``
+    — as figure ``kind`` (runs: ``run.KINDS``, default heights; sweeps: ``sweep.KINDS``,
+    default restitution) and return the matplotlib Figure (inline in Jupyter).  With
+    ``ax``, the figure is drawn into that axes.  ``style``: the figure's options
+    (runs: quantity, t_range, figsize; sweeps: quantity, x, y, at, figsize)."""
+    if isinstance(obj, SweepTable):
+        is_run = False
+    elif isinstance(obj, Result):
+        is_run = True
+    elif isinstance(obj, (str, Path)):
+        is_run = file_kind(obj) == "run"
+    else:
+        raise TypeError(f"rodjit.plot draws a Result, a SweepTable or a run or sweep file "
+                        f"path, not {type(obj).__name__}")
+    kinds = run.KINDS if is_run else sweep.KINDS
+    if kind is not None and kind not in kinds:
+        raise ValueError(f"kind = {kind!r} is not allowed for a {'run' if is_run else 'sweep'}"
+                         f" (one of {', '.join(kinds)})")
+    if is_run:
+        return run.figure(obj, kind or "heights", ax=ax, **style)
+    return sweep.sweep_figure(obj, kind or "restitution", ax=ax, **style)

@@ -1,0 +1,77 @@
+"""The script-without-guard check: worker processes are started by *spawn*, which imports
+the user's main script again in every worker.  A script that calls ``rodjit.sweep`` at its
+top level, outside ``if __name__ == "__main__":``, would start a sweep inside every worker
+(multiprocessing forbids it and the worker dies), so every point failed.  ``check_main``
+finds that before any worker starts and says what to add."""
+from __future__ import annotations
+
+import ast
+import multiprocessing
+import sys
+
+__all__ = ["MissingMainGuard", "check_main"]
+
+ADVICE = ('put the code that calls rodjit.sweep under  if __name__ == "__main__":  in {where} '
+          '(worker processes import the main script again), or use jobs=1, scheduler="inline"')
+
+
+class MissingMainGuard(RuntimeError):
+    """``rodjit.sweep`` with worker processes was called from a script's top level outside
+    ``if __name__ == "__main__":``."""
+
+
+def _is_main_test(node) -> bool:
+    """``__name__ == "__main__"`` (either order)."""
+    if not (isinstance(node, ast.Compare) and len(node.ops) == 1
+            and isinstance(node.ops[0], ast.Eq)):
+        return False
+    sides = [node.left, node.comparators[0]]
+    names = [s for s in sides if isinstance(s, ast.Name) and s.id == "__name__"]
+    consts = [s for s in sides if isinstance(s, ast.Constant) and s.value == "__main__"]
+    return bool(names and consts)
+
+
+def _guarded(source: str, line: int) -> bool:
+    """Whether line ``line`` of the module ``source`` lies inside a top-level
+    ``if __name__ == "__main__":`` block (True also when the source cannot be parsed: the
+    check then stays out of the way)."""
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return True
+    for stmt in tree.body:
+        if stmt.lineno <= line <= (stmt.end_lineno or stmt.lineno):
+            return isinstance(stmt, ast.If) and _is_main_test(stmt.test) and \
+                any(s.lineno <= line <= (s.end_lineno or s.lineno) for s in stmt.body)
+    return True
+
+
+def check_main() -> None:
+    """Raise MissingMainGuard when this call comes (through any functions) from the top
+    level of the main script outside its ``__main__`` guard, or from a worker's re-import
+    of that script."""
+    if multiprocessing.parent_process() is not None and "__mp_main__" in sys.modules:
+        main = sys.modules["__mp_main__"]
+        raise MissingMainGuard("rodjit.sweep was started again inside a worker process: "
+                               + ADVICE.format(where=getattr(main, "__file__", "the script")))
+    main = sys.modules.get("__main__")
+    path = getattr(main, "__file__", None)
+    if main is None or path is None:           # interactive, notebook, python -c
+        return
+    spec = getattr(main, "__spec__", None)
+    if spec is not None and spec.name.endswith(".__main__"):   # python -m package: spawn
+        return                                                 # does not import it again
+    frame = sys._getframe(1)
+    while frame is not None:
+        if frame.f_globals is main.__dict__ and frame.f_code.co_name == "<module>":
+            try:
+                with open(path, encoding="utf-8") as fh:
+                    source = fh.read()
+            except OSError:
+                return
+            if not _guarded(source, frame.f_lineno):
+                raise MissingMainGuard(f"rodjit.sweep with worker processes was called at the "
+                                       f"top level of {path} (line {frame.f_lineno}): "
+                                       + ADVICE.format(where="the script"))
+            return
+        frame = frame.f_back

@@ -1,0 +1,79 @@
+"""One progress facility (tqdm) for runs, run files, sweeps and the command line; user
+callables keep working; the first compile is announced."""
+from __future__ import annotations
+
+import pytest
+from click.testing import CliRunner
+
+import rodjit
+from rodjit.cli import main
+from rodjit.driver import progress as P
+
+CFG = rodjit.Config().override({"time.t_end": 0.3})
+
+
+def test_simulate_with_a_bar(capsys):
+    r = rodjit.simulate(CFG, progress=True)
+    err = capsys.readouterr().err
+    assert r.status == "completed"
+    assert "run: 100%" in err and "t = 0.3 / 0.3 s" in err
+
+
+def test_callables_still_get_the_run(tmp_path):
+    long = CFG.override({"time.t_end": 5.0, "rod.N": 40})   # many compiled chunks
+    seen = []
+    rodjit.simulate(long, progress=lambda run: seen.append(run.t))
+    assert seen and seen == sorted(seen) and 0 < seen[-1] < 5.0
+    seen.clear()
+    rodjit.run_to_file(CFG, tmp_path / "r.h5", progress=lambda run: seen.append(run.t))
+    assert seen
+
+
+def test_run_to_file_resume_and_sweep_with_bars(tmp_path, capsys):
+    rodjit.run_to_file(CFG, tmp_path / "r.h5", progress=True)
+    assert "run: 100%" in capsys.readouterr().err
+    rodjit.resume_file(tmp_path / "r.h5", t_end=0.5, progress=True)
+    assert "t = 0.5 / 0.5 s" in capsys.readouterr().err
+    rodjit.sweep(CFG, {"rod.mu": [0, 1]}, scheduler="inline", progress=True)
+    err = capsys.readouterr().err
+    assert "sweep: 2/2 points" in err and "100%" in err and "0 failed" in err
+
+
+def test_a_cold_cache_is_announced(monkeypatch, capsys):
+    monkeypatch.setattr(P, "kernels_cold", lambda: True)
+    bar = P.RunBar()
+    bar.bar.refresh()
+    assert P.COMPILING in capsys.readouterr().err
+    bar.close()
+
+
+def test_kernels_cold_reads_the_numba_cache():
+    rodjit.simulate(CFG)                 # compiled and cached by now
+    assert P.kernels_cold() is False
+
+
+def test_cli_progress_flags(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    runner = CliRunner()
+    r = runner.invoke(main, ["run", "--set", "time.t_end=0.3", "-o", "a.h5", "--progress"])
+    assert r.exit_code == 0, r.output
+    assert "run: 100%" in r.stderr
+    r = runner.invoke(main, ["run", "--set", "time.t_end=0.3", "-o", "b.h5", "--no-progress"])
+    assert r.exit_code == 0 and "100%" not in r.stderr
+    monkeypatch.setattr(P, "kernels_cold", lambda: True)
+    r = runner.invoke(main, ["run", "--set", "time.t_end=0.3", "-o", "c.h5", "--progress"])
+    assert r.stderr.startswith(P.COMPILING + "\n")
+    r = runner.invoke(main, ["sweep", "--set", "time.t_end=0.3", "--grid", "rod.mu=0,1",
+                             "--scheduler", "inline", "-o", "s.h5", "--progress"])
+    assert r.exit_code == 0, r.output
+    assert "2/2 points" in r.stderr
+
+
+def test_cli_sweep_whose_points_all_failed_exits_1(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["sweep", "--set", "time.dt=1e-3", "--set",
+                                  "initial.velocity=-100", "--set", "time.t_end=0.5",
+                                  "--grid", "rod.mu=0,1", "--scheduler", "inline",
+                                  "-o", "s.h5"])
+    assert r.exit_code == 1
+    assert "every point of the sweep failed (2)" in r.stderr
