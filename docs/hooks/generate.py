@@ -18,9 +18,8 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import inspect
+import sys
 from pathlib import Path
-
-from mkdocs.structure.files import File
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -42,25 +41,52 @@ def public_modules() -> list[str]:
     return names
 
 
+def _defined_in_source(module: str, name: str) -> bool:
+    """Whether ``def name``/``class name`` is written in the file of ``module`` in rodjit
+    (not made at run time, not from a dependency), so mkdocstrings can find it there."""
+    file = getattr(sys.modules.get(module), "__file__", None)
+    stem = ROOT.joinpath(*module.split("."))
+    if not file or Path(file).resolve() not in (stem.with_suffix(".py"), stem / "__init__.py"):
+        return False
+    text = Path(file).read_text()
+    return f"def {name}(" in text or f"class {name}(" in text or f"class {name}:" in text
+
+
+def api_objects(module: str) -> list[tuple[str, str]]:
+    """``(public name, path of its definition)`` for each name in the module's ``__all__``.
+
+    Functions and classes are documented where they are defined (a package may re-export
+    the function ``converge`` of its submodule ``converge``; the definition's path is
+    unambiguous); constants under the module that exports them.
+    """
+    mod = importlib.import_module(module)
+    out = []
+    for n in getattr(mod, "__all__", []):
+        obj = getattr(mod, n)
+        if inspect.ismodule(obj) or n == "__version__":
+            continue
+        defined = getattr(obj, "__module__", None)
+        qual = getattr(obj, "__qualname__", None)
+        if ((inspect.isclass(obj) or inspect.isfunction(obj)) and defined and qual
+                and "<locals>" not in qual and _defined_in_source(defined, qual)):
+            out.append((n, f"{defined}.{qual}"))
+        else:
+            out.append((n, f"{module}.{n}"))
+    return out
+
+
 def api_page(module: str) -> str:
     mod = importlib.import_module(module)
-    summary = (inspect.getdoc(mod) or "").split("\n\n")[0]
-    if module == "rodjit":
-        body = ["# `rodjit`", "", summary, "",
-                "The names below are `rodjit.__all__`, the package's public interface.", ""]
-        import rodjit
-        for n in rodjit.__all__:
-            obj = getattr(rodjit, n)
-            if inspect.ismodule(obj):
-                body += [f"- [`rodjit.{n}`]({obj.__name__}.md) (module)"]
-        body += ["", "::: rodjit", "    options:",
-                 "      members: " + repr([n for n in rodjit.__all__
-                                           if not inspect.ismodule(getattr(rodjit, n))
-                                           and n != "__version__"]),
-                 "      show_root_heading: false", ""]
-        return "\n".join(body)
-    return "\n".join([f"# `{module}`", "", f"::: {module}", "    options:",
-                      "      show_root_heading: false", ""])
+    doc = inspect.getdoc(mod) or ""
+    body = [f"# `{module}`", "", doc, ""]
+    subs = [getattr(mod, n).__name__ for n in getattr(mod, "__all__", [])
+            if inspect.ismodule(getattr(mod, n))]
+    if subs:
+        body += ["Modules: " + ", ".join(f"[`{m}`]({m}.md)" for m in subs), ""]
+    for name, path in api_objects(module):
+        body += [f"::: {path}", "    options:", "      show_root_heading: true",
+                 "      show_root_full_path: false", "      heading_level: 2", ""]
+    return "\n".join(body)
 
 
 def _fmt_default(value) -> str:
@@ -127,6 +153,7 @@ def integrator_table() -> str:
 
 
 def on_files(files, config):
+    from mkdocs.structure.files import File
     files.append(File.generated(config, "reference/configuration.md",
                                 content=configuration_page()))
     for module in public_modules():
