@@ -102,7 +102,8 @@ def test_configuration_reference_lists_every_key_with_range_default_and_unit():
                 "unset" if default is None else f"`{default}`") in line, key
         unit = getattr(spec, "unit", None)
         cells = [c.strip() for c in line.split("|")]
-        assert cells[3] == (f"`{unit}`" if unit else "—"), key
+        assert cells[3] == (("1 (dimensionless)" if unit == "1" else f"`{unit}`")
+                            if unit else "—"), key
         meaning = getattr(spec, "meaning", None)
         if meaning:
             assert meaning in line, key

@@ -134,7 +134,7 @@ def configuration_page() -> str:
             out += ["", f"## `[{section}]`", "", r["section_doc"], "",
                     "| key | meaning | unit | type and range | default |",
                     "|---|---|---|---|---|"]
-        unit = f"`{r['unit']}`" if r["unit"] else "—"
+        unit = ("1 (dimensionless)" if r["unit"] == "1" else f"`{r['unit']}`") if r["unit"] else "—"
         rng = r["range"].replace("|", "\\|")
         out.append(f"| `{r['key']}` | {r['meaning'] or '—'} | {unit} | {rng} | {r['default']} |")
     return "\n".join(out) + "\n"
