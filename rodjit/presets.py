@@ -36,4 +36,21 @@ def preset_path(name: str):
 
 
 def load_preset(name: str) -> Config:
+    """The shipped configuration ``name`` (``data/<name>.toml``).
+
+    Parameters
+    ----------
+    name : str
+        One of ``preset_names()`` (``paper-mu0``, ``paper-mu100``, ...).
+
+    Returns
+    -------
+    Config
+        The preset's configuration, defaults filled in.
+
+    Raises
+    ------
+    ValueError
+        ``name`` is not a preset (the message lists the presets).
+    """
     return Config.from_toml_string(preset_path(name).read_text())

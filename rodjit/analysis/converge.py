@@ -161,7 +161,12 @@ class Convergence:
 
 def load_convergence(path) -> dict:
     """Read a convergence file back as the dictionary of ``Convergence.to_dict`` (config
-    as TOML text)."""
+    as TOML text).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A file written by ``Convergence.save`` or ``rodjit converge``."""
     import h5py
 
     with h5py.File(path, "r") as f:

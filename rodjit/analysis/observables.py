@@ -396,7 +396,16 @@ def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
 
 def observables(result, merge_time: float | None = None) -> dict:
     """The scalar OBSERVABLES of a Result, with ``status`` and ``reason`` of the first
-    macroscopic contact."""
+    macroscopic contact.
+
+    Parameters
+    ----------
+    result : Result
+        A run, from ``simulate`` or ``load_file``.
+    merge_time : float, optional
+        Contact episodes closer than this (s) count as one macroscopic contact; by default
+        a few periods of the rod's highest mode (``physics_of``).
+    """
     phys = physics_of(result, merge_time)
     d = result.diagnostics
     fi = first_impact(d, result.episodes, result.bounces, phys)

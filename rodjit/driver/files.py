@@ -48,14 +48,43 @@ def run_to_file(config, path, *, overwrite: bool = False,
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
-    ``t_end`` overrides ``time.t_end``; ``progress``: True for a bar (tqdm), or ``progress(run)`` is called
-    between compiled calls;
-    ``command`` is recorded in the file (default: this call); ``overlap`` (default
-    ``OVERLAP``) computes in a worker thread while writing, False keeps to one thread (the
-    file is the same bit for bit).  Bad input raises ValueError
-    before anything is written.  A failure raises SimulationError and an interruption
-    (SIGINT/SIGTERM, caught while ``handle_signals``) raises RunInterrupted, both after
-    the file is closed with its status and a checkpoint; both carry ``summary``.
+    Parameters
+    ----------
+    config : Config or None
+        The run; ``None`` is ``Config()``.
+    path : str or os.PathLike
+        The run file to write.
+    overwrite : bool
+        Replace an existing file (otherwise ``OutputExists`` is raised).
+    command : str, optional
+        The command line recorded in the file (default: this call).
+    progress : bool or callable, optional
+        True for a progress bar (tqdm; a widget in notebooks, saying when the kernels are
+        first compiled), or a callable: ``progress(run)`` is called between compiled calls.
+    t_end : float, optional
+        Overrides ``time.t_end``.
+    flush_interval : float
+        Wall-clock seconds between saves of data and checkpoint.
+    handle_signals : bool
+        Catch SIGINT/SIGTERM, stop between two compiled calls and checkpoint.
+    overlap : bool, optional
+        Compute in a worker thread while writing (default ``OVERLAP``); False keeps to one
+        thread.  The file is the same bit for bit.
+
+    Returns
+    -------
+    RunSummary
+        What ``rodjit run`` prints at the end (``.report()``).
+
+    Raises
+    ------
+    ValueError
+        Bad input, before anything is written.
+    SimulationError
+        The run failed; raised after the file is closed with its status and a checkpoint,
+        and carries ``summary``.
+    RunInterrupted
+        SIGINT/SIGTERM while ``handle_signals``; likewise after the file is closed.
     """
     if config is None:
         config = Config()
@@ -82,6 +111,15 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
 
     A file whose writer was killed (SIGKILL, power loss) is first rebuilt from its last
     checkpoint.  Errors and return value as in ``run_to_file``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The run file to continue.
+    t_end : float, optional
+        The new end time (default: the file's ``time.t_end``).
+    command, progress, flush_interval, handle_signals, overlap
+        As in ``run_to_file``.
     """
     path = Path(path)
     _check_interval(flush_interval)

@@ -14,11 +14,28 @@ __all__ = ["simulate"]
 def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
     """Run ``config`` (default: the built-in run) to ``time.t_end`` and return the Result.
 
-    ``u0``, ``v0`` optionally give initial heights and velocities (length ``rod.N + 1``).
-    ``progress``: True for a progress bar (tqdm; a widget in notebooks, saying when the
-    kernels are first compiled), or a callable, ``progress(run)``, called between
-    compiled chunks.  Invalid input raises ValueError;
-    a run that cannot continue raises SimulationError carrying the partial ``result``.
+    Parameters
+    ----------
+    config : Config, optional
+        The run; ``None`` is ``Config()``, the built-in default.
+    u0, v0 : array_like, optional
+        Initial heights and velocities of the nodes (length ``rod.N + 1``); by default
+        the uniform state of ``config.initial``.
+    progress : bool or callable, optional
+        True for a progress bar (tqdm; a widget in notebooks, saying when the kernels are
+        first compiled), or a callable: ``progress(run)`` is called between compiled chunks.
+
+    Returns
+    -------
+    Result
+        Snapshots, diagnostics, contact episodes, bounces and run statistics, in memory.
+
+    Raises
+    ------
+    ValueError
+        Invalid input (before anything runs).
+    SimulationError
+        A run that cannot continue; it carries the partial ``result``.
     """
     if config is None:
         config = Config()

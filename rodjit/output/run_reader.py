@@ -51,7 +51,14 @@ def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str,
 
 
 def load_file(path):
-    """Read a whole run file into a ``rodjit.Result`` (the same object ``simulate`` returns)."""
+    """Read a whole run file into a ``rodjit.Result`` (the same object ``simulate`` returns).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A run file written by ``rodjit run`` or ``run_to_file``, also one still being
+        written or whose writer was killed.
+    """
     with open_file(path) as f:
         check_run_file(f, path)
         config = read_config(f)

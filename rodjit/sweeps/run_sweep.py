@@ -133,15 +133,50 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     """Run ``config`` (None: the built-in run) at every point of ``grid`` and return the
     summary table; with ``output``, stream it to that sweep file as points finish.
 
-    ``grid``: ``{"rod.mu": [0, 1, 10], "floor.kappa_b": "logspace(3, 5, 3)", ...}`` (any
-    configuration key; the Cartesian product).  ``jobs``: worker processes (default: every
-    core).  ``scheduler``: None/"processes" (local pool), "local" (a Dask LocalCluster of
-    ``jobs`` workers), "tcp://HOST:PORT" (an existing Dask cluster) or "inline" (this
-    process).  ``save_runs``: a directory for one full run file per point.  ``resume``:
-    continue ``output``, running only its pending and failed points.  ``progress``: True
-    for a bar (tqdm), or a callable ``progress(p)`` that gets a SweepProgress.  Bad input
-    raises ValueError before anything is written; SIGINT or
-    SIGTERM raise SweepInterrupted after the file is closed with every finished point.
+    Parameters
+    ----------
+    config : Config or None
+        The base configuration every point starts from; ``None`` is ``Config()``.
+    grid : mapping
+        Configuration key -> values: a list, or ``"linspace(a, b, n)"`` /
+        ``"logspace(a, b, n)"``, e.g. ``{"rod.mu": [0, 1, 10], "floor.kappa_b":
+        "logspace(3, 5, 3)"}``; the points are the Cartesian product, the last key varying
+        fastest.
+    output : str or os.PathLike, optional
+        The sweep file to write.
+    jobs : int, optional
+        Worker processes (default: every core).
+    scheduler : str, optional
+        None or ``"processes"`` (a local pool), ``"local"`` (a Dask LocalCluster of
+        ``jobs`` workers), ``"tcp://HOST:PORT"`` (an existing Dask cluster) or
+        ``"inline"`` (this process).
+    save_runs : str or os.PathLike, optional
+        A directory for one full run file per point.
+    resume : bool
+        Continue ``output``, running only its pending and failed points.
+    overwrite : bool
+        Replace an existing ``output``.
+    progress : bool or callable, optional
+        True for a progress bar (tqdm), or a callable: ``progress(p)`` gets a SweepProgress
+        as points finish.
+    command : str, optional
+        The command line recorded in the file.
+    handle_signals : bool
+        Catch SIGINT/SIGTERM and close the file with every finished point.
+    flush_interval : float
+        Wall-clock seconds between writes of finished points.
+
+    Returns
+    -------
+    SweepTable
+        One summary row per point, and each point's bounce table.
+
+    Raises
+    ------
+    ValueError
+        Bad input (any point), before anything is written.
+    SweepInterrupted
+        SIGINT or SIGTERM, after the file is closed with every finished point.
     """
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")

@@ -204,7 +204,13 @@ def _cell(value, column: str) -> str:
 
 
 def load_sweep(path) -> SweepTable:
-    """Read a sweep file's summary table (also while the sweep is still running)."""
+    """Read a sweep file's summary table (also while the sweep is still running).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A sweep file written by ``rodjit sweep`` or ``rodjit.sweep``.
+    """
     with sweep_file.open_sweep(path) as f:
         header = sweep_file.read_header(f)
         columns = sweep_file.read_summary(f)
