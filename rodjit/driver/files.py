@@ -17,6 +17,7 @@ from pathlib import Path
 from ..config import Config
 from ..output import run_writer
 from ..output.h5files import FileBusy, OutputExists, check_output, open_file, writer_alive
+from ..output.lock import WriterLock
 from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
@@ -61,12 +62,15 @@ def run_to_file(config, path, *, overwrite: bool = False,
     if t_end is not None:
         config = config.override({"time.t_end": t_end})
     _check_interval(flush_interval)
-    path = check_output(path, overwrite)
+    path = check_output(path, overwrite, "run")
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
-    with StopFlag(handle_signals) as stop:
+    # the writer lock, held from the last check until the file is closed: no second
+    # writer can create, replace or resume the file meanwhile
+    with WriterLock(path), StopFlag(handle_signals) as stop:
+        check_output(path, overwrite, "run", held=True)   # again, now that no one else can write it
         return _drive(run, lambda: run_writer.create_run_file(path, config, first, command=command),
                       path, progress, flush_interval, stop, overlap)
 
@@ -82,12 +86,22 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
     """
     path = Path(path)
     _check_interval(flush_interval)
+    if not path.is_file():
+        open_file(path).close()      # the one-line reason: missing, a directory, ...
+    with WriterLock(path):
+        return _resume_locked(path, t_end, command, progress, flush_interval,
+                              handle_signals, overlap)
+
+
+def _resume_locked(path: Path, t_end, command, progress, flush_interval,
+                   handle_signals, overlap) -> RunSummary:
+    """``resume_file`` once this process holds the writer lock of ``path``."""
     with open_file(path) as f:
         check_run_file(f, path)
         config = read_config(f)
         ck = read_checkpoint(f)
         needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
-        alive = writer_alive(f) if needs_recovery else False
+        alive = writer_alive(f, lock=False) if needs_recovery else False
         pid, host = f.attrs.get("writer_pid"), f.attrs.get("writer_host")
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import h5py
 
+from .lock import FileBusy, is_locked
+
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "writer_alive", "is_live", "check_output"]
@@ -21,10 +23,6 @@ __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", 
 
 class NotARunFile(ValueError):
     """The path is not a rodjit run file (missing, not HDF5, or another kind of file)."""
-
-
-class FileBusy(ValueError):
-    """Another process holds the file (a live writer, or a reader blocking a write)."""
 
 
 class OutputExists(ValueError):
@@ -118,8 +116,13 @@ def writer_attrs() -> dict:
             "writer_tag": process_tag(pid)}
 
 
-def writer_alive(f: h5py.File) -> bool | None:
-    """Is the process that last wrote ``f`` still running?  None if it ran on another host."""
+def writer_alive(f: h5py.File, lock: bool = True) -> bool | None:
+    """Is the process that last wrote ``f`` still running?  True if a process holds the
+    file's writer lock (``output.lock``; skipped with ``lock=False``, for the holder
+    itself); otherwise judged from the host, pid and start tag recorded in the file (files
+    of rodjit versions without the lock); None if it ran on another host."""
+    if lock and is_locked(f.filename):
+        return True
     if f.attrs.get("writer_host") != socket.gethostname():
         return None
     pid = int(f.attrs.get("writer_pid", -1))
@@ -135,19 +138,22 @@ def writer_alive(f: h5py.File) -> bool | None:
     return not tag or process_tag(pid) in ("", tag)
 
 
-def is_live(path) -> bool:
+def is_live(path, lock: bool = True) -> bool:
     """True if ``path`` is a rodjit file (a run or a sweep) whose writer is still running
-    on this host."""
+    on this host (``lock=False``: the caller holds the writer lock; judge by the file)."""
     try:
         with open_file(path) as f:
-            return f.attrs.get("status") == "running" and writer_alive(f) is True
+            return f.attrs.get("status") == "running" and writer_alive(f, lock) is True
     except (ValueError, OSError):
-        return False
+        return lock and is_locked(path)
 
 
-def check_output(path, overwrite: bool) -> Path:
+def check_output(path, overwrite: bool, kind: str | None = None, held: bool = False) -> Path:
     """Raise ValueError (one line) unless ``path`` can be created or replaced: its directory
-    exists and is writable, and it is not the file of a live writer."""
+    exists and is writable, it is not the file of a live writer, and (given ``kind``) an
+    existing file is replaced only if it is a rodjit file of that kind (or empty): never a
+    configuration, an image or anyone else's data.  ``held``: the caller holds the writer
+    lock of ``path`` (``output.lock``)."""
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.exists():
@@ -162,7 +168,16 @@ def check_output(path, overwrite: bool) -> Path:
         if not overwrite:
             raise OutputExists(f"output file {str(path)!r} already exists; pass "
                                f"overwrite=True to replace it")
-        if is_live(path):
+        if is_live(path, lock=not held):
             raise FileBusy(f"output file {str(path)!r} is being written by a running "
                            f"rodjit process; stop it before replacing the file")
+        if kind is not None and path.stat().st_size > 0:
+            try:
+                found = file_kind(path)
+            except (ValueError, OSError):
+                found = None
+            if found != kind:
+                what = f"a rodjit {found} file" if found else "not a rodjit file"
+                raise ValueError(f"output file {str(path)!r} is {what}; --overwrite replaces "
+                                 f"only rodjit {kind} files: choose another output path")
     return path

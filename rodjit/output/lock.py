@@ -1,0 +1,104 @@
+"""One writer per file: an advisory lock of rodjit's own, held for a whole write.
+
+HDF5's own file lock is dropped once a file is in SWMR mode, and ``--overwrite`` truncates
+or replaces the file, so neither can keep a second writer out.  rodjit therefore takes
+``fcntl.flock`` on a lock file beside the output, ``.NAME.lock`` in the same directory
+(``run.h5`` -> ``.run.h5.lock``), before it checks, creates, replaces, recovers or reopens
+the output, and holds it until the file is closed.  A second writer (run, resume, sweep)
+finds the lock taken and is refused with FileBusy before it touches anything.
+
+The lock file is left in place when the writer ends: removing it would let a process that
+opened it just before the removal lock an inode nobody else sees.  It holds no data; the
+kernel drops the lock when the process dies, whatever the way (SIGKILL included), so a
+left-over lock file never blocks anyone.
+"""
+from __future__ import annotations
+
+import fcntl
+import os
+from pathlib import Path
+
+__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked"]
+
+
+class FileBusy(ValueError):
+    """Another process holds the file (a live writer, or a reader blocking a write)."""
+
+
+def lock_path(path) -> Path:
+    """The lock file of the output ``path``: ``.NAME.lock`` beside it."""
+    path = Path(path)
+    return path.with_name(f".{path.name}.lock")
+
+
+class WriterLock:
+    """``with WriterLock(path):`` holds the writer lock of ``path`` (FileBusy if another
+    process holds it).  Not re-entrant across open file descriptions: one per write."""
+
+    def __init__(self, path):
+        self.path = Path(path)
+        self.fd: int | None = None
+
+    def acquire(self) -> "WriterLock":
+        lp = lock_path(self.path)
+        try:
+            fd = os.open(lp, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+        except OSError as exc:
+            raise ValueError(f"cannot create the lock file {str(lp)!r} beside the output: "
+                             f"{exc.strerror}") from None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = _holder(fd)
+            os.close(fd)
+            raise FileBusy(f"{str(self.path)!r} is being written by "
+                           f"{f'process {holder}' if holder else 'another process'} (a running "
+                           f"rodjit); wait for it to finish or stop it") from None
+        except OSError:            # a file system without flock: fall back on HDF5's checks
+            pass
+        try:                       # who holds it, for the message a second writer gets
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        except OSError:
+            pass
+        self.fd = fd
+        return self
+
+    def release(self) -> None:
+        if self.fd is not None:
+            os.close(self.fd)      # closing the description drops the lock
+            self.fd = None
+
+    def __enter__(self):
+        return self.acquire()
+
+    def __exit__(self, *exc):
+        self.release()
+
+
+def _holder(fd: int) -> str:
+    """The process id the lock file's holder wrote into it ("" if none)."""
+    try:
+        text = os.pread(fd, 32, 0).decode().strip()
+    except (OSError, UnicodeDecodeError):
+        return ""
+    return text if text.isdigit() else ""
+
+
+def is_locked(path) -> bool:
+    """True if some process (this one included, through another descriptor) holds the
+    writer lock of ``path``."""
+    lp = lock_path(path)
+    try:
+        fd = os.open(lp, os.O_RDONLY | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH | fcntl.LOCK_NB)
+        return False
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    finally:
+        os.close(fd)
