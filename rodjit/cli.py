@@ -10,6 +10,7 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
+import re
 import shlex
 import sys
 import time
@@ -21,14 +22,40 @@ EXIT_USAGE = 2
 DEFAULT_OUTPUT = "default.h5"
 
 
+_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
+
+
+def _quiet_disk_errors(unraisable) -> None:
+    """Errors h5py raises while releasing the handles of a file the disk refused (full, a
+    size limit) cannot be acted on, and the one-line error already says what happened."""
+    if not _DISK_ERRNO.search(str(unraisable.exc_value)):
+        sys.__unraisablehook__(unraisable)
+
+
+def _quiet_disk_tracebacks(kind, value, tb) -> None:
+    """The same errors, as h5py's compiled deallocators print them (through excepthook)."""
+    if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
+        sys.__excepthook__(kind, value, tb)
+
+
+sys.unraisablehook = _quiet_disk_errors
+sys.excepthook = _quiet_disk_tracebacks
+
+
 class UsageError(click.ClickException):
     """One line on stderr, exit code 2; raised before anything is written."""
 
     exit_code = EXIT_USAGE
 
+    def __init__(self, message):
+        super().__init__(one_line(message))
+
 
 class RunFailed(click.ClickException):
     exit_code = 1
+
+    def __init__(self, message):
+        super().__init__(one_line(message))
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -189,10 +216,32 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         raise UsageError(str(exc)) from None
     except OSError as exc:          # the disk failed us during the run (full, removed, ...)
         _close(progress)
-        raise RunFailed(f"{exc}; the file keeps its last checkpoint") from None
+        _disk_failed(exc)
     _close(progress)
     if not quiet:
         click.echo(summary.report())
+
+
+def one_line(message) -> str:
+    """``message`` on one line (HDF5's messages embed newlines)."""
+    return " ".join(str(message).split())
+
+
+def _disk_failed(exc: OSError):
+    """Exit 1 with one line when the disk failed a write.  The process ends at once
+    (``os._exit``): HDF5 would otherwise try to flush the abandoned file again while the
+    interpreter shuts down, printing tracebacks or crashing."""
+    import os
+
+    from .output.h5files import WriteFailed, disk_cause
+
+    cause = disk_cause(exc)
+    text = str(exc) if isinstance(exc, WriteFailed) or cause is None else (
+        f"a write failed: {cause} ({exc})")
+    click.echo(f"Error: {one_line(text)}", err=True)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(1)
 
 
 def _close(progress) -> None:

@@ -16,8 +16,9 @@ from pathlib import Path
 
 from ..config import Config
 from ..output import run_writer
-from ..output.h5files import FileBusy, OutputExists, check_output, open_file, writer_alive
-from ..output.lock import WriterLock
+from ..output.h5files import (FileBusy, OutputExists, WriteFailed, check_output, disk_cause,
+                              open_file, repair_truncated, writer_alive)
+from ..output.lock import WriterLock, note_failure
 from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
@@ -29,6 +30,9 @@ __all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists", "chec
 
 FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
 OVERLAP = True         # compute the next block in a worker thread while writing the last
+
+
+_LEFT_OPEN = []        # handles of files the disk failed: closing them would write again
 
 
 class RunInterrupted(RuntimeError):
@@ -96,6 +100,7 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
 def _resume_locked(path: Path, t_end, command, progress, flush_interval,
                    handle_signals, overlap) -> RunSummary:
     """``resume_file`` once this process holds the writer lock of ``path``."""
+    repair_truncated(path)       # cut short by a full disk: its checkpoint is still there
     with open_file(path) as f:
         check_run_file(f, path)
         config = read_config(f)
@@ -139,6 +144,21 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         return _drive(run, lambda: writer, path, progress, flush_interval, stop, overlap)
 
 
+def _write_failed(path: Path, writer, cause: str) -> WriteFailed:
+    """The error of a write the disk refused.  The file is left as the disk has it: HDF5
+    cannot close a file it can no longer extend, and any further write could only make it
+    worse; its last checkpoint is intact, and a resume repairs the end of the file."""
+    if writer is None:
+        return WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was written")
+    _LEFT_OPEN.append(writer.file)  # never closed nor flushed again by this process
+    writer.file = None
+    t = float(writer.checkpoint["clock"][L.T])
+    note_failure(path, f"a write failed: {cause}")
+    return WriteFailed(f"writing {str(path)!r} failed: {cause}; the file keeps its last "
+                       f"checkpoint (t = {t:.9g}); free space, then continue with: rodjit "
+                       f"run --resume {path}")
+
+
 def _check_interval(flush_interval) -> None:
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0
             and math.isfinite(flush_interval)):
@@ -148,7 +168,29 @@ def _check_interval(flush_interval) -> None:
 def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
            stop: StopFlag, overlap: bool | None = None) -> RunSummary:
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
-    returns (called once the first compiled call is under way); close the file."""
+    returns (called once the first compiled call is under way); close the file.  A write
+    the disk refuses, at any point (layout, rows, checkpoints, closing), raises
+    WriteFailed."""
+    opened = []
+
+    def open_and_keep():
+        opened.append(open_writer())
+        return opened[-1]
+
+    try:
+        return _drive_writer(run, open_and_keep, path, progress, flush_interval, stop, overlap)
+    except BaseException as exc:
+        if isinstance(exc, WriteFailed) and not opened:
+            raise
+        cause = disk_cause(exc)
+        if cause is None:
+            raise
+        raise _write_failed(path, opened[-1] if opened else None, cause) from None
+
+
+def _drive_writer(run: Run, open_writer, path: Path, progress, flush_interval: float,
+                  stop: StopFlag, overlap: bool | None = None) -> RunSummary:
+    """``_drive`` without the translation of disk errors."""
     calls = (Pipeline if (OVERLAP if overlap is None else overlap) else Inline)(run)
     writer = None
     opened = False
@@ -199,6 +241,8 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
         exc.summary = closed_summary(writer)
         raise
     except BaseException as exc:
+        if disk_cause(exc) is not None:
+            raise
         if not opened:
             try:
                 open_once()

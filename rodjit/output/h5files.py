@@ -8,7 +8,9 @@ Both file kinds (runs, ``output.run_writer``; sweeps, ``sweeps.sweep_file``) use
 from __future__ import annotations
 
 import datetime
+import errno
 import os
+import re
 import socket
 from pathlib import Path
 
@@ -18,7 +20,8 @@ from .lock import FileBusy, is_locked
 
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
-           "writer_alive", "is_live", "check_output"]
+           "writer_alive", "is_live", "check_output", "WriteFailed", "disk_cause",
+           "truncation", "repair_truncated"]
 
 
 class NotARunFile(ValueError):
@@ -45,8 +48,23 @@ def open_file(path) -> h5py.File:
         return h5py.File(path, "r")
     except OSError as exc:
         if "already open for write" not in str(exc):
-            raise NotARunFile(f"cannot open {str(path)!r}: {exc}") from None
-    return h5py.File(path, "r", swmr=True)
+            raise _unopenable(path, exc) from None
+    try:
+        return h5py.File(path, "r", swmr=True)
+    except OSError as exc:
+        raise _unopenable(path, exc) from None
+
+
+def _unopenable(path, exc) -> NotARunFile:
+    """The one-line reason a file does not open."""
+    m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc))
+    if m and int(m.group(2)) > int(m.group(1)):
+        return NotARunFile(f"{str(path)!r} is cut short ({m.group(1)} of {m.group(2)} bytes: "
+                           f"its disk filled or a size limit was hit while it was written); "
+                           f"its last checkpoint is kept: continue it with 'rodjit run "
+                           f"--resume {path}' (or 'rodjit sweep --resume -o {path}') once "
+                           f"there is space")
+    return NotARunFile(f"cannot open {str(path)!r}: {' '.join(str(exc).split())}")
 
 
 def check_kind(f: h5py.File, kind: str, version: int, path=None) -> None:
@@ -181,3 +199,68 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
                 raise ValueError(f"output file {str(path)!r} is {what}; --overwrite replaces "
                                  f"only rodjit {kind} files: choose another output path")
     return path
+
+
+# ---- the disk failing a writer --------------------------------------------------------------
+_CAUSES = {errno.ENOSPC: "no space left on the device",
+           errno.EFBIG: "the file size limit was reached (file too large)",
+           errno.EDQUOT: "the disk quota is exceeded",
+           errno.EIO: "an input/output error of the device"}
+
+
+class WriteFailed(OSError):
+    """The disk refused a write (full, a size limit or quota, an I/O error): the file keeps
+    its last checkpoint and ``rodjit run --resume`` continues it once there is space."""
+
+
+def disk_cause(exc: BaseException) -> str | None:
+    """What the disk said, if ``exc`` (or its cause) is a refused write: ENOSPC, EFBIG,
+    EDQUOT or EIO, as raised by Python or reported inside an HDF5 message."""
+    seen = 0
+    while exc is not None and seen < 5:
+        if isinstance(exc, WriteFailed):
+            return str(exc)
+        code = getattr(exc, "errno", None)
+        if code in _CAUSES:
+            return _CAUSES[code]
+        m = re.search(r"errno = (\d+)", str(exc))
+        if m and int(m.group(1)) in _CAUSES:
+            return _CAUSES[int(m.group(1))]
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return None
+
+
+def truncation(path) -> tuple[int, int] | None:
+    """(bytes on disk, bytes the superblock records) of an HDF5 file cut short because a
+    write failed at the end of the file (the disk filled); None if it is not."""
+    try:
+        h5py.File(path, "r").close()
+        return None
+    except OSError as exc:
+        m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc))
+        if m and int(m.group(2)) > int(m.group(1)):
+            return int(m.group(1)), int(m.group(2))
+        if "already open for write" in str(exc):
+            try:
+                h5py.File(path, "r", swmr=True).close()
+                return None
+            except OSError as exc2:
+                m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc2))
+                if m and int(m.group(2)) > int(m.group(1)):
+                    return int(m.group(1)), int(m.group(2))
+    return None
+
+
+def repair_truncated(path) -> bool:
+    """Give a file cut short by a failed write its recorded length back (zeros at the end,
+    beyond every checkpointed row), so it opens and its checkpoint can be recovered; True
+    if it was cut short.  The caller holds the writer lock."""
+    cut = truncation(path)
+    if cut is None:
+        return False
+    try:
+        os.truncate(path, cut[1])
+    except OSError as exc:
+        raise WriteFailed(f"cannot repair {str(path)!r} ({cut[0]} of its {cut[1]} bytes are "
+                          f"on disk): {disk_cause(exc) or exc.strerror}") from None
+    return True

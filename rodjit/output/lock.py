@@ -18,7 +18,7 @@ import fcntl
 import os
 from pathlib import Path
 
-__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked"]
+__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked", "note_failure", "failure_note"]
 
 
 class FileBusy(ValueError):
@@ -102,3 +102,28 @@ def is_locked(path) -> bool:
         return False
     finally:
         os.close(fd)
+
+
+def note_failure(path, message: str) -> None:
+    """Record in the lock file why the writer of ``path`` stopped when the output itself can
+    no longer be written (its disk full): ``info`` reports it instead of a killed writer.
+    The next writer's lock replaces the note."""
+    try:
+        with open(lock_path(path), "r+") as fh:
+            pid = fh.readline().strip()
+            fh.seek(0)
+            fh.truncate()
+            fh.write(f"{pid}\nfailed: {' '.join(message.split())}\n")
+    except OSError:
+        pass
+
+
+def failure_note(path) -> str | None:
+    """The failure ``note_failure`` recorded for ``path``, if any."""
+    try:
+        with open(lock_path(path)) as fh:
+            lines = fh.read(4096).splitlines()
+    except (OSError, UnicodeDecodeError):
+        return None
+    note = next((ln for ln in lines if ln.startswith("failed: ")), None)
+    return note[len("failed: "):] if note else None
