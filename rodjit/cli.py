@@ -160,7 +160,12 @@ class _Progress(_Bar):
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--flush-interval", type=float, default=2.0, show_default=True,
               metavar="SECONDS", help="Wall time between checkpoints.")
-def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval):
+@click.option("--max-output", default="10GiB", show_default=True, metavar="SIZE",
+              help="Refuse a run whose file would exceed SIZE (e.g. 500M, 50GiB, inf).")
+@click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
+              help="Refuse a fixed time.dt that needs more than N steps.")
+def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval,
+                max_output, max_steps):
     """Run CONFIG.toml, a preset (see 'rodjit presets') or the built-in default, streaming
     snapshots, diagnostics, contact episodes and bounces to an HDF5 file.
 
@@ -196,9 +201,12 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             overrides = _overrides(sets)
             if overrides:
                 cfg = cfg.override(overrides)
+            from .output.estimate import parse_size
+
             summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
                                   command=command, progress=progress, t_end=t_end,
-                                  flush_interval=flush_interval)
+                                  flush_interval=flush_interval,
+                                  max_output=parse_size(max_output), max_steps=max_steps)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
     except RunInterrupted as exc:
@@ -290,9 +298,11 @@ def _duration(seconds: float) -> str:
                                              "missing or failed.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing sweep file (and run "
                                                 "files in --save-runs).")
+@click.option("--force-jobs", is_flag=True, help="Start --jobs workers even if that is more "
+                                                 "than the cores.")
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
-                  quiet):
+                  force_jobs, quiet):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -327,6 +337,12 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                 cfg = cfg.override(_overrides(sets)) if sets else cfg
             if grids:
                 grid = parse_grid_option(grids)
+            from .sweeps import load_sweep
+
+            done = load_sweep(output)
+            if done.counts["completed"] == len(done.grid):
+                raise ValueError(f"{output!r} is already complete ({len(done.grid)} points); "
+                                 f"nothing to resume")
         else:
             cfg, default_name = _load_config(config)
             overrides = _overrides(sets)
@@ -336,6 +352,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             if not output:
                 output = ("sweep.h5" if default_name == DEFAULT_OUTPUT
                           else default_name[:-3] + "_sweep.h5")
+        jobs = _cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
         table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                       save_runs=save_runs, resume=resume, overwrite=overwrite,
                       progress=progress, command=command)
@@ -356,6 +373,26 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         click.echo(table.report(max_rows=40))
     if table.counts["failed"]:
         sys.exit(1)
+
+
+def _cap_jobs(jobs, scheduler, grid, force: bool, quiet: bool):
+    """--jobs for a local pool: at most the cores (unless forced, with a note when cut) and
+    never more than the points."""
+    if jobs is None or isinstance(jobs, bool) or jobs < 1 or scheduler not in (None,
+                                                                               "processes"):
+        return jobs
+    from .sweeps.executors import default_jobs
+    from .sweeps.grid import Grid
+
+    cores = default_jobs()
+    if jobs > cores and not force:
+        if not quiet:
+            click.echo(f"note: --jobs {jobs} is more than the {cores} cores; using {cores} "
+                       f"(--force-jobs to insist)", err=True)
+        jobs = cores
+    if grid is not None:
+        jobs = max(1, min(jobs, len(Grid.from_spec(grid))))
+    return jobs
 
 
 # ---- rodjit presets -----------------------------------------------------------------------
@@ -386,6 +423,12 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
     from .plotting import MissingMatplotlib
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
+    from .output.h5files import check_output
+
+    try:
+        check_output(out, overwrite=True)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     try:
         written = plot(path, out, kind, **options)
     except MissingMatplotlib as exc:

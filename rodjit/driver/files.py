@@ -16,6 +16,7 @@ from pathlib import Path
 
 from ..config import Config
 from ..output import run_writer
+from ..output.estimate import MAX_OUTPUT, MAX_STEPS, check_run
 from ..output.h5files import (FileBusy, OutputExists, WriteFailed, check_output, disk_cause,
                               open_file, repair_truncated, writer_alive)
 from ..output.lock import WriterLock, note_failure
@@ -47,7 +48,8 @@ class RunInterrupted(RuntimeError):
 def run_to_file(config, path, *, overwrite: bool = False,
                 command: str | None = None, progress=None, t_end: float | None = None,
                 flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True,
-                overlap: bool | None = None) -> RunSummary:
+                overlap: bool | None = None, max_output: float = MAX_OUTPUT,
+                max_steps: float = MAX_STEPS) -> RunSummary:
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
@@ -55,7 +57,9 @@ def run_to_file(config, path, *, overwrite: bool = False,
     ``command`` is recorded in the file (default: this call); ``overlap`` (default
     ``OVERLAP``) computes in a worker thread while writing, False keeps to one thread (the
     file is the same bit for bit).  Bad input raises ValueError
-    before anything is written.  A failure raises SimulationError and an interruption
+    before anything is written, and so does a run that could not finish or fit
+    (``output.estimate.check_run``: a file above ``max_output`` bytes or the free space,
+    a fixed step time cannot resolve or needing more than ``max_steps`` steps).  A failure raises SimulationError and an interruption
     (SIGINT/SIGTERM, caught while ``handle_signals``) raises RunInterrupted, both after
     the file is closed with its status and a checkpoint; both carry ``summary``.
     """
@@ -67,6 +71,7 @@ def run_to_file(config, path, *, overwrite: bool = False,
         config = config.override({"time.t_end": t_end})
     _check_interval(flush_interval)
     path = check_output(path, overwrite, "run")
+    check_run(config, path, max_output=max_output, max_steps=max_steps)
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)

@@ -5,7 +5,22 @@ from __future__ import annotations
 import signal
 import threading
 
-__all__ = ["StopFlag"]
+__all__ = ["StopFlag", "Interrupted", "raise_interrupted"]
+
+
+class Interrupted(BaseException):
+    """SIGINT/SIGTERM outside a run or sweep (start-up, loading): the command ends at once.
+    A BaseException, so that neither ``except Exception`` nor click's handling of
+    KeyboardInterrupt swallows it."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def raise_interrupted(signum, frame):
+    """Signal handler: raise Interrupted."""
+    raise Interrupted(signum)
 
 
 class StopFlag:

@@ -200,7 +200,12 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
             sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) by: "
                                               f"{command}")
         else:
-            sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
+            try:
+                sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
+            except BaseException:        # cut short (a signal, the disk): leave no part
+                Path(output).unlink(missing_ok=True)
+                executor.close(cancel=True)
+                raise
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start)
 
