@@ -10,10 +10,9 @@ Every error, click's usage errors included, is one line on stderr.
 import signal
 import sys
 
-from .driver.signals import Interrupted, raise_interrupted
+from .driver.signals import Interrupted, install_early_handlers
 
-for _s in (signal.SIGINT, signal.SIGTERM):
-    signal.signal(_s, raise_interrupted)
+install_early_handlers()         # (already while ``rodjit/__init__`` was imported)
 
 
 def _exit_interrupted(signum: int):
