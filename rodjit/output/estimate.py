@@ -18,7 +18,7 @@ __all__ = ["Estimate", "estimate_run", "check_run", "parse_size", "format_size",
 
 MAX_OUTPUT = 10 * 2**30     # bytes a run file may reach unless the caller raises the limit
 MAX_STEPS = 10**10          # fixed steps a run may need unless the caller raises the limit
-_OVERHEAD = 64 * 2**10      # layout, attributes, checkpoints (measured: ~40 KiB for N = 5)
+_OVERHEAD = 3 * 2**19       # layout, checkpoints, the first chunk of every table (~1.6 MB)
 
 
 @dataclass
