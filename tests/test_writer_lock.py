@@ -112,3 +112,4 @@ def test_the_lock_file_names_its_holder_and_is_dropped_on_release(tmp_path):
             lock.WriterLock(out).acquire()
     assert not lock.is_locked(out)
     assert lock.lock_path(out).name == ".x.h5.lock"
+    assert not lock.lock_path(out).exists()      # removed on release

@@ -7,10 +7,11 @@ or replaces the file, so neither can keep a second writer out.  rodjit therefore
 the output, and holds it until the file is closed.  A second writer (run, resume, sweep)
 finds the lock taken and is refused with FileBusy before it touches anything.
 
-The lock file is left in place when the writer ends: removing it would let a process that
-opened it just before the removal lock an inode nobody else sees.  It holds no data; the
-kernel drops the lock when the process dies, whatever the way (SIGKILL included), so a
-left-over lock file never blocks anyone.
+The lock file holds the writer's process id.  The writer removes it before it lets go
+(a process that opened it meanwhile finds, once it has the lock, that the path no longer
+names its file, and starts over), except when it records why a write failed
+(``note_failure``, for ``info``).  The kernel drops the lock when the process dies, whatever
+the way (SIGKILL included), so a lock file left behind never blocks anyone.
 """
 from __future__ import annotations
 
@@ -41,21 +42,28 @@ class WriterLock:
 
     def acquire(self) -> "WriterLock":
         lp = lock_path(self.path)
-        try:
-            fd = os.open(lp, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
-        except OSError as exc:
-            raise ValueError(f"cannot create the lock file {str(lp)!r} beside the output: "
-                             f"{exc.strerror}") from None
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            holder = _holder(fd)
+        while True:
+            try:
+                fd = os.open(lp, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+            except OSError as exc:
+                raise ValueError(f"cannot create the lock file {str(lp)!r} beside the output: "
+                                 f"{exc.strerror}") from None
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = _holder(fd)
+                os.close(fd)
+                raise FileBusy(f"{str(self.path)!r} is being written by "
+                               f"{f'process {holder}' if holder else 'another process'} (a "
+                               f"running rodjit); wait for it to finish or stop it") from None
+            except OSError:        # a file system without flock: fall back on HDF5's checks
+                break
+            try:                   # still the lock file, not one its holder just removed?
+                if os.fstat(fd).st_ino == os.stat(lp).st_ino:
+                    break
+            except FileNotFoundError:
+                pass
             os.close(fd)
-            raise FileBusy(f"{str(self.path)!r} is being written by "
-                           f"{f'process {holder}' if holder else 'another process'} (a running "
-                           f"rodjit); wait for it to finish or stop it") from None
-        except OSError:            # a file system without flock: fall back on HDF5's checks
-            pass
         try:                       # who holds it, for the message a second writer gets
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
@@ -65,9 +73,19 @@ class WriterLock:
         return self
 
     def release(self) -> None:
-        if self.fd is not None:
-            os.close(self.fd)      # closing the description drops the lock
-            self.fd = None
+        """Remove the lock file (unless it records a failure, ``note_failure``), then drop
+        the lock: a process that opened the file meanwhile sees it gone and starts over."""
+        if self.fd is None:
+            return
+        try:
+            if failure_note(self.path) is None:
+                lp = lock_path(self.path)
+                if os.fstat(self.fd).st_ino == os.stat(lp).st_ino:
+                    lp.unlink()
+        except OSError:
+            pass
+        os.close(self.fd)          # closing the description drops the lock
+        self.fd = None
 
     def __enter__(self):
         return self.acquire()
