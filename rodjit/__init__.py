@@ -5,6 +5,12 @@
 >>> summary = rodjit.run_to_file(rodjit.Config(), "run.h5", overwrite=True)  # streamed to HDF5
 >>> table = rodjit.sweep(rodjit.Config(), {"rod.mu": [0, 1, 10]}, output="sweep.h5")
 """
+import sys as _sys
+
+if _sys.argv[:1] == ["-m"]:   # being located by ``python -m rodjit``: handle SIGINT/SIGTERM
+    from .driver.signals import install_early_handlers   # before the heavy imports below
+    install_early_handlers(exit_now=True)
+
 from . import laws
 from .analysis import (Convergence, FitError, FitResult, TableFit, converge, fit, fit_table,
                        load_convergence, observables)

@@ -10,6 +10,7 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
+import re
 import shlex
 import sys
 from pathlib import Path
@@ -20,14 +21,40 @@ EXIT_USAGE = 2
 DEFAULT_OUTPUT = "default.h5"
 
 
+_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
+
+
+def _quiet_disk_errors(unraisable) -> None:
+    """Errors h5py raises while releasing the handles of a file the disk refused (full, a
+    size limit) cannot be acted on, and the one-line error already says what happened."""
+    if not _DISK_ERRNO.search(str(unraisable.exc_value)):
+        sys.__unraisablehook__(unraisable)
+
+
+def _quiet_disk_tracebacks(kind, value, tb) -> None:
+    """The same errors, as h5py's compiled deallocators print them (through excepthook)."""
+    if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
+        sys.__excepthook__(kind, value, tb)
+
+
+sys.unraisablehook = _quiet_disk_errors
+sys.excepthook = _quiet_disk_tracebacks
+
+
 class UsageError(click.ClickException):
     """One line on stderr, exit code 2; raised before anything is written."""
 
     exit_code = EXIT_USAGE
 
+    def __init__(self, message):
+        super().__init__(one_line(message))
+
 
 class RunFailed(click.ClickException):
     exit_code = 1
+
+    def __init__(self, message):
+        super().__init__(one_line(message))
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -115,8 +142,12 @@ def _progress(flag: bool | None, quiet: bool, bar):
               metavar="SECONDS", help="Wall time between checkpoints.")
 @click.option("--progress/--no-progress", "show_progress", default=None,
               help="Show a progress bar [default: on a terminal].")
+@click.option("--max-output", default="10GiB", show_default=True, metavar="SIZE",
+              help="Refuse a run whose file would exceed SIZE (e.g. 500M, 50GiB, inf).")
+@click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
+              help="Refuse a fixed time.dt that needs more than N steps.")
 def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval,
-                show_progress):
+                show_progress, max_output, max_steps):
     """Run CONFIG.toml, a preset (see 'rodjit presets') or the built-in default, streaming
     snapshots, diagnostics, contact episodes and bounces to an HDF5 file.
 
@@ -152,9 +183,12 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             overrides = _overrides(sets)
             if overrides:
                 cfg = cfg.override(overrides)
+            from .output.estimate import parse_size
+
             summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
                                   command=command, progress=progress, t_end=t_end,
-                                  flush_interval=flush_interval)
+                                  flush_interval=flush_interval,
+                                  max_output=parse_size(max_output), max_steps=max_steps)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
     except RunInterrupted as exc:
@@ -172,10 +206,32 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         raise UsageError(str(exc)) from None
     except OSError as exc:          # the disk failed us during the run (full, removed, ...)
         _close(progress)
-        raise RunFailed(f"{exc}; the file keeps its last checkpoint") from None
+        _disk_failed(exc)
     _close(progress)
     if not quiet:
         click.echo(summary.report())
+
+
+def one_line(message) -> str:
+    """``message`` on one line (HDF5's messages embed newlines)."""
+    return " ".join(str(message).split())
+
+
+def _disk_failed(exc: OSError):
+    """Exit 1 with one line when the disk failed a write.  The process ends at once
+    (``os._exit``): HDF5 would otherwise try to flush the abandoned file again while the
+    interpreter shuts down, printing tracebacks or crashing."""
+    import os
+
+    from .output.h5files import WriteFailed, disk_cause
+
+    cause = disk_cause(exc)
+    text = str(exc) if isinstance(exc, WriteFailed) or cause is None else (
+        f"a write failed: {cause} ({exc})")
+    click.echo(f"Error: {one_line(text)}", err=True)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(1)
 
 
 def _close(progress) -> None:
@@ -213,11 +269,13 @@ def _SweepProgress():
                                              "missing or failed.")
 @click.option("--overwrite", is_flag=True, help="Replace an existing sweep file (and run "
                                                 "files in --save-runs).")
+@click.option("--force-jobs", is_flag=True, help="Start --jobs workers even if that is more "
+                                                 "than the cores.")
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--progress/--no-progress", "show_progress", default=None,
               help="Show a progress bar [default: on a terminal].")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
-                  quiet, show_progress):
+                  force_jobs, quiet, show_progress):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -252,6 +310,12 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                 cfg = cfg.override(_overrides(sets)) if sets else cfg
             if grids:
                 grid = parse_grid_option(grids)
+            from .sweeps import load_sweep
+
+            done = load_sweep(output)
+            if done.counts["completed"] == len(done.grid):
+                raise ValueError(f"{output!r} is already complete ({len(done.grid)} points); "
+                                 f"nothing to resume")
         else:
             cfg, default_name = _load_config(config)
             overrides = _overrides(sets)
@@ -261,6 +325,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             if not output:
                 output = ("sweep.h5" if default_name == DEFAULT_OUTPUT
                           else default_name[:-3] + "_sweep.h5")
+        jobs = _cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
         table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                       save_runs=save_runs, resume=resume, overwrite=overwrite,
                       progress=progress, command=command)
@@ -288,6 +353,26 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         click.echo(table.report(max_rows=40))
     if table.counts["failed"]:
         sys.exit(1)
+
+
+def _cap_jobs(jobs, scheduler, grid, force: bool, quiet: bool):
+    """--jobs for a local pool: at most the cores (unless forced, with a note when cut) and
+    never more than the points."""
+    if jobs is None or isinstance(jobs, bool) or jobs < 1 or scheduler not in (None,
+                                                                               "processes"):
+        return jobs
+    from .sweeps.executors import default_jobs
+    from .sweeps.grid import Grid
+
+    cores = default_jobs()
+    if jobs > cores and not force:
+        if not quiet:
+            click.echo(f"note: --jobs {jobs} is more than the {cores} cores; using {cores} "
+                       f"(--force-jobs to insist)", err=True)
+        jobs = cores
+    if grid is not None:
+        jobs = max(1, min(jobs, len(Grid.from_spec(grid))))
+    return jobs
 
 
 # ---- rodjit presets -----------------------------------------------------------------------
@@ -318,6 +403,12 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
     from .plotting import MissingMatplotlib, NothingToDraw
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
+    from .output.h5files import check_output
+
+    try:
+        check_output(out, overwrite=True)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
     try:
         written = plot(path, out, kind, **options)
     except MissingMatplotlib as exc:

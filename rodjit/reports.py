@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .output.h5files import NotARunFile, file_kind, writer_alive
+from .output.lock import failure_note
 from .output.run_layout import FORMAT_VERSION as RUN_FORMAT_VERSION
 from .output.summary import summarize
 from .sweeps import sweep_file
@@ -38,6 +39,9 @@ def _about_run(path: str) -> About:
     if status == "running":
         if s.writer_alive:
             status += " (the writing process is alive)"
+        elif s.writer_alive is False and failure_note(path):
+            status = (f"failed ({failure_note(path)}; 'rodjit run --resume {path}' continues "
+                      f"from the checkpoint at t = {s.t:.6g} once there is space)")
         elif s.writer_alive is False:
             status += (f" (the writing process is gone: it was killed; 'rodjit run --resume "
                        f"{path}' continues from the checkpoint at t = {s.t:.6g})")

@@ -137,6 +137,12 @@ def test_existing_output_needs_overwrite(tmp_path, small_config):
     with pytest.raises(rodjit.OutputExists, match="already exists; pass overwrite=True"):
         rodjit.run_to_file(small_config, out)
     assert out.read_bytes() == b"precious"
+    # overwrite replaces rodjit run files only, never someone else's file
+    with pytest.raises(ValueError, match="is not a rodjit file; --overwrite replaces only"):
+        rodjit.run_to_file(small_config, out, overwrite=True)
+    assert out.read_bytes() == b"precious"
+    out.unlink()
+    rodjit.run_to_file(small_config.override({"time.t_end": 0.5}), out)
     rodjit.run_to_file(small_config, out, overwrite=True)
     assert rodjit.load_file(out).status == "completed"
 

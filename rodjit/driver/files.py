@@ -16,7 +16,10 @@ from pathlib import Path
 
 from ..config import Config
 from ..output import run_writer
-from ..output.h5files import FileBusy, OutputExists, check_output, open_file, writer_alive
+from ..output.estimate import MAX_OUTPUT, MAX_STEPS, check_run
+from ..output.h5files import (FileBusy, OutputExists, WriteFailed, check_output, disk_cause,
+                              open_file, repair_truncated, writer_alive)
+from ..output.lock import WriterLock, note_failure
 from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
@@ -32,6 +35,9 @@ FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
 OVERLAP = True         # compute the next block in a worker thread while writing the last
 
 
+_LEFT_OPEN = []        # handles of files the disk failed: closing them would write again
+
+
 class RunInterrupted(RuntimeError):
     """A run stopped by SIGINT/SIGTERM; its file holds a checkpoint (``summary``)."""
 
@@ -44,7 +50,8 @@ class RunInterrupted(RuntimeError):
 def run_to_file(config, path, *, overwrite: bool = False,
                 command: str | None = None, progress=None, t_end: float | None = None,
                 flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True,
-                overlap: bool | None = None) -> RunSummary:
+                overlap: bool | None = None, max_output: float = MAX_OUTPUT,
+                max_steps: float = MAX_STEPS) -> RunSummary:
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
@@ -70,6 +77,11 @@ def run_to_file(config, path, *, overwrite: bool = False,
     overlap : bool, optional
         Compute in a worker thread while writing (default ``OVERLAP``); False keeps to one
         thread.  The file is the same bit for bit.
+    max_output : float, optional
+        Refuse (ValueError) a run whose file is estimated above this many bytes, or above
+        the free space of its disk (``output.estimate.check_run``).
+    max_steps : float, optional
+        Refuse a fixed step that time cannot resolve or that needs more steps than this.
 
     Returns
     -------
@@ -79,7 +91,7 @@ def run_to_file(config, path, *, overwrite: bool = False,
     Raises
     ------
     ValueError
-        Bad input, before anything is written.
+        Bad input, or a run that could not finish or fit, before anything is written.
     SimulationError
         The run failed; raised after the file is closed with its status and a checkpoint,
         and carries ``summary``.
@@ -93,12 +105,16 @@ def run_to_file(config, path, *, overwrite: bool = False,
     if t_end is not None:
         config = config.override({"time.t_end": t_end})
     _check_interval(flush_interval)
-    path = check_output(path, overwrite)
+    path = check_output(path, overwrite, "run")
+    check_run(config, path, max_output=max_output, max_steps=max_steps)
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
-    with StopFlag(handle_signals) as stop:
+    # the writer lock, held from the last check until the file is closed: no second
+    # writer can create, replace or resume the file meanwhile
+    with WriterLock(path), StopFlag(handle_signals) as stop:
+        check_output(path, overwrite, "run", held=True)   # again, now that no one else can write it
         return _drive(run, lambda: run_writer.create_run_file(path, config, first, command=command),
                       path, progress, flush_interval, stop, overlap)
 
@@ -123,12 +139,23 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
     """
     path = Path(path)
     _check_interval(flush_interval)
+    if not path.is_file():
+        open_file(path).close()      # the one-line reason: missing, a directory, ...
+    with WriterLock(path):
+        return _resume_locked(path, t_end, command, progress, flush_interval,
+                              handle_signals, overlap)
+
+
+def _resume_locked(path: Path, t_end, command, progress, flush_interval,
+                   handle_signals, overlap) -> RunSummary:
+    """``resume_file`` once this process holds the writer lock of ``path``."""
+    repair_truncated(path)       # cut short by a full disk: its checkpoint is still there
     with open_file(path) as f:
         check_run_file(f, path)
         config = read_config(f)
         ck = read_checkpoint(f)
         needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
-        alive = writer_alive(f) if needs_recovery else False
+        alive = writer_alive(f, lock=False) if needs_recovery else False
         pid, host = f.attrs.get("writer_pid"), f.attrs.get("writer_host")
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
@@ -166,6 +193,21 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         return _drive(run, lambda: writer, path, progress, flush_interval, stop, overlap)
 
 
+def _write_failed(path: Path, writer, cause: str) -> WriteFailed:
+    """The error of a write the disk refused.  The file is left as the disk has it: HDF5
+    cannot close a file it can no longer extend, and any further write could only make it
+    worse; its last checkpoint is intact, and a resume repairs the end of the file."""
+    if writer is None:
+        return WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was written")
+    _LEFT_OPEN.append(writer.file)  # never closed nor flushed again by this process
+    writer.file = None
+    t = float(writer.checkpoint["clock"][L.T])
+    note_failure(path, f"a write failed: {cause}")
+    return WriteFailed(f"writing {str(path)!r} failed: {cause}; the file keeps its last "
+                       f"checkpoint (t = {t:.9g}); free space, then continue with: rodjit "
+                       f"run --resume {path}")
+
+
 def _check_interval(flush_interval) -> None:
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0
             and math.isfinite(flush_interval)):
@@ -175,7 +217,29 @@ def _check_interval(flush_interval) -> None:
 def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
            stop: StopFlag, overlap: bool | None = None) -> RunSummary:
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
-    returns (called once the first compiled call is under way); close the file."""
+    returns (called once the first compiled call is under way); close the file.  A write
+    the disk refuses, at any point (layout, rows, checkpoints, closing), raises
+    WriteFailed."""
+    opened = []
+
+    def open_and_keep():
+        opened.append(open_writer())
+        return opened[-1]
+
+    try:
+        return _drive_writer(run, open_and_keep, path, progress, flush_interval, stop, overlap)
+    except BaseException as exc:
+        if isinstance(exc, WriteFailed) and not opened:
+            raise
+        cause = disk_cause(exc)
+        if cause is None:
+            raise
+        raise _write_failed(path, opened[-1] if opened else None, cause) from None
+
+
+def _drive_writer(run: Run, open_writer, path: Path, progress, flush_interval: float,
+                  stop: StopFlag, overlap: bool | None = None) -> RunSummary:
+    """``_drive`` without the translation of disk errors."""
     calls = (Pipeline if (OVERLAP if overlap is None else overlap) else Inline)(run)
     progress = run_progress(progress)
     writer = None
@@ -228,6 +292,8 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
         exc.summary = closed_summary(writer)
         raise
     except BaseException as exc:
+        if disk_cause(exc) is not None:
+            raise
         if not opened:
             try:
                 open_once()

@@ -2,10 +2,26 @@
 recorded and the call stops at its next safe point instead of dying mid-write."""
 from __future__ import annotations
 
+import os
 import signal
 import threading
 
-__all__ = ["StopFlag"]
+__all__ = ["StopFlag", "Interrupted", "raise_interrupted", "install_early_handlers"]
+
+
+class Interrupted(BaseException):
+    """SIGINT/SIGTERM outside a run or sweep (start-up, loading): the command ends at once.
+    A BaseException, so that neither ``except Exception`` nor click's handling of
+    KeyboardInterrupt swallows it."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def raise_interrupted(signum, frame):
+    """Signal handler: raise Interrupted."""
+    raise Interrupted(signum)
 
 
 class StopFlag:
@@ -33,3 +49,17 @@ class StopFlag:
         for s, old in self._old.items():
             signal.signal(s, old)
         self._old = {}
+
+
+def _exit_at_once(signum, frame):
+    os.write(2, f"Error: interrupted by {signal.Signals(signum).name}\n".encode())
+    os._exit(128 + signum)
+
+
+def install_early_handlers(exit_now: bool = False) -> None:
+    """SIGINT and SIGTERM raise Interrupted (the command line's entry point turns it into
+    one line and exit code 128 + signal); ``exit_now``: while the package itself is being
+    imported (nothing is open yet, and no handler of ours could catch the exception), they
+    end the process at once with that line and code."""
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, _exit_at_once if exit_now else raise_interrupted)

@@ -48,6 +48,7 @@ def initial_state(config, u0=None, v0=None) -> tuple[np.ndarray, np.ndarray]:
     x = grid(n)
     if u0 is None:
         u = config.initial.height + (1.0 + config.initial.strain) * x
+        _check_resolved(config.initial.height, u, (1.0 + config.initial.strain) / n)
     else:
         u = _profile("u0", u0, n)
     if v0 is None:
@@ -57,8 +58,21 @@ def initial_state(config, u0=None, v0=None) -> tuple[np.ndarray, np.ndarray]:
     return u, v
 
 
+def _check_resolved(height: float, u: np.ndarray, spacing: float) -> None:
+    """The node spacing must survive adding ``height`` (else strains are cancellation)."""
+    if np.max(np.abs(np.diff(u) - spacing)) > 1e-9 * abs(spacing):
+        bound = 1e-9 * abs(spacing) / np.finfo(float).eps
+        raise ValueError(f"initial.height = {height!r} is out of range: the rod's node "
+                         f"spacing {spacing:.3g} is lost in rounding above |height| ~ "
+                         f"{bound:.3g}")
+
+
 def _profile(name: str, values, n: int) -> np.ndarray:
-    arr = np.array(values, dtype=np.float64, copy=True)
+    try:
+        arr = np.array(values, dtype=np.float64, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be an array of numbers of length rod.N + 1 = {n + 1} "
+                         f"({type(exc).__name__}: {exc})") from None
     if arr.ndim != 1 or arr.size != n + 1:
         raise ValueError(f"{name} must be a 1-D array of length rod.N + 1 = {n + 1}, "
                          f"got shape {arr.shape}")

@@ -8,23 +8,24 @@ Both file kinds (runs, ``output.run_writer``; sweeps, ``sweeps.sweep_file``) use
 from __future__ import annotations
 
 import datetime
+import errno
 import os
+import re
 import socket
 from pathlib import Path
 
 import h5py
 
+from .lock import FileBusy, is_locked
+
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
-           "writer_alive", "is_live", "check_output"]
+           "writer_alive", "is_live", "check_output", "WriteFailed", "disk_cause",
+           "truncation", "repair_truncated"]
 
 
 class NotARunFile(ValueError):
     """The path is not a rodjit run file (missing, not HDF5, or another kind of file)."""
-
-
-class FileBusy(ValueError):
-    """Another process holds the file (a live writer, or a reader blocking a write)."""
 
 
 class OutputExists(ValueError):
@@ -47,8 +48,23 @@ def open_file(path) -> h5py.File:
         return h5py.File(path, "r")
     except OSError as exc:
         if "already open for write" not in str(exc):
-            raise NotARunFile(f"cannot open {str(path)!r}: {exc}") from None
-    return h5py.File(path, "r", swmr=True)
+            raise _unopenable(path, exc) from None
+    try:
+        return h5py.File(path, "r", swmr=True)
+    except OSError as exc:
+        raise _unopenable(path, exc) from None
+
+
+def _unopenable(path, exc) -> NotARunFile:
+    """The one-line reason a file does not open."""
+    m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc))
+    if m and int(m.group(2)) > int(m.group(1)):
+        return NotARunFile(f"{str(path)!r} is cut short ({m.group(1)} of {m.group(2)} bytes: "
+                           f"its disk filled or a size limit was hit while it was written); "
+                           f"its last checkpoint is kept: continue it with 'rodjit run "
+                           f"--resume {path}' (or 'rodjit sweep --resume -o {path}') once "
+                           f"there is space")
+    return NotARunFile(f"cannot open {str(path)!r}: {' '.join(str(exc).split())}")
 
 
 def check_kind(f: h5py.File, kind: str, version: int, path=None) -> None:
@@ -118,8 +134,13 @@ def writer_attrs() -> dict:
             "writer_tag": process_tag(pid)}
 
 
-def writer_alive(f: h5py.File) -> bool | None:
-    """Is the process that last wrote ``f`` still running?  None if it ran on another host."""
+def writer_alive(f: h5py.File, lock: bool = True) -> bool | None:
+    """Is the process that last wrote ``f`` still running?  True if a process holds the
+    file's writer lock (``output.lock``; skipped with ``lock=False``, for the holder
+    itself); otherwise judged from the host, pid and start tag recorded in the file (files
+    of rodjit versions without the lock); None if it ran on another host."""
+    if lock and is_locked(f.filename):
+        return True
     if f.attrs.get("writer_host") != socket.gethostname():
         return None
     pid = int(f.attrs.get("writer_pid", -1))
@@ -135,19 +156,22 @@ def writer_alive(f: h5py.File) -> bool | None:
     return not tag or process_tag(pid) in ("", tag)
 
 
-def is_live(path) -> bool:
+def is_live(path, lock: bool = True) -> bool:
     """True if ``path`` is a rodjit file (a run or a sweep) whose writer is still running
-    on this host."""
+    on this host (``lock=False``: the caller holds the writer lock; judge by the file)."""
     try:
         with open_file(path) as f:
-            return f.attrs.get("status") == "running" and writer_alive(f) is True
+            return f.attrs.get("status") == "running" and writer_alive(f, lock) is True
     except (ValueError, OSError):
-        return False
+        return lock and is_locked(path)
 
 
-def check_output(path, overwrite: bool) -> Path:
+def check_output(path, overwrite: bool, kind: str | None = None, held: bool = False) -> Path:
     """Raise ValueError (one line) unless ``path`` can be created or replaced: its directory
-    exists and is writable, and it is not the file of a live writer."""
+    exists and is writable, it is not the file of a live writer, and (given ``kind``) an
+    existing file is replaced only if it is a rodjit file of that kind (or empty): never a
+    configuration, an image or anyone else's data.  ``held``: the caller holds the writer
+    lock of ``path`` (``output.lock``)."""
     path = Path(path)
     parent = path.parent if str(path.parent) else Path(".")
     if not parent.exists():
@@ -162,7 +186,81 @@ def check_output(path, overwrite: bool) -> Path:
         if not overwrite:
             raise OutputExists(f"output file {str(path)!r} already exists; pass "
                                f"overwrite=True to replace it")
-        if is_live(path):
+        if is_live(path, lock=not held):
             raise FileBusy(f"output file {str(path)!r} is being written by a running "
                            f"rodjit process; stop it before replacing the file")
+        if kind is not None and path.stat().st_size > 0:
+            try:
+                found = file_kind(path)
+            except (ValueError, OSError):
+                found = None
+            if found != kind:
+                what = f"a rodjit {found} file" if found else "not a rodjit file"
+                raise ValueError(f"output file {str(path)!r} is {what}; --overwrite replaces "
+                                 f"only rodjit {kind} files: choose another output path")
     return path
+
+
+# ---- the disk failing a writer --------------------------------------------------------------
+_CAUSES = {errno.ENOSPC: "no space left on the device",
+           errno.EFBIG: "the file size limit was reached (file too large)",
+           errno.EDQUOT: "the disk quota is exceeded",
+           errno.EIO: "an input/output error of the device"}
+
+
+class WriteFailed(OSError):
+    """The disk refused a write (full, a size limit or quota, an I/O error): the file keeps
+    its last checkpoint and ``rodjit run --resume`` continues it once there is space."""
+
+
+def disk_cause(exc: BaseException) -> str | None:
+    """What the disk said, if ``exc`` (or its cause) is a refused write: ENOSPC, EFBIG,
+    EDQUOT or EIO, as raised by Python or reported inside an HDF5 message."""
+    seen = 0
+    while exc is not None and seen < 5:
+        if isinstance(exc, WriteFailed):
+            return str(exc)
+        code = getattr(exc, "errno", None)
+        if code in _CAUSES:
+            return _CAUSES[code]
+        m = re.search(r"errno = (\d+)", str(exc))
+        if m and int(m.group(1)) in _CAUSES:
+            return _CAUSES[int(m.group(1))]
+        exc, seen = exc.__cause__ or exc.__context__, seen + 1
+    return None
+
+
+def truncation(path) -> tuple[int, int] | None:
+    """(bytes on disk, bytes the superblock records) of an HDF5 file cut short because a
+    write failed at the end of the file (the disk filled); None if it is not."""
+    try:
+        h5py.File(path, "r").close()
+        return None
+    except OSError as exc:
+        m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc))
+        if m and int(m.group(2)) > int(m.group(1)):
+            return int(m.group(1)), int(m.group(2))
+        if "already open for write" in str(exc):
+            try:
+                h5py.File(path, "r", swmr=True).close()
+                return None
+            except OSError as exc2:
+                m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc2))
+                if m and int(m.group(2)) > int(m.group(1)):
+                    return int(m.group(1)), int(m.group(2))
+    return None
+
+
+def repair_truncated(path) -> bool:
+    """Give a file cut short by a failed write its recorded length back (zeros at the end,
+    beyond every checkpointed row), so it opens and its checkpoint can be recovered; True
+    if it was cut short.  The caller holds the writer lock."""
+    cut = truncation(path)
+    if cut is None:
+        return False
+    try:
+        os.truncate(path, cut[1])
+    except OSError as exc:
+        raise WriteFailed(f"cannot repair {str(path)!r} ({cut[0]} of its {cut[1]} bytes are "
+                          f"on disk): {disk_cause(exc) or exc.strerror}") from None
+    return True

@@ -18,7 +18,8 @@ from ..records.bounces import bounce_table
 from ..records.extremes import Extremes
 from ..records.sink import Sink
 from ..stepping import layout as L
-from .h5files import history_with, now, open_for_writing, writer_attrs
+from .h5files import (WriteFailed, disk_cause, history_with, now, open_for_writing,
+                      writer_attrs)
 from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
                          overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
@@ -151,9 +152,16 @@ def create_run_file(path, config, start, *, command: str) -> RunWriter:
         f.swmr_mode = True             # flushes the file: the first checkpoint is on disk
         writer = RunWriter(f, path, config, dict(ck, lengths=dict.fromkeys(TABLES, 0)),
                            layout)
-    except BaseException:
-        f.close()
-        raise
+    except BaseException as exc:
+        cause = disk_cause(exc)
+        if cause is None:
+            f.close()
+            raise
+        # the layout is incomplete and HDF5 cannot close a file it cannot extend: leave
+        # the handle alone and remove the file, which holds no checkpoint yet
+        Path(path).unlink(missing_ok=True)
+        raise WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was "
+                          f"written") from None
     return writer
 
 

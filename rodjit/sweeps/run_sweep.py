@@ -21,7 +21,8 @@ from ..config import Config
 from ..driver.progress import close as close_progress
 from ..driver.progress import sweep_progress
 from ..driver.signals import StopFlag
-from ..output.h5files import FileBusy, check_output, writer_alive
+from ..output.h5files import FileBusy, check_output, open_file, writer_alive
+from ..output.lock import WriterLock
 from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import Grid
@@ -110,7 +111,8 @@ def _open_resume(output, config, grid):
     with sweep_file.open_sweep(output) as f:
         header = sweep_file.read_header(f)
         columns = sweep_file.read_summary(f)
-        alive = writer_alive(f) if header["attrs"].get("status") == "running" else False
+        alive = (writer_alive(f, lock=False) if header["attrs"].get("status") == "running"
+                 else False)
     if alive:
         raise FileBusy(f"{str(output)!r} is being written by a running sweep (process "
                             f"{header['attrs'].get('writer_pid')}); stop it before resuming")
@@ -184,11 +186,28 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     check_scheduler(scheduler)
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
+    if resume and output is None:
+        raise ValueError("resume needs the sweep file to continue (output=PATH, or "
+                         "rodjit sweep --resume -o PATH)")
+    if output is None:
+        return _sweep(config, grid, None, jobs, scheduler, save_runs, resume, overwrite,
+                      progress, command, handle_signals, flush_interval)
+    output = Path(output)
+    if resume and not output.is_file():
+        open_file(output).close()      # the one-line reason: missing, a directory, ...
+    elif not resume:
+        check_output(output, overwrite, "sweep")
+    # the writer lock of the sweep file, held until it is closed (see output.lock)
+    with WriterLock(output):
+        return _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite,
+                      progress, command, handle_signals, flush_interval)
+
+
+def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, progress,
+           command, handle_signals, flush_interval) -> SweepTable:
+    """``sweep`` once this process holds the writer lock of ``output`` (if any)."""
     attrs = {}
     if resume:
-        if output is None:
-            raise ValueError("resume needs the sweep file to continue (output=PATH, or "
-                             "rodjit sweep --resume -o PATH)")
         base, grid, columns, attrs = _open_resume(output, config, grid)
         if save_runs is None and attrs.get("save_runs"):
             save_runs = attrs["save_runs"]
@@ -201,7 +220,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         grid.validate(base)
         columns = _new_columns(grid)
         if output is not None:
-            output = check_output(output, overwrite)   # also: not a live sweep's file
+            output = check_output(output, overwrite, "sweep", held=True)
     todo = [i for i in range(len(grid)) if columns["status"][i] != "completed"]
     runs_dir = _prepare_runs_dir(save_runs, grid, todo, overwrite, resume)
     if command is None:
@@ -231,7 +250,12 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
             sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) by: "
                                               f"{command}")
         else:
-            sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
+            try:
+                sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
+            except BaseException:        # cut short (a signal, the disk): leave no part
+                Path(output).unlink(missing_ok=True)
+                executor.close(cancel=True)
+                raise
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start)
 

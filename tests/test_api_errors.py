@@ -1,0 +1,21 @@
+"""Errors of the Python API name the argument: a profile of non-numbers, a height the node
+spacing cannot survive."""
+from __future__ import annotations
+
+import pytest
+
+import rodjit
+
+SHORT = rodjit.Config().override({"time.t_end": 0.01})
+
+
+@pytest.mark.parametrize("u0", [["a"] * 6, [[1.0, 2.0], [3.0]], [object()] * 6])
+def test_a_profile_of_non_numbers_is_named(u0):
+    with pytest.raises(ValueError, match=r"^u0 must be an array of numbers of length"):
+        rodjit.simulate(SHORT, u0=u0)
+
+
+def test_a_huge_initial_height_is_named_with_its_range():
+    with pytest.raises(ValueError, match=r"^initial.height = 1000000000000.0 is out of range"):
+        rodjit.simulate(SHORT.override({"initial.height": 1e12}))
+    assert rodjit.simulate(SHORT.override({"initial.height": 10.0})).t[-1] > 0
