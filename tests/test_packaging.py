@@ -33,8 +33,10 @@ def test_console_script_and_dependencies():
         assert name in test
     assert any(d.startswith("matplotlib") for d in extras["plot"])
     assert {d.split(">")[0] for d in extras["analysis"]} == {"xarray", "h5netcdf", "pandas"}
+    # [all]: every extra a user runs rodjit with; the developers' extras (tests, the
+    # documentation build, the benchmark peers) stay apart
     assert set(extras["all"]) == {f"rodjit[{name}]" for name in extras
-                                  if name not in ("all", "test")}
+                                  if name not in ("all", "test", "docs", "bench")}
 
 
 def test_ci_runs_exactly_the_readme_test_command():
