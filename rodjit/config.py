@@ -16,7 +16,8 @@ from typing import Any, ClassVar, Mapping
 from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
-           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "parse_value"]
+           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "field_spec",
+           "parse_value"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
 
@@ -25,8 +26,10 @@ class _Spec:
     """Type and range of one configuration field; ``check`` returns an error or None."""
 
     def __init__(self, kind: str, rng: str = "", check=None, optional: bool = False,
-                 choices: tuple[str, ...] | None = None):
+                 choices: tuple[str, ...] | None = None, *, meaning: str, unit: str = ""):
         self.kind, self.rng, self.check, self.optional, self.choices = kind, rng, check, optional, choices
+        self.meaning = meaning   # what the key sets: for comments, listings and file attributes
+        self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text keys
 
     def coerce(self, key: str, value: Any) -> Any:
         if value is None:
@@ -72,41 +75,73 @@ def _nonneg(x):
 
 _FIELDS: dict[str, dict[str, _Spec]] = {
     "rod": {
-        "N": _Spec("int", "in [1, 10000000]", lambda n: 1 <= n <= 10_000_000),
-        "kappa": _Spec("float", "> 0", _pos),
-        "gamma": _Spec("float", ">= 0", _nonneg),
-        "mu": _Spec("float", ">= 0", _nonneg),
-        "law": _Spec("str", "a registered rod law"),
+        "N": _Spec("int", "in [1, 10000000]", lambda n: 1 <= n <= 10_000_000,
+                   meaning="number of rod segments (N + 1 nodes)", unit="1"),
+        "kappa": _Spec("float", "> 0", _pos, meaning="elastic modulus kappa of the rod",
+                       unit="N"),
+        "gamma": _Spec("float", ">= 0", _nonneg,
+                       meaning="bending (beam regularisation) coefficient gamma", unit="N m2"),
+        "mu": _Spec("float", ">= 0", _nonneg, meaning="viscosity mu of the rod", unit="N s"),
+        "law": _Spec("str", "a registered rod law", meaning="stress law f of the rod"),
     },
     "floor": {
-        "kappa_b": _Spec("float", "> 0", _pos),
-        "beta": _Spec("float", "> 0", _pos),
-        "law": _Spec("str", "a registered floor law"),
+        "kappa_b": _Spec("float", "> 0", _pos, meaning="stiffness kappa_b of the floor",
+                         unit="N"),
+        "beta": _Spec("float", "> 0", _pos, unit="m",
+                      meaning="bending limit beta of the floor (its stress is singular at "
+                              "u_0 = -beta)"),
+        "law": _Spec("str", "a registered floor law", meaning="stress law sigma_b of the floor"),
     },
     "gravity": {
-        "g": _Spec("float", "finite, signed along +u (negative pulls down)"),
+        "g": _Spec("float", "finite, signed along +u (negative pulls down)",
+                   meaning="gravitational acceleration along +u", unit="m s-2"),
     },
     "initial": {
-        "height": _Spec("float", "> -floor.beta"),
-        "velocity": _Spec("float", "finite"),
-        "strain": _Spec("float", "> -1", lambda e: e > -1.0),
+        "height": _Spec("float", "> -floor.beta", meaning="initial height of the bottom end u_0",
+                        unit="m"),
+        "velocity": _Spec("float", "finite", meaning="initial velocity of every node",
+                          unit="m s-1"),
+        "strain": _Spec("float", "> -1", lambda e: e > -1.0,
+                        meaning="initial uniform strain of the rod", unit="1"),
     },
     "time": {
-        "t_end": _Spec("float", "> 0", _pos),
-        "integrator": _Spec("str", choices=INTEGRATORS),
-        "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1),
-        "dt_max": _Spec("float", "> 0", _pos, optional=True),
-        "dt_min": _Spec("float", "> 0", _pos),
-        "dt": _Spec("float", "> 0 (fixed step; unset for adaptive steps)", _pos, optional=True),
-        "rtol": _Spec("float", "in (0, 1)", lambda r: 0 < r < 1),
-        "atol": _Spec("float", "> 0", _pos),
+        "t_end": _Spec("float", "> 0", _pos, meaning="time at which the run ends", unit="s"),
+        "integrator": _Spec("str", choices=INTEGRATORS, meaning="time integrator"),
+        "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1, unit="1",
+                     meaning="fraction of the stability limit taken as the step (verlet, "
+                             "semi-implicit)"),
+        "dt_max": _Spec("float", "> 0", _pos, optional=True, meaning="largest adaptive step",
+                        unit="s"),
+        "dt_min": _Spec("float", "> 0", _pos, meaning="smallest step before the run fails",
+                        unit="s"),
+        "dt": _Spec("float", "> 0 (fixed step; unset for adaptive steps)", _pos, optional=True,
+                    meaning="fixed time step", unit="s"),
+        "rtol": _Spec("float", "in (0, 1)", lambda r: 0 < r < 1, unit="1",
+                      meaning="relative tolerance of the energy integrator's step control"),
+        "atol": _Spec("float", "> 0", _pos, unit="m",
+                      meaning="absolute tolerance (heights u) of the energy integrator's "
+                              "step control"),
     },
     "output": {
-        "snapshot_interval": _Spec("float", ">= 0 (0 disables snapshots)", _nonneg),
-        "diagnostics_interval": _Spec("float", ">= 0 (0 disables diagnostics)", _nonneg),
-        "compression": _Spec("str", choices=COMPRESSIONS),
+        "snapshot_interval": _Spec("float", ">= 0 (0 disables snapshots)", _nonneg, unit="s",
+                                   meaning="simulated time between snapshots of u and v"),
+        "diagnostics_interval": _Spec("float", ">= 0 (0 disables diagnostics)", _nonneg,
+                                      unit="s", meaning="simulated time between diagnostics "
+                                                        "rows"),
+        "compression": _Spec("str", choices=COMPRESSIONS,
+                             meaning="compression of the HDF5 tables"),
     },
 }
+
+
+def field_spec(key: str) -> _Spec:
+    """The spec of a dotted key: its kind, range, meaning and unit; unknown keys raise the
+    error that names the closest valid key."""
+    section, _, name = key.partition(".")
+    try:
+        return _FIELDS[section][name]
+    except KeyError:
+        raise _unknown_key_error(key) from None
 
 
 def valid_keys() -> list[str]:

@@ -55,7 +55,7 @@ def _heights(f, config, ax) -> None:
     s = _stride(n)
     t = g["t"][0:n:s]
     u = g["u"][0:n:s, list(nodes)]
-    x = f["grid/x"][()]
+    x = hdf5.read_x(f)
     import matplotlib
 
     colors = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.9, nodes.size))
