@@ -1,13 +1,18 @@
 """Validated, frozen run configuration, loadable from TOML and overridable by dotted keys.
 
-Every field is declared once in ``_FIELDS`` with its type and allowed range; bad values
-raise ``ValueError`` naming the key and the range, at the moment they enter.
+Every field is declared once in ``_FIELDS`` with its type, allowed range, meaning and unit
+(the default is the dataclass's): one source for the error messages, ``rodjit config``
+(``commented_toml``, ``key_lines``), the file attributes and the documentation.  Bad values
+raise ``ValueError`` naming the key and the range, at the moment they enter.  Numbers may be
+Python or NumPy numbers; a TOML file is strict (a quoted number is an error), while
+``override`` also takes strings in TOML syntax, as the command line's ``--set`` gives them.
 """
 from __future__ import annotations
 
 import dataclasses
 import difflib
 import math
+import numbers
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,7 +21,7 @@ from typing import Any, ClassVar, Mapping
 from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
-           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "field_spec",
+           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "field_spec", "key_lines",
            "parse_value"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
@@ -32,18 +37,26 @@ class _Spec:
         self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text keys
 
     def coerce(self, key: str, value: Any) -> Any:
+        """``value`` checked and converted to the field's Python type (NumPy integers and
+        floats as int and float; booleans, NumPy's included, are not numbers here)."""
         if value is None:
             if self.optional:
                 return None
             raise ValueError(f"{key} must be set ({self.describe()})")
+        if isinstance(value, str) and self.kind != "str":
+            raise ValueError(_quoted_error(key, value, self))
+        is_bool = isinstance(value, bool) or type(value).__name__ == "bool_"
         if self.kind == "int":
-            if isinstance(value, bool) or not isinstance(value, int):
-                if isinstance(value, float) and value.is_integer():
-                    value = int(value)
-                else:
-                    raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
+            if is_bool or not isinstance(value, numbers.Real):
+                raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
+            if isinstance(value, numbers.Integral):
+                value = int(value)
+            elif float(value).is_integer():
+                value = int(float(value))
+            else:
+                raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
         elif self.kind == "float":
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
+            if is_bool or not isinstance(value, numbers.Real):
                 raise ValueError(f"{key} = {value!r} is not a number ({self.describe()})")
             value = float(value)
             if not math.isfinite(value):
@@ -57,12 +70,32 @@ class _Spec:
             raise ValueError(f"{key} = {value!r} is out of range ({self.describe()})")
         return value
 
+    def comment(self, default: Any) -> str:
+        """One line of ``rodjit config``: meaning, unit, default and allowed values."""
+        unit = f"; unit {self.unit}" if self.unit and self.unit != "1" else (
+            "; dimensionless" if self.unit == "1" else "")
+        shown = "unset" if default is None else _toml_value(default)
+        return f"{self.meaning}{unit}; default {shown}; {self.describe()}"
+
     def describe(self) -> str:
         if self.choices is not None:
             text = "one of " + ", ".join(repr(c) for c in self.choices)
         else:
             text = f"{self.kind} {self.rng}".strip()
         return text + (", or unset" if self.optional else "")
+
+
+def _quoted_error(key: str, value: str, spec: "_Spec") -> str:
+    """The error for text where a number is expected: a quoted number says so."""
+    try:
+        number = tomllib.loads(f"v = {value.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        number = None
+    if isinstance(number, (int, float)) and not isinstance(number, bool):
+        return (f"{key} = {value!r} is a quoted number; write {value.strip()} without quotes "
+                f"({spec.describe()})")
+    what = "an integer" if spec.kind == "int" else "a number"
+    return f"{key} = {value!r} is not {what} ({spec.describe()})"
 
 
 def _pos(x):
@@ -142,6 +175,17 @@ def field_spec(key: str) -> _Spec:
         return _FIELDS[section][name]
     except KeyError:
         raise _unknown_key_error(key) from None
+
+
+def key_lines() -> list[str]:
+    """``rodjit config --keys``: every key with its meaning and unit, one per line."""
+    width = max(len(k) for k in valid_keys())
+    out = []
+    for key in valid_keys():
+        spec = field_spec(key)
+        unit = f" [{spec.unit}]" if spec.unit else ""
+        out.append(f"{key:<{width}}  {spec.meaning}{unit}")
+    return out
 
 
 def valid_keys() -> list[str]:
@@ -303,7 +347,7 @@ class Config:
             raise ValueError(f"configuration file {str(path)!r} is not valid TOML: {exc}") from None
         except UnicodeDecodeError:
             raise ValueError(f"configuration file {str(path)!r} is not a text file") from None
-        return cls.from_dict(data)
+        return cls()._replaced(_flatten(data), text=False)
 
     @classmethod
     def from_toml_string(cls, text: str) -> "Config":
@@ -311,13 +355,19 @@ class Config:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"configuration is not valid TOML: {exc}") from None
-        return cls.from_dict(data)
+        return cls()._replaced(_flatten(data), text=False)
 
     def override(self, changes: Mapping[str, Any]) -> "Config":
         """A new config with dotted keys replaced, e.g. ``{"rod.mu": 100.0}``.
 
-        Values may be strings in TOML syntax (``"1e-3"``, ``"'verlet'"``, ``"none"``).
+        Values may be strings in TOML syntax (``"1e-3"``, ``"'verlet'"``, ``"none"``), as the
+        command line's ``--set`` passes them, and NumPy numbers.
         """
+        return self._replaced(changes, text=True)
+
+    def _replaced(self, changes: Mapping[str, Any], *, text: bool) -> "Config":
+        """``override``; ``text``: strings for non-text keys are parsed as TOML values (else
+        they are an error naming the key, as in a TOML file)."""
         sections = {name: dataclasses.asdict(getattr(self, name)) for name in _SECTIONS}
         for key, value in changes.items():
             if not isinstance(key, str) or "." not in key:
@@ -325,9 +375,9 @@ class Config:
             section, name = key.split(".", 1)
             if section not in _FIELDS or name not in _FIELDS[section]:
                 raise _unknown_key_error(key)
-            if isinstance(value, str) and _FIELDS[section][name].kind != "str":
+            if text and isinstance(value, str) and _FIELDS[section][name].kind != "str":
                 value = parse_value(key, value)
-            elif isinstance(value, str) and _FIELDS[section][name].kind == "str":
+            elif text and isinstance(value, str) and _FIELDS[section][name].kind == "str":
                 value = _strip_quotes(value)
             sections[section][name] = value
         return Config(**{name: cls(**sections[name]) for name, cls in _SECTIONS.items()})
@@ -350,6 +400,20 @@ class Config:
                     lines.append(f"# {key} is unset")
                 else:
                     lines.append(f"{key} = {_toml_value(value)}")
+            lines.append("")
+        return "\n".join(lines)
+
+    def commented_toml(self) -> str:
+        """``to_toml`` with each key preceded by a comment: meaning, unit, default, range
+        (``rodjit config``).  Valid TOML that ``from_toml_string`` reads back."""
+        lines = []
+        for section, values in self.to_dict().items():
+            defaults = dataclasses.asdict(_SECTIONS[section]())
+            lines.append(f"[{section}]")
+            for key, value in values.items():
+                lines.append(f"# {_FIELDS[section][key].comment(defaults[key])}")
+                lines.append(f"# {key} is unset" if value is None else
+                             f"{key} = {_toml_value(value)}")
             lines.append("")
         return "\n".join(lines)
 
