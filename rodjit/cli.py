@@ -387,6 +387,31 @@ def presets_command():
         click.echo(f"{name:<14}{about}")
 
 
+@main.command("config")
+@click.argument("config", required=False, metavar="[CONFIG.toml | PRESET]")
+@click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
+              help="Override a configuration key, e.g. --set rod.mu=100 (repeatable).")
+@click.option("--keys", is_flag=True, help="List every key with its meaning and unit.")
+def config_command(config, sets, keys):
+    """Print the resolved configuration of CONFIG.toml, a preset or the built-in default
+    (with --set overrides) as TOML, each key commented with its meaning, unit, default and
+    allowed values; the output is itself a valid configuration file."""
+    from .config import key_lines
+
+    if keys:
+        if config is not None or sets:
+            raise UsageError("--keys lists the keys of every configuration; it takes no "
+                             "CONFIG or --set")
+        click.echo("\n".join(key_lines()))
+        return
+    try:
+        cfg, _ = _load_config(config)
+        cfg = cfg.override(_overrides(sets))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(cfg.commented_toml(), nl=False)
+
+
 # ---- rodjit info / plot: dispatch on the file's kind --------------------------------------
 def _kind(path: str) -> str:
     """The file's kind ("run", "sweep"), or a UsageError naming what is wrong with it."""

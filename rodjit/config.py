@@ -1,13 +1,18 @@
 """Validated, frozen run configuration, loadable from TOML and overridable by dotted keys.
 
-Every field is declared once in ``_FIELDS`` with its type and allowed range; bad values
-raise ``ValueError`` naming the key and the range, at the moment they enter.
+Every field is declared once in ``_FIELDS`` with its type, allowed range, meaning and unit
+(the default is the dataclass's): one source for the error messages, ``rodjit config``
+(``commented_toml``, ``key_lines``), the file attributes and the documentation.  Bad values
+raise ``ValueError`` naming the key and the range, at the moment they enter.  Numbers may be
+Python or NumPy numbers; a TOML file is strict (a quoted number is an error), while
+``override`` also takes strings in TOML syntax, as the command line's ``--set`` gives them.
 """
 from __future__ import annotations
 
 import dataclasses
 import difflib
 import math
+import numbers
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,7 +21,8 @@ from typing import Any, ClassVar, Mapping
 from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
-           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "parse_value"]
+           "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "field_spec", "key_lines",
+           "parse_value"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
 
@@ -25,22 +31,32 @@ class _Spec:
     """Type and range of one configuration field; ``check`` returns an error or None."""
 
     def __init__(self, kind: str, rng: str = "", check=None, optional: bool = False,
-                 choices: tuple[str, ...] | None = None):
+                 choices: tuple[str, ...] | None = None, *, meaning: str, unit: str = ""):
         self.kind, self.rng, self.check, self.optional, self.choices = kind, rng, check, optional, choices
+        self.meaning = meaning   # what the key sets: for comments, listings and file attributes
+        self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text keys
 
     def coerce(self, key: str, value: Any) -> Any:
+        """``value`` checked and converted to the field's Python type (NumPy integers and
+        floats as int and float; booleans, NumPy's included, are not numbers here)."""
         if value is None:
             if self.optional:
                 return None
             raise ValueError(f"{key} must be set ({self.describe()})")
+        if isinstance(value, str) and self.kind != "str":
+            raise ValueError(_quoted_error(key, value, self))
+        is_bool = isinstance(value, bool) or type(value).__name__ == "bool_"
         if self.kind == "int":
-            if isinstance(value, bool) or not isinstance(value, int):
-                if isinstance(value, float) and value.is_integer():
-                    value = int(value)
-                else:
-                    raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
+            if is_bool or not isinstance(value, numbers.Real):
+                raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
+            if isinstance(value, numbers.Integral):
+                value = int(value)
+            elif float(value).is_integer():
+                value = int(float(value))
+            else:
+                raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
         elif self.kind == "float":
-            if isinstance(value, bool) or not isinstance(value, (int, float)):
+            if is_bool or not isinstance(value, numbers.Real):
                 raise ValueError(f"{key} = {value!r} is not a number ({self.describe()})")
             value = float(value)
             if not math.isfinite(value):
@@ -54,12 +70,32 @@ class _Spec:
             raise ValueError(f"{key} = {value!r} is out of range ({self.describe()})")
         return value
 
+    def comment(self, default: Any) -> str:
+        """One line of ``rodjit config``: meaning, unit, default and allowed values."""
+        unit = f"; unit {self.unit}" if self.unit and self.unit != "1" else (
+            "; dimensionless" if self.unit == "1" else "")
+        shown = "unset" if default is None else _toml_value(default)
+        return f"{self.meaning}{unit}; default {shown}; {self.describe()}"
+
     def describe(self) -> str:
         if self.choices is not None:
             text = "one of " + ", ".join(repr(c) for c in self.choices)
         else:
             text = f"{self.kind} {self.rng}".strip()
         return text + (", or unset" if self.optional else "")
+
+
+def _quoted_error(key: str, value: str, spec: "_Spec") -> str:
+    """The error for text where a number is expected: a quoted number says so."""
+    try:
+        number = tomllib.loads(f"v = {value.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        number = None
+    if isinstance(number, (int, float)) and not isinstance(number, bool):
+        return (f"{key} = {value!r} is a quoted number; write {value.strip()} without quotes "
+                f"({spec.describe()})")
+    what = "an integer" if spec.kind == "int" else "a number"
+    return f"{key} = {value!r} is not {what} ({spec.describe()})"
 
 
 def _pos(x):
@@ -72,41 +108,84 @@ def _nonneg(x):
 
 _FIELDS: dict[str, dict[str, _Spec]] = {
     "rod": {
-        "N": _Spec("int", "in [1, 10000000]", lambda n: 1 <= n <= 10_000_000),
-        "kappa": _Spec("float", "> 0", _pos),
-        "gamma": _Spec("float", ">= 0", _nonneg),
-        "mu": _Spec("float", ">= 0", _nonneg),
-        "law": _Spec("str", "a registered rod law"),
+        "N": _Spec("int", "in [1, 10000000]", lambda n: 1 <= n <= 10_000_000,
+                   meaning="number of rod segments (N + 1 nodes)", unit="1"),
+        "kappa": _Spec("float", "> 0", _pos, meaning="elastic modulus kappa of the rod",
+                       unit="N"),
+        "gamma": _Spec("float", ">= 0", _nonneg,
+                       meaning="bending (beam regularisation) coefficient gamma", unit="N m2"),
+        "mu": _Spec("float", ">= 0", _nonneg, meaning="viscosity mu of the rod", unit="N s"),
+        "law": _Spec("str", "a registered rod law", meaning="stress law f of the rod"),
     },
     "floor": {
-        "kappa_b": _Spec("float", "> 0", _pos),
-        "beta": _Spec("float", "> 0", _pos),
-        "law": _Spec("str", "a registered floor law"),
+        "kappa_b": _Spec("float", "> 0", _pos, meaning="stiffness kappa_b of the floor",
+                         unit="N"),
+        "beta": _Spec("float", "> 0", _pos, unit="m",
+                      meaning="bending limit beta of the floor (its stress is singular at "
+                              "u_0 = -beta)"),
+        "law": _Spec("str", "a registered floor law", meaning="stress law sigma_b of the floor"),
     },
     "gravity": {
-        "g": _Spec("float", "finite, signed along +u (negative pulls down)"),
+        "g": _Spec("float", "finite, signed along +u (negative pulls down)",
+                   meaning="gravitational acceleration along +u", unit="m s-2"),
     },
     "initial": {
-        "height": _Spec("float", "> -floor.beta"),
-        "velocity": _Spec("float", "finite"),
-        "strain": _Spec("float", "> -1", lambda e: e > -1.0),
+        "height": _Spec("float", "> -floor.beta", meaning="initial height of the bottom end u_0",
+                        unit="m"),
+        "velocity": _Spec("float", "finite", meaning="initial velocity of every node",
+                          unit="m s-1"),
+        "strain": _Spec("float", "> -1", lambda e: e > -1.0,
+                        meaning="initial uniform strain of the rod", unit="1"),
     },
     "time": {
-        "t_end": _Spec("float", "> 0", _pos),
-        "integrator": _Spec("str", choices=INTEGRATORS),
-        "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1),
-        "dt_max": _Spec("float", "> 0", _pos, optional=True),
-        "dt_min": _Spec("float", "> 0", _pos),
-        "dt": _Spec("float", "> 0 (fixed step; unset for adaptive steps)", _pos, optional=True),
-        "rtol": _Spec("float", "in (0, 1)", lambda r: 0 < r < 1),
-        "atol": _Spec("float", "> 0", _pos),
+        "t_end": _Spec("float", "> 0", _pos, meaning="time at which the run ends", unit="s"),
+        "integrator": _Spec("str", choices=INTEGRATORS, meaning="time integrator"),
+        "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1, unit="1",
+                     meaning="fraction of the stability limit taken as the step (verlet, "
+                             "semi-implicit)"),
+        "dt_max": _Spec("float", "> 0", _pos, optional=True, meaning="largest adaptive step",
+                        unit="s"),
+        "dt_min": _Spec("float", "> 0", _pos, meaning="smallest step before the run fails",
+                        unit="s"),
+        "dt": _Spec("float", "> 0 (fixed step; unset for adaptive steps)", _pos, optional=True,
+                    meaning="fixed time step", unit="s"),
+        "rtol": _Spec("float", "in (0, 1)", lambda r: 0 < r < 1, unit="1",
+                      meaning="relative tolerance of the energy integrator's step control"),
+        "atol": _Spec("float", "> 0", _pos, unit="m",
+                      meaning="absolute tolerance (heights u) of the energy integrator's "
+                              "step control"),
     },
     "output": {
-        "snapshot_interval": _Spec("float", ">= 0 (0 disables snapshots)", _nonneg),
-        "diagnostics_interval": _Spec("float", ">= 0 (0 disables diagnostics)", _nonneg),
-        "compression": _Spec("str", choices=COMPRESSIONS),
+        "snapshot_interval": _Spec("float", ">= 0 (0 disables snapshots)", _nonneg, unit="s",
+                                   meaning="simulated time between snapshots of u and v"),
+        "diagnostics_interval": _Spec("float", ">= 0 (0 disables diagnostics)", _nonneg,
+                                      unit="s", meaning="simulated time between diagnostics "
+                                                        "rows"),
+        "compression": _Spec("str", choices=COMPRESSIONS,
+                             meaning="compression of the HDF5 tables"),
     },
 }
+
+
+def field_spec(key: str) -> _Spec:
+    """The spec of a dotted key: its kind, range, meaning and unit; unknown keys raise the
+    error that names the closest valid key."""
+    section, _, name = key.partition(".")
+    try:
+        return _FIELDS[section][name]
+    except KeyError:
+        raise _unknown_key_error(key) from None
+
+
+def key_lines() -> list[str]:
+    """``rodjit config --keys``: every key with its meaning and unit, one per line."""
+    width = max(len(k) for k in valid_keys())
+    out = []
+    for key in valid_keys():
+        spec = field_spec(key)
+        unit = f" [{spec.unit}]" if spec.unit else ""
+        out.append(f"{key:<{width}}  {spec.meaning}{unit}")
+    return out
 
 
 def valid_keys() -> list[str]:
@@ -268,7 +347,7 @@ class Config:
             raise ValueError(f"configuration file {str(path)!r} is not valid TOML: {exc}") from None
         except UnicodeDecodeError:
             raise ValueError(f"configuration file {str(path)!r} is not a text file") from None
-        return cls.from_dict(data)
+        return cls()._replaced(_flatten(data), text=False)
 
     @classmethod
     def from_toml_string(cls, text: str) -> "Config":
@@ -276,13 +355,19 @@ class Config:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"configuration is not valid TOML: {exc}") from None
-        return cls.from_dict(data)
+        return cls()._replaced(_flatten(data), text=False)
 
     def override(self, changes: Mapping[str, Any]) -> "Config":
         """A new config with dotted keys replaced, e.g. ``{"rod.mu": 100.0}``.
 
-        Values may be strings in TOML syntax (``"1e-3"``, ``"'verlet'"``, ``"none"``).
+        Values may be strings in TOML syntax (``"1e-3"``, ``"'verlet'"``, ``"none"``), as the
+        command line's ``--set`` passes them, and NumPy numbers.
         """
+        return self._replaced(changes, text=True)
+
+    def _replaced(self, changes: Mapping[str, Any], *, text: bool) -> "Config":
+        """``override``; ``text``: strings for non-text keys are parsed as TOML values (else
+        they are an error naming the key, as in a TOML file)."""
         sections = {name: dataclasses.asdict(getattr(self, name)) for name in _SECTIONS}
         for key, value in changes.items():
             if not isinstance(key, str) or "." not in key:
@@ -290,9 +375,9 @@ class Config:
             section, name = key.split(".", 1)
             if section not in _FIELDS or name not in _FIELDS[section]:
                 raise _unknown_key_error(key)
-            if isinstance(value, str) and _FIELDS[section][name].kind != "str":
+            if text and isinstance(value, str) and _FIELDS[section][name].kind != "str":
                 value = parse_value(key, value)
-            elif isinstance(value, str) and _FIELDS[section][name].kind == "str":
+            elif text and isinstance(value, str) and _FIELDS[section][name].kind == "str":
                 value = _strip_quotes(value)
             sections[section][name] = value
         return Config(**{name: cls(**sections[name]) for name, cls in _SECTIONS.items()})
@@ -315,6 +400,20 @@ class Config:
                     lines.append(f"# {key} is unset")
                 else:
                     lines.append(f"{key} = {_toml_value(value)}")
+            lines.append("")
+        return "\n".join(lines)
+
+    def commented_toml(self) -> str:
+        """``to_toml`` with each key preceded by a comment: meaning, unit, default, range
+        (``rodjit config``).  Valid TOML that ``from_toml_string`` reads back."""
+        lines = []
+        for section, values in self.to_dict().items():
+            defaults = dataclasses.asdict(_SECTIONS[section]())
+            lines.append(f"[{section}]")
+            for key, value in values.items():
+                lines.append(f"# {_FIELDS[section][key].comment(defaults[key])}")
+                lines.append(f"# {key} is unset" if value is None else
+                             f"{key} = {_toml_value(value)}")
             lines.append("")
         return "\n".join(lines)
 

@@ -46,7 +46,7 @@ def _about_run(path: str) -> About:
             status += (f" (the writing process is gone: it was killed; 'rodjit run --resume "
                        f"{path}' continues from the checkpoint at t = {s.t:.6g})")
     c = s.counts
-    return About(RUN_FORMAT_VERSION, s.attrs, status,
+    return About(int(s.attrs.get("format_version", RUN_FORMAT_VERSION)), s.attrs, status,
                  [f"rows      {c['snapshots']} snapshots, {c['diagnostics']} diagnostics, "
                   f"{c['episodes']} episodes, {c['bounces']} bounces"],
                  "configuration:", s.config, s.report(max_bounces=None))
@@ -69,7 +69,7 @@ def _about_sweep(path: str) -> About:
                 for key, values in zip(table.grid.keys, table.grid.values)]
     if a.get("save_runs"):
         details.append(f"run files {a['save_runs']}")
-    return About(sweep_file.FORMAT_VERSION, a,
+    return About(int(a.get("format_version", sweep_file.FORMAT_VERSION)), a,
                  status + (f": {table.message}" if table.message else ""), details,
                  "base configuration:", table.base, table.report())
 

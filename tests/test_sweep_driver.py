@@ -74,13 +74,13 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
     same_values(loaded, inline_table)
     with h5py.File(path, "r") as f:
         a = f.attrs
-        assert a["rodjit_kind"] == "sweep" and a["format_version"] == 1
+        assert a["rodjit_kind"] == "sweep" and a["format_version"] == 2
         assert a["status"] == "completed" and a["command"] == "test sweep"
         assert rodjit.Config.from_toml_string(a["base_config_toml"]) == BASE
         assert Grid.from_json(a["grid"]) == Grid.from_spec(GRID)
         assert list(a["grid_keys"]) == ["rod.mu", "floor.beta"] and a["n_points"] == 4
         s = f["summary"]
-        assert list(s) == ["rod.mu", "floor.beta", *SUMMARY_COLUMNS]   # in table order
+        assert list(s) == ["point", "rod.mu", "floor.beta", *SUMMARY_COLUMNS]   # dimension, then table order
         assert s["rod.mu"].dtype == np.float64 and s["steps"].dtype == np.int64
         assert h5py.check_string_dtype(s["status"].dtype)
         assert all(s[c].shape == (4,) for c in s)

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import h5py
 
+from .cf import LIBVER
 from .lock import FileBusy, is_locked
 
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
@@ -67,9 +68,9 @@ def _unopenable(path, exc) -> NotARunFile:
     return NotARunFile(f"cannot open {str(path)!r}: {' '.join(str(exc).split())}")
 
 
-def check_kind(f: h5py.File, kind: str, version: int, path=None) -> None:
+def check_kind(f: h5py.File, kind: str, version, path=None) -> None:
     """Raise NotARunFile unless ``f`` is a rodjit ``kind`` file ("run", "sweep") of format
-    ``version``."""
+    ``version`` (an int, or the tuple of formats read)."""
     name = str(path if path is not None else f.filename)
     found = f.attrs.get("rodjit_kind")
     if found is None:
@@ -77,9 +78,11 @@ def check_kind(f: h5py.File, kind: str, version: int, path=None) -> None:
     if found != kind:
         raise NotARunFile(f"{name!r} is a rodjit {found!r} file, not a {kind} file")
     got = int(f.attrs.get("format_version", 0))
-    if got != version:
+    versions = version if isinstance(version, tuple) else (version,)
+    if got not in versions:
+        wanted = " or ".join(str(v) for v in versions)
         raise NotARunFile(f"{name!r} has {kind}-file format {got}; this rodjit reads format "
-                          f"{version}")
+                          f"{wanted}")
 
 
 def file_kind(path) -> str:
@@ -93,10 +96,11 @@ def file_kind(path) -> str:
 
 
 def open_for_writing(path, mode: str) -> h5py.File:
-    """``h5py.File(path, mode)`` in the latest file format (SWMR needs it); FileBusy if
+    """``h5py.File(path, mode)`` in the HDF5 1.10 file format (``cf.LIBVER``: the oldest
+    with SWMR, readable by HDF5 1.10 and netCDF-C); FileBusy if
     another process holds the file, ValueError (one line) for any other failure."""
     try:
-        return h5py.File(path, mode, libver="latest")
+        return h5py.File(path, mode, libver=LIBVER)
     except OSError as exc:
         if "lock" in str(exc):
             raise FileBusy(f"{str(path)!r} is open in another process; close it there and "

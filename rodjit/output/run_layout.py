@@ -1,11 +1,13 @@
 """The run file's layout (the public contract; README "HDF5 layout") and the builder that
 creates it.
 
-Root attributes, ``/grid/x``, the tables ``/snapshots``, ``/diagnostics``, ``/episodes``,
+Format 2 (format 1 is still read and continued): root attributes, the tables ``/snapshots``, ``/diagnostics``, ``/episodes``,
 ``/bounces`` (one dataset per column, growing along axis 0, with dimension scales so xarray
-sees coordinates) and ``/checkpoint`` (two slots written alternately; ``/checkpoint/current``
+sees coordinates; ``/snapshots/x`` is the node coordinate) and ``/checkpoint`` (two slots written alternately; ``/checkpoint/current``
 names the valid one).  Everything is created before SWMR writing starts, which cannot add
-objects.
+objects.  The file is netCDF-4 / CF where that fits (``cf``): every dataset has a
+``long_name`` (and a ``units`` where one unit applies), every axis a dimension, booleans are
+flagged ``int8``.  Format 1 also had ``/grid/x``, the same values as ``/snapshots/x``.
 """
 from __future__ import annotations
 
@@ -19,15 +21,17 @@ from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS, INT_COLUMNS
 from ..stepping import layout as L
 from ..stepping.registry import SCHEME_STATS
 from ..version import __version__
+from . import cf
 from .growing_table import Table
 from .h5files import now, writer_attrs
 
-__all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
+__all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
            "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "RunLayout",
            "build_layout", "overwrite"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+READS = (1, 2)          # the formats this version reads and continues
 STATUSES = ("running", "completed", "interrupted", "failed")
 
 SNAPSHOT_CHUNK_BYTES = 256 * 1024   # one chunk of u (or v) holds this many bytes of snapshots
@@ -48,11 +52,33 @@ _DESCRIPTIONS = {
     "snapshots/u": "height u_i of every node (rows: times, columns: nodes at x)",
     "snapshots/v": "velocity v_i of every node",
     "snapshots/x": "natural position x_i = i/N of each node",
-    "grid/x": "natural position x_i = i/N of each node",
     "episodes/t_start": "start of a contact episode (u_0 < 0)",
     "episodes/t_end": "end of the episode",
     "bounces/open": "true if the bounce's last episode had not ended when the run stopped",
 }
+
+
+def x_path(f: h5py.File) -> str:
+    """Where a run file keeps the nodes' positions: ``/snapshots/x`` (format 2) or
+    ``/grid/x`` (format 1)."""
+    return "grid/x" if "grid" in f else "snapshots/x"
+
+
+# the checkpoint's dimensions (netCDF dimensions without values): name -> entries named
+_CK_DIMS = {"state": ("state_row", "node"), "clock": ("clock_entry",),
+            "count": ("count_entry",), "ev": ("ev_entry",), "sstats": ("sstats_entry",),
+            "lengths": ("table",)}
+_CK_LONG_NAMES = {
+    "state": "heights u, velocities v and accelerations a of every node",
+    "clock": "the run's real-valued state (entries named in 'names')",
+    "count": "the run's counters (entries named in 'names')",
+    "ev": "contact and bounce bookkeeping (entries named in 'names')",
+    "sstats": "per-scheme step counts (entries named in 'names')",
+    "run_time": "wall time spent stepping in compiled code", "compile_time":
+    "wall time spent compiling or loading kernels", "lengths":
+    "rows of each table (in 'names' order) this checkpoint matches",
+    "current": "the valid checkpoint slot (0 or 1)"}
+_CK_UNITS = {"run_time": "s", "compile_time": "s", "lengths": "1", "current": "1"}
 
 
 def _names(size: int, mapping: dict[int, str]) -> tuple[str, ...]:
@@ -80,7 +106,8 @@ EV_NAMES = _names(L.EV_SIZE, {
     L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
     L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
     L.REL_MIN_EPS: "min_strain_at_release"})
-SUMMARY_ATTRS = ("rodjit_version", "created", "command", "history")   # shown by ``info``
+SUMMARY_ATTRS = ("rodjit_version", "format_version", "created", "command",
+                 "history")                                 # shown by ``info``
 CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")      # a checkpoint's arrays
 CK_SCALARS = ("run_time", "compile_time")                     # and its numbers
 _CK_DATASETS = CK_ARRAYS + CK_SCALARS + ("lengths",)
@@ -123,15 +150,12 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
     base = {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
             "rodjit_version": __version__, "created": now(), "command": "",
             "config_toml": config.to_toml(), "status": "running", "message": "",
-            **writer_attrs()}
+            **writer_attrs(),
+            **cf.root_attrs(f"rodjit run: rod of {config.rod.N} segments dropped on a floor")}
     base.update(attrs)
     for key, value in base.items():
         _attr(f, key, value)
     filters = _filters(config.output.compression)
-
-    grid = f.create_group("grid")
-    gx = grid.create_dataset("x", data=x)
-    gx.make_scale("x")
 
     def column(group, name, row_shape, chunk_rows, dtype=np.float64, like=None):
         """A growing column; ``like``: a column of the same group, shape and dtype whose
@@ -142,9 +166,12 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
             ds = group.create_dataset(name, shape=(0,) + row_shape,
                                       maxshape=(None,) + row_shape,
                                       chunks=(chunk_rows,) + row_shape, dtype=dtype, **filters)
-        text = _DESCRIPTIONS.get(f"{group.name[1:]}/{name}")
+        table = group.name[1:]
+        text = _DESCRIPTIONS.get(f"{table}/{name}")
         if text:
             _attr(ds, "description", text)
+        for key, value in cf.column_attrs(table, name).items():
+            _attr(ds, key, value)
         return ds
 
     snap = f.create_group("snapshots")
@@ -154,6 +181,8 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
     sx = snap.create_dataset("x", data=x)
     sx.make_scale("x")
     _attr(sx, "description", _DESCRIPTIONS["snapshots/x"])
+    for key, value in cf.column_attrs("grid", "x").items():
+        _attr(sx, key, value)
     step = column(snap, "step", (), rows, np.int64)
     step.dims[0].attach_scale(t)
     columns = {"snapshots": [t, step]}
@@ -172,7 +201,7 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
         scale = column(g, names[0], (), chunk)
         scale.make_scale(names[0])
         columns[group] = [scale]
-        dtypes = [np.int64 if name in INT_COLUMNS else bool if name in BOOL_COLUMNS
+        dtypes = [np.int64 if name in INT_COLUMNS else cf.BOOL_DTYPE if name in BOOL_COLUMNS
                   else np.float64 for name in names]
         for name, dtype in zip(names[1:], dtypes[1:]):
             ds = column(g, name, (), chunk, dtype, like=scale if dtype is np.float64 else None)
@@ -186,10 +215,15 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
     _attr(ckg, "description", "two slots written alternately; 'current' names the valid "
                               "one; its 'lengths' are the table rows it matches")
     current = ckg.create_dataset("current", data=np.int64(0))
+    _ck_attrs(current, "current")
     lengths = ck.get("lengths", {})
     first = {name: np.asarray(ck[name], np.float64) for name in CK_SCALARS}
     first.update({name: ck[name] for name in CK_ARRAYS},
                  lengths=np.array([lengths.get(name, 0) for name in TABLES], np.int64))
+    dims = {}
+    for name, names in _CK_DIMS.items():
+        for dim, size in zip(names, np.shape(first[name])):
+            dims[dim] = cf.pure_dimension(ckg, dim, size)
     slots = []
     for slot in (0, 1):                       # slot 1: zeros (its fill value), unwritten
         g = ckg.create_group(f"slot{slot}")
@@ -200,7 +234,16 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
                                     g.create_dataset(name, value.shape, value.dtype))
             if name in _CK_NAMES:
                 _attr(ds, "names", _CK_NAMES[name])
+            _ck_attrs(ds, name)
+            for axis, dim in enumerate(_CK_DIMS.get(name, ())):
+                ds.dims[axis].attach_scale(dims[dim])
     return RunLayout(tables, slots, current)
+
+
+def _ck_attrs(ds, name: str) -> None:
+    _attr(ds, "long_name", "checkpoint: " + _CK_LONG_NAMES[name])
+    if name in _CK_UNITS:              # the other arrays mix units (see their 'names')
+        _attr(ds, "units", _CK_UNITS[name])
 
 
 # A new run file has dozens of datasets and attributes, whose creation through h5py's

@@ -1,24 +1,28 @@
 """Reading a run file: its configuration, valid checkpoint and tables, or all of it as a
 ``rodjit.Result`` (``load_file``).  A file still being written is read up to the rows
-present in every column."""
+present in every column.  Formats 1 and 2 read alike: the nodes' positions from wherever
+the format keeps them, boolean columns as bool."""
 from __future__ import annotations
 
 import h5py
 import numpy as np
 
 from ..config import Config
+from ..records.columns import BOOL_COLUMNS
 from ..records.result import Result
 from ..records.stats import run_stats
 from ..stepping import layout as L
 from .h5files import NotARunFile, check_kind, open_file
-from .run_layout import CK_ARRAYS, CK_SCALARS, FORMAT_VERSION, KIND, TABLES
+from .cf import as_bool
+from .run_layout import CK_ARRAYS, CK_SCALARS, KIND, READS, TABLES, x_path
 
-__all__ = ["check_run_file", "read_config", "read_checkpoint", "read_table", "load_file"]
+__all__ = ["check_run_file", "read_config", "read_checkpoint", "read_table", "read_x",
+           "load_file"]
 
 
 def check_run_file(f: h5py.File, path=None) -> None:
     """Raise NotARunFile unless ``f`` is a rodjit run file of a format this version reads."""
-    check_kind(f, KIND, FORMAT_VERSION, path)
+    check_kind(f, KIND, READS, path)
 
 
 def read_config(f: h5py.File) -> Config:
@@ -47,7 +51,15 @@ def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str,
     g = f[group]
     n = min(g[c].shape[0] for c in TABLES[group])
     sel = slice(0, n) if rows is None else slice(*rows.indices(n))
-    return {c: g[c][sel] for c in TABLES[group]}
+    out = {c: g[c][sel] for c in TABLES[group]}
+    for c in BOOL_COLUMNS.intersection(out):
+        out[c] = as_bool(out[c])
+    return out
+
+
+def read_x(f: h5py.File) -> np.ndarray:
+    """The natural positions x_i = i/N of the nodes."""
+    return f[x_path(f)][()]
 
 
 def load_file(path):
@@ -68,7 +80,7 @@ def load_file(path):
                           compile_time=ck["compile_time"], run_time=ck["run_time"],
                           nodes=config.rod.N + 1, scheme_counts=ck["sstats"])
         return Result(
-            config=config, x=f["grid/x"][()], t=snaps["t"], u=snaps["u"], v=snaps["v"],
+            config=config, x=read_x(f), t=snaps["t"], u=snaps["u"], v=snaps["v"],
             diagnostics=read_table(f, "diagnostics"), episodes=read_table(f, "episodes"),
             bounces=read_table(f, "bounces"), stats=stats,
             status=str(f.attrs["status"]), message=str(f.attrs["message"]),

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._extras import need
 from ..records.datasets import run_dataset, strain_of
-from .run_reader import check_run_file, read_config, read_table
+from .run_reader import check_run_file, read_config, read_table, read_x
 from .h5files import open_file
 
 __all__ = ["open_run"]
@@ -61,7 +61,7 @@ def open_run(path):
         H5Rows, Lazy = _lazy_arrays(xr)
         g = f["snapshots"]
         rows = min(g[c].shape[0] for c in ("t", "u", "v"))
-        x = f["grid/x"][()]
+        x = read_x(f)
         n = x.size - 1
         u = Lazy(H5Rows(g["u"], rows, n + 1))
         v = Lazy(H5Rows(g["v"], rows, n + 1))

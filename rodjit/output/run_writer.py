@@ -15,9 +15,11 @@ import h5py
 import numpy as np
 
 from ..records.bounces import bounce_table
+from ..records.columns import BOOL_COLUMNS
 from ..records.extremes import Extremes
 from ..records.sink import Sink
 from ..stepping import layout as L
+from .cf import LIBVER
 from .h5files import (WriteFailed, disk_cause, history_with, now, open_for_writing,
                       writer_attrs)
 from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
@@ -53,8 +55,9 @@ class RunWriter(Sink):
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
         b = self.tables["bounces"]       # every bounce row, kept for the summary
-        self._bounces = [[np.zeros(0, buf.dtype) if new else d[:b.length]]
-                         for d, buf in zip(b.ds, b.buf)]
+        self._bounces = [[np.zeros(0, _kept(name, buf.dtype)) if new else
+                          d[:b.length].astype(_kept(name, d.dtype))]
+                         for name, d, buf in zip(TABLES["bounces"], b.ds, b.buf)]
         if not new:
             self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
         self.final = None        # what closing leaves in the file (status, bounces, ...)
@@ -140,6 +143,11 @@ class RunWriter(Sink):
             pass
 
 
+def _kept(column: str, dtype):
+    """The dtype a kept bounce column has in memory (a flagged int8 column as bool)."""
+    return bool if column in BOOL_COLUMNS else dtype
+
+
 def create_run_file(path, config, start, *, command: str) -> RunWriter:
     """A new run file in SWMR mode whose first checkpoint is ``start``: a Run not started
     yet, or the ``checkpoint()`` of one (taken before it started, so the run may already
@@ -202,13 +210,14 @@ def recover(path) -> None:
         config = read_config(src)
         ck = read_checkpoint(src)
         attrs = {k: v for k, v in src.attrs.items()}
+        attrs.pop("format_version")       # the rebuilt file has the current layout
         t = float(ck["clock"][L.T])
         attrs["history"] = history_with(src, f"recovered at the checkpoint t = {t!r} after the "
                                          f"writer stopped without closing the file")
         attrs["status"] = "interrupted"
         attrs["message"] = (f"the writing process stopped without closing the file (killed?); "
                             f"recovered at the checkpoint t = {t!r}")
-        with h5py.File(tmp, "w", libver="latest") as dst:
+        with h5py.File(tmp, "w", libver=LIBVER) as dst:
             build_layout(dst, config, ck, attrs)       # its checkpoint in slot 0
             for group, cols in TABLES.items():
                 n = ck["lengths"][group]

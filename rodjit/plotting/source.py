@@ -36,7 +36,7 @@ class RunSource:
             try:
                 hdf5.check_run_file(self._file, obj)
                 self.config = hdf5.read_config(self._file)
-                self.x = self._file["grid/x"][()]
+                self.x = hdf5.read_x(self._file)
             except BaseException:
                 self._file.close()
                 raise

@@ -75,3 +75,27 @@ def meaning(table: str, column: str) -> Meaning:
         return COLUMN_MEANINGS[table][column]
     except KeyError:
         raise KeyError(f"no description of column {column!r} of table {table!r}") from None
+
+
+# the sweep file's summary columns after the swept keys (whose unit is the key's own,
+# ``config.field_spec``); their longer descriptions are ``sweeps.point.SUMMARY_COLUMNS``
+COLUMN_MEANINGS["summary"] = {
+    "status": Meaning("status of the point (completed, failed, pending)", ""),
+    "message": Meaning("why the point failed", ""),
+    "n_bounces": Meaning("bounces recorded", "1"),
+    "n_complete_bounces": Meaning("bounces whose last contact episode ended", "1"),
+    "restitution_first": Meaning("restitution of the first complete bounce", "1"),
+    "restitution_mean": Meaning("mean restitution over the complete bounces", "1"),
+    "contact_time_first": Meaning("contact time of the first complete bounce", "s"),
+    "min_u0": Meaning("lowest bottom height u_0", "m"),
+    "max_floor_force": Meaning("largest floor force sigma_b(u_0)", "N"),
+    "min_strain": Meaning("smallest segment strain", "1"),
+    "energy_error": Meaning("relative energy error", "1"),
+    "steps": Meaning("accepted steps", "1"),
+    "rejected_steps": Meaning("rejected trial steps", "1"),
+    "wall_time": Meaning("wall time of the point in its worker", "s"),
+    "compile_time": Meaning("wall time compiling or loading kernels", "s"),
+    "run_time": Meaning("wall time stepping in compiled code", "s"),
+    "t_final": Meaning("simulated time reached", "s"),
+    "run_file": Meaning("the point's run file", ""),
+}

@@ -1,9 +1,12 @@
 """The sweep file: one HDF5 file per sweep, a summary row per grid point (public contract).
 
-Layout (README "Sweeps"): root attributes (``rodjit_kind = "sweep"``, version, base
-configuration as TOML, the grid as JSON, command, status); ``/summary/<column>``, 1-D, one
-row per point in grid order (the swept keys, then ``point.SUMMARY_COLUMNS``); and
-``/points/<index>/bounces/<column>``, the bounce table of each point that ran.
+Layout (README "Sweeps"), format 2: root attributes (``rodjit_kind = "sweep"``, version,
+base configuration as TOML, the grid as JSON, command, status, the CF ones);
+``/summary/<column>``, 1-D along the dimension ``/summary/point`` (the point's index), one
+row per point in grid order (the swept keys, which are the data's coordinates, then
+``point.SUMMARY_COLUMNS``); and ``/points/<index>/bounces/<column>``, the bounce table of
+each point that ran, along its ``t_impact``.  Format 1, still read and continued, had no
+``point`` dimension and stored ``open`` as bool.
 
 Every row exists from the start, ``status = "pending"`` until its point reports.  The parent
 process is the only writer; it opens the file for each batch of results and closes it
@@ -16,7 +19,8 @@ import time
 import h5py
 import numpy as np
 
-from ..config import Config
+from ..config import Config, field_spec
+from ..output import cf
 from ..output.h5files import (FileBusy, NotARunFile, check_kind, history_with, now, open_file,
                               writer_attrs)
 from ..records.bounces import empty_bounces
@@ -30,7 +34,9 @@ __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "fin
            "open_sweep", "reopen"]
 
 KIND = "sweep"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+READS = (1, 2)          # the formats this version reads and continues
+POINT = "point"         # the summary's dimension
 STATUSES = ("running", "completed", "interrupted", "failed")
 LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file before failing
 
@@ -59,7 +65,7 @@ def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
     deadline = time.monotonic() + wait
     while True:
         try:
-            return h5py.File(path, mode, libver="latest")
+            return h5py.File(path, mode, libver=cf.LIBVER)
         except OSError as exc:
             if "lock" not in str(exc) or time.monotonic() > deadline:
                 if "lock" in str(exc):
@@ -79,20 +85,35 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
                            "grid": grid.to_json(), "grid_keys": list(grid.keys),
                            "n_points": n, "status": "running", "message": "",
                            "history": [f"{now()} created by: {command}"],
-                           **writer_attrs(), **attrs}.items():
+                           **writer_attrs(), **attrs,
+                           **cf.root_attrs(f"rodjit sweep over {', '.join(grid.keys)} "
+                                           f"({n} points)")}.items():
             f.attrs[key] = value
         s = f.create_group("summary", track_order=True)
         s.attrs["description"] = ("one row per grid point, in grid order (the last swept key "
                                   "varies fastest); status 'pending' until the point has run")
         chunk = (min(max(n, 1), 65536),)
+        point = s.create_dataset(POINT, data=np.arange(n, dtype=np.int64))
+        point.make_scale(POINT)
+        point.attrs.update(long_name="index of the grid point (grid order)", units="1")
         for key, col in key_columns(grid).items():
             kind = _key_kind(grid.values[grid.keys.index(key)])
             ds = s.create_dataset(key, data=col, dtype=_DTYPES[kind], chunks=chunk)
+            spec = field_spec(key)
             ds.attrs["description"] = f"swept configuration key {key}"
+            ds.attrs.update(long_name=spec.meaning, config_key=key)
+            if spec.unit:
+                ds.attrs["units"] = spec.unit
+            ds.dims[0].attach_scale(point)
+        coordinates = " ".join(grid.keys)      # CF auxiliary coordinates of every column
         for name, col in empty_columns(n).items():
             kind, text = SUMMARY_COLUMNS[name]
             ds = s.create_dataset(name, data=col, dtype=_DTYPES[kind], chunks=chunk)
             ds.attrs["description"] = text
+            ds.attrs.update(cf.column_attrs("summary", name))
+            if coordinates:
+                ds.attrs["coordinates"] = coordinates
+            ds.dims[0].attach_scale(point)
         p = f.create_group("points")
         p.attrs["description"] = "per point: its bounce table (the run file's /bounces columns)"
 
@@ -127,9 +148,29 @@ def write_results(path, results, wait: float = LOCK_WAIT) -> None:
             if key in p:
                 del p[key]
             b = p.create_group(key).create_group("bounces", track_order=True)
-            for name in BOUNCE_COLUMNS:
-                b.create_dataset(name, data=np.asarray(r.bounces[name]))
+            if "format_version" in f.attrs and int(f.attrs["format_version"]) == 1:
+                for name in BOUNCE_COLUMNS:
+                    b.create_dataset(name, data=np.asarray(r.bounces[name]))
+                continue
+            _bounce_table(b, r.bounces)
         s["status"][idx] = np.array([r.status for r in results], dtype=object)
+
+
+def _bounce_table(g: h5py.Group, bounces: dict) -> None:
+    """A point's bounce table as the run file's ``/bounces`` (format 2): columns along the
+    dimension ``t_impact``, ``open`` as flagged int8, long names and units."""
+    scale = None
+    for name in BOUNCE_COLUMNS:
+        data = np.asarray(bounces[name])
+        if data.dtype == bool:
+            data = data.astype(cf.BOOL_DTYPE)
+        ds = g.create_dataset(name, data=data)
+        ds.attrs.update(cf.column_attrs("bounces", name))
+        if scale is None:
+            ds.make_scale(name)
+            scale = ds
+        else:
+            ds.dims[0].attach_scale(scale)
 
 
 def finish(path, status: str, message: str = "", attrs: dict | None = None) -> None:
@@ -145,7 +186,7 @@ def finish(path, status: str, message: str = "", attrs: dict | None = None) -> N
 # ---- reading ------------------------------------------------------------------------------
 def check_sweep_file(f: h5py.File, path=None) -> None:
     """Raise NotARunFile unless ``f`` is a sweep file of a format this version reads."""
-    check_kind(f, KIND, FORMAT_VERSION, path)
+    check_kind(f, KIND, READS, path)
 
 
 def read_header(f: h5py.File) -> dict:
@@ -159,6 +200,8 @@ def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
     """The summary columns, in file order; text columns as arrays of str."""
     out = {}
     for name, ds in f["summary"].items():
+        if name == POINT and ds.is_scale:
+            continue                      # the dimension, not a column
         out[name] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
                      else ds[()])
     return out
@@ -169,7 +212,9 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
     g = f["points"].get(str(index))
     if g is None:
         return empty_bounces()
-    return {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
+    out = {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
+    out["open"] = cf.as_bool(out["open"])
+    return out
 
 
 def open_sweep(path) -> h5py.File:
