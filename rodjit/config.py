@@ -15,6 +15,10 @@ from typing import Any, ClassVar, Mapping
 
 from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
 
+# time.control of the kick–drift–kick integrators: "tolerance" (steps from time.rtol and
+# time.atol, stability as a cap) or "cfl" (time.cfl × the stability limit, no estimate)
+CONTROLS = ("tolerance", "cfl")
+
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
            "TimeConfig", "OutputConfig", "INTEGRATORS", "valid_keys", "parse_value"]
 
@@ -95,6 +99,7 @@ _FIELDS: dict[str, dict[str, _Spec]] = {
         "t_end": _Spec("float", "> 0", _pos),
         "integrator": _Spec("str", choices=INTEGRATORS),
         "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1),
+        "control": _Spec("str", choices=CONTROLS),
         "dt_max": _Spec("float", "> 0", _pos, optional=True),
         "dt_min": _Spec("float", "> 0", _pos),
         "dt": _Spec("float", "> 0 (fixed step; unset for adaptive steps)", _pos, optional=True),
@@ -187,8 +192,9 @@ class TimeConfig(_Section):
     SECTION: ClassVar[str] = "time"
 
     t_end: float = 5.0
-    integrator: str = "verlet"
+    integrator: str = "energy"
     cfl: float = 0.05
+    control: str = "tolerance"
     dt_max: float | None = None
     dt_min: float = 1e-12
     dt: float | None = None
