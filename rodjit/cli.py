@@ -140,6 +140,9 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
     Ctrl-C or SIGTERM stops at once with a checkpoint; 'rodjit run --resume FILE.h5'
     continues exactly where the run stopped.
     """
+    import warnings
+
+    from .config import ModelWarning
     from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
     from .driver.run import SimulationError
 
@@ -169,9 +172,13 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             overrides = _overrides(sets)
             if overrides:
                 cfg = cfg.override(overrides)
-            summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
-                                  command=command, progress=progress, t_end=t_end,
-                                  flush_interval=flush_interval)
+            for text in cfg.warnings():     # one line each on stderr, not Python's format
+                click.echo(f"warning: {text}", err=True)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ModelWarning)
+                summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
+                                      command=command, progress=progress, t_end=t_end,
+                                      flush_interval=flush_interval)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
     except RunInterrupted as exc:

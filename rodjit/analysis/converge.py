@@ -225,6 +225,8 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     failed = [f"{key} = {v}: {r['reason']}" for v, r in zip(values, runs)
               if r["status"] == "failed"]
     warnings += [f"run failed at {x}" for x in failed]
+    # the model's own limits (the shock-forming μ = γ = 0 rod), once each along the ladder
+    warnings += list(dict.fromkeys(w for c in configs for w in c.warnings()))
     out = {}
     for name in observables:
         s = study(name, _levels(key, values), _values_of(runs, name))

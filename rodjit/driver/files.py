@@ -21,7 +21,7 @@ from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
-from .run import Run, SimulationError
+from .run import Run, SimulationError, warn_config
 from .signals import StopFlag
 
 __all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists", "check_output"]
@@ -65,6 +65,7 @@ def run_to_file(config, path, *, overwrite: bool = False,
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
+    warn_config(config)
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
     with StopFlag(handle_signals) as stop:
         return _drive(run, lambda: run_writer.create_run_file(path, config, first, command=command),

@@ -4,7 +4,7 @@ from __future__ import annotations
 from ..config import Config
 from ..records.result import MemorySink, Result
 from ..stepping import layout as L
-from .run import Run, SimulationError
+from .run import Run, SimulationError, warn_config
 
 __all__ = ["simulate"]
 
@@ -15,12 +15,14 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
     ``u0``, ``v0`` optionally give initial heights and velocities (length ``rod.N + 1``).
     ``progress(run)`` is called between compiled chunks.  Invalid input raises ValueError;
     a run that cannot continue raises SimulationError carrying the partial ``result``.
+    A configuration with known limits (``Config.warnings``) issues ModelWarning.
     """
     if config is None:
         config = Config()
     elif not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     run = Run(config, u0=u0, v0=v0)
+    warn_config(config)
     sink = MemorySink()
     try:
         run.start(sink)

@@ -47,6 +47,11 @@ class RunSummary:
     writer_alive: bool | None = None
 
     @property
+    def warnings(self) -> tuple[str, ...]:
+        """What the run's results cannot be trusted for (``Config.warnings``)."""
+        return self.config.warnings()
+
+    @property
     def n_bounces(self) -> int:
         return int(self.bounces["t_impact"].size)
 
@@ -61,6 +66,7 @@ class RunSummary:
                  f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
         if self.message:
             lines.append(f"  {self.message}")
+        lines.extend(f"  warning: {w}" for w in self.warnings)
         b = self.bounces
         n = self.n_bounces
         lines.append(f"  {n} bounce{'s' if n != 1 else ''}, "
