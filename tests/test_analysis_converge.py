@@ -130,6 +130,7 @@ def _spring_wall_config(alpha: float, V: float = 1e-6) -> rodjit.Config:
         "gravity.g": 0.0, "floor.kappa_b": alpha * E * beta / 3, "floor.beta": beta,
         "initial.height": V * 1e-3, "initial.velocity": -V,
         "time.t_end": 1e-3 + s / math.sqrt(E) + 0.02, "output.snapshot_interval": 0.0,
+        "time.integrator": "verlet", "time.control": "cfl",
         "output.diagnostics_interval": 1e-4})
 
 
