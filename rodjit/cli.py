@@ -172,9 +172,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             overrides = _overrides(sets)
             if overrides:
                 cfg = cfg.override(overrides)
-            for text in cfg.warnings():     # one line each on stderr, not Python's format
-                click.echo(f"warning: {text}", err=True)
-            with warnings.catch_warnings():
+            with warnings.catch_warnings():   # said below as one line each on stderr
                 warnings.simplefilter("ignore", ModelWarning)
                 summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
                                       command=command, progress=progress, t_end=t_end,
@@ -198,6 +196,8 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         _close(progress)
         raise RunFailed(f"{exc}; the file keeps its last checkpoint") from None
     _close(progress)
+    for text in summary.warnings:      # even with --quiet: what the results do not mean
+        click.echo(f"warning: {text}", err=True)
     if not quiet:
         click.echo(summary.report())
 
