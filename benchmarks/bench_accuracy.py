@@ -23,7 +23,7 @@ def main():
     for preset, t_end in (("paper-mu0", 10.0), ("paper-mu100", 5.0)):
         for integrator in ("verlet", "semi-implicit"):
             for cfl in CFLS:
-                cfg = load_preset(preset).override({"time.t_end": t_end, "time.cfl": cfl,
+                cfg = load_preset(preset).override({"time.t_end": t_end, "time.cfl": cfl, "time.control": "cfl",
                                                     "time.integrator": integrator,
                                                     "output.snapshot_interval": 0.0})
                 t0 = time.perf_counter()

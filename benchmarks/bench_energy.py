@@ -49,6 +49,7 @@ def config(n, mu, floor, integrator, knob):
         over.update({"time.rtol": knob, "time.atol": knob})
     else:
         over["time.cfl"] = knob
+        over["time.control"] = "cfl"
     return rodjit.Config().override(over)
 
 

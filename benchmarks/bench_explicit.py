@@ -56,7 +56,8 @@ def base_config(steps=STEPS, gamma=0.0):
     cfg = rodjit.Config().override({
         "rod.N": N, "rod.kappa": 100.0, "rod.gamma": gamma, "floor.kappa_b": 100.0,
         "floor.beta": 0.05, "gravity.g": -1.0, "initial.height": 0.5,
-        "time.t_end": t_end, "output.snapshot_interval": t_end,
+        "time.t_end": t_end, "time.integrator": "verlet", "time.control": "cfl",
+        "output.snapshot_interval": t_end,
         "output.diagnostics_interval": 0.0})
     return cfg, dt
 
@@ -111,11 +112,11 @@ def main(argv=None):
     cfg_g, dt_g = base_config(steps // 4, gamma=1e-3)
     variants = {
         "fixed": cfg.override({"time.dt": dt}),
-        "adaptive": cfg.override({"time.cfl": 0.5}),
-        "adaptive, default cfl": cfg.override({"time.cfl": 0.05,
+        "adaptive": cfg.override({"time.cfl": 0.5, "time.control": "cfl"}),
+        "adaptive, default cfl": cfg.override({"time.cfl": 0.05, "time.control": "cfl",
                                                "time.t_end": cfg.time.t_end / 10}),
         "bouncing (contact, events)": cfg.override({
-            "time.cfl": 0.5, "initial.height": 0.02, "initial.velocity": -1.0,
+            "time.cfl": 0.5, "time.control": "cfl", "initial.height": 0.02, "initial.velocity": -1.0,
             "floor.kappa_b": 1000.0, "time.t_end": 4 * cfg.time.t_end}),
         "gamma=1e-3, fixed": cfg_g.override({"time.dt": dt_g}),
     }

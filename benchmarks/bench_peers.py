@@ -238,6 +238,7 @@ def run_rodjit(pb, integrator, value):
         over.update({"time.rtol": value, "time.atol": value})
     else:
         over["time.cfl"] = value
+        over["time.control"] = "cfl"
     cfg = pb.cfg.override(over)
     t0 = time.perf_counter()
     res = rodjit.simulate(cfg)

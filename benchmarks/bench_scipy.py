@@ -95,6 +95,7 @@ def overrides(integrator: str, value: float) -> dict:
         over.update({"time.rtol": value, "time.atol": value})
     else:
         over["time.cfl"] = value
+        over["time.control"] = "cfl"
     return over
 
 

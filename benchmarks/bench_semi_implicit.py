@@ -41,7 +41,8 @@ TOLERANCE = 0.20
 def config(mu, gamma, strain, integrator="semi-implicit", span=SPAN):
     return rodjit.Config().override({
         "rod.N": N, "rod.mu": mu, "rod.gamma": gamma, "initial.strain": strain,
-        "initial.height": 1.0, "time.integrator": integrator, "time.t_end": span,
+        "initial.height": 1.0, "time.integrator": integrator, "time.control": "cfl",
+        "time.t_end": span,
         "output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0})
 
 

@@ -154,6 +154,9 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
     Ctrl-C or SIGTERM stops at once with a checkpoint; 'rodjit run --resume FILE.h5'
     continues exactly where the run stopped.
     """
+    import warnings
+
+    from .config import ModelWarning
     from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
     from .driver.run import SimulationError
 
@@ -185,10 +188,12 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
                 cfg = cfg.override(overrides)
             from .output.estimate import parse_size
 
-            summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
-                                  command=command, progress=progress, t_end=t_end,
-                                  flush_interval=flush_interval,
-                                  max_output=parse_size(max_output), max_steps=max_steps)
+            with warnings.catch_warnings():   # said below as one line each on stderr
+                warnings.simplefilter("ignore", ModelWarning)
+                summary = run_to_file(cfg, output or default_name, overwrite=overwrite,
+                                      command=command, progress=progress, t_end=t_end,
+                                      flush_interval=flush_interval,
+                                      max_output=parse_size(max_output), max_steps=max_steps)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
     except RunInterrupted as exc:
@@ -208,6 +213,8 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         _close(progress)
         _disk_failed(exc)
     _close(progress)
+    for text in summary.warnings:      # even with --quiet: what the results do not mean
+        click.echo(f"warning: {text}", err=True)
     if not quiet:
         click.echo(summary.report())
 

@@ -12,8 +12,11 @@ import rodjit
 
 
 def quiet(**over):
-    """A Config with outputs off unless asked (fast runs); dotted-key overrides."""
-    base = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
+    """A Config with outputs off unless asked (fast runs); dotted-key overrides.  The
+    integrator is verlet with fixed-fraction steps (time.control = "cfl") unless asked:
+    the cheap explicit baseline these tests measure their bounds on."""
+    base = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0,
+            "time.integrator": "verlet", "time.control": "cfl"}
     base.update(over)
     return rodjit.Config().override(base)
 

@@ -97,7 +97,8 @@ def test_free_vibration_runs_converge_to_the_first_continuum_mode():
     cfg = rodjit.Config().override({"gravity.g": 0.0, "initial.strain": 1e-6,
                                     "initial.height": 1.0, "time.t_end": 1.0,
                                     "output.snapshot_interval": 2e-4,
-                                    "output.diagnostics_interval": 1e-3, "time.cfl": 0.02})
+                                    "output.diagnostics_interval": 1e-3, "time.cfl": 0.02,
+                                    "time.integrator": "verlet", "time.control": "cfl"})
     conv = converge(cfg, {"rod.N": [8, 16, 32]}, observables=["omega_1"],
                     extra={"omega_1": _omega1}, jobs=1)
     oc = conv["omega_1"]
@@ -130,6 +131,7 @@ def _spring_wall_config(alpha: float, V: float = 1e-6) -> rodjit.Config:
         "gravity.g": 0.0, "floor.kappa_b": alpha * E * beta / 3, "floor.beta": beta,
         "initial.height": V * 1e-3, "initial.velocity": -V,
         "time.t_end": 1e-3 + s / math.sqrt(E) + 0.02, "output.snapshot_interval": 0.0,
+        "time.integrator": "verlet", "time.control": "cfl",
         "output.diagnostics_interval": 1e-4})
 
 
@@ -175,7 +177,8 @@ def test_shock_forming_ladder_is_reported_not_extrapolated():
 def test_convergence_file_round_trip_and_repr(tmp_path):
     cfg = rodjit.load_preset("paper-mu100").override({"rod.mu": 1.0, "time.t_end": 0.7,
                                                       "output.snapshot_interval": 0.0})
-    conv = converge(cfg, {"rod.N": "10,20,40"}, also={"time.cfl": [0.05, 0.0125]},
+    conv = converge(cfg.override({"time.integrator": "semi-implicit", "time.control": "cfl"}),
+                    {"rod.N": "10,20,40"}, also={"time.cfl": [0.05, 0.0125]},
                     observables=["restitution_first", "contact_time_first"], jobs=2)
     text = repr(conv)
     assert "restitution_first" in text and "±" in text and text.count("\n") < 12
@@ -205,4 +208,7 @@ def test_bad_ladders_are_one_line_errors():
     with pytest.raises(ValueError, match="unknown observable"):
         converge(cfg, {"rod.N": [5, 10, 20]}, observables=["nope"])
     with pytest.raises(ValueError, match="time.cfl"):
-        converge(cfg, {"rod.N": [5, 10, 20]}, also={"time.rtol": [1e-6, 1e-7]})
+        converge(cfg.override({"time.integrator": "verlet", "time.control": "cfl"}),
+                 {"rod.N": [5, 10, 20]}, also={"time.rtol": [1e-6, 1e-7]})
+    with pytest.raises(ValueError, match="time.rtol"):
+        converge(cfg, {"rod.N": [5, 10, 20]}, also={"time.cfl": [0.05, 0.01]})

@@ -15,7 +15,8 @@ from rodjit.analysis import (energy_vibration, first_impact, lift_energy,
 PAPER = rodjit.load_preset("paper-mu100")
 STIFF = rodjit.Config().override({"floor.kappa_b": 1e5, "floor.beta": 1e-3, "rod.N": 5,
                                   "time.t_end": 10.0, "rod.mu": 0.0,
-                                  "output.snapshot_interval": 0.0})
+                                  "output.snapshot_interval": 0.0,
+                                  "time.integrator": "verlet", "time.control": "cfl"})
 
 
 @pytest.fixture(scope="module")

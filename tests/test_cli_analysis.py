@@ -29,7 +29,7 @@ def test_converge_bad_input_exits_2_with_one_line():
     for args, text in ((["--ladder", "rod.N=20,10,5"], "refine"),
                        (["--ladder", "rod.N"], "KEY=VALUES"),
                        (["--observable", "nope"], "unknown observable"),
-                       (["--also", "time.rtol=1e-6,1e-7"], "time.cfl")):
+                       (["--also", "time.cfl=0.05,0.01"], "time.rtol")):
         r = _run("converge", *args)
         assert r.exit_code == 2, (args, r.output)
         assert text in r.output and r.output.count("\n") == 1

@@ -13,7 +13,8 @@ def test_defaults_are_the_paper_first_figure():
     assert (c.rod.N, c.rod.kappa, c.rod.gamma, c.rod.mu) == (5, 100.0, 0.0, 0.0)
     assert (c.floor.kappa_b, c.floor.beta, c.gravity.g) == (1000.0, 0.05, -9.81)
     assert (c.initial.height, c.initial.velocity, c.initial.strain) == (1.0, 0.0, 0.0)
-    assert c.time.t_end == 5.0 and c.time.integrator == "verlet" and c.time.dt is None
+    assert c.time.t_end == 5.0 and c.time.integrator == "energy" and c.time.dt is None
+    assert c.time.control == "tolerance"
     assert c.output.snapshot_interval == 0.005
 
 

@@ -110,6 +110,7 @@ def test_same_results_with_jit_disabled():
     """The kernels are plain Python too: a short run in a process with NUMBA_DISABLE_JIT=1
     gives the same numbers as the compiled run."""
     over = {"time.t_end": 0.6, "rod.N": 4, "rod.mu": 1.0, "rod.gamma": 1e-3,
+            "time.integrator": "verlet", "time.control": "cfl",
             "output.snapshot_interval": 0.1, "output.diagnostics_interval": 0.05}
     code = ("import json, rodjit; r = rodjit.simulate(rodjit.Config().override(%r)); "
             "print(json.dumps([list(r.u_final), r.stats['steps'], list(r.bounces['t_impact'])]))"

@@ -96,7 +96,7 @@ def test_closed_summary_equals_the_file_read_back(tmp_path, monkeypatch):
     assert_same_summary(s, summarize(path))
     assert_same_summary(rodjit.resume_file(path, t_end=2.0), summarize(path))
     with pytest.raises(rodjit.SimulationError) as failed:
-        rodjit.run_to_file(rodjit.Config().override({"time.dt": 1e-3,
+        rodjit.run_to_file(rodjit.Config().override({"time.dt": 1e-3, "time.integrator": "verlet",
                                                      "initial.velocity": -100.0}),
                            tmp_path / "f.h5")
     assert failed.value.summary.status == "failed"

@@ -117,7 +117,7 @@ def test_every_kdk_scheme_has_a_row_of_the_stage_table():
     assert (v.kick_bending, v.drift, v.viscous, v.viscous_limit) == (
         True, kdk.DRIFT, kdk.CRANK_NICOLSON, True)
     assert (s.kick_bending, s.drift, s.viscous, s.viscous_limit) == (
-        False, kdk.BEAM_MIDPOINT, kdk.SDIRK2, False)
+        False, kdk.BEAM_MIDPOINT, kdk.IMEX_KICK, False)
     assert kdk.stages(kdk.Verlet(0.1)) is v
 
     @numba.njit

@@ -24,7 +24,7 @@ from conftest import assert_same_files
 BASE = rodjit.Config().override({"time.t_end": 0.8})       # the fall and one impact
 GRID = {"rod.mu": [0.0, 10.0], "floor.beta": [0.01, 0.05]}
 TIMINGS = ("wall_time", "compile_time", "run_time")
-FAILING = {"time.dt": 1e-3}                                 # with initial.velocity = -100
+FAILING = {"time.dt": 1e-3, "time.integrator": "verlet"}   # with initial.velocity = -100
 
 
 def same_values(a, b, skip=TIMINGS):

@@ -57,7 +57,7 @@ def test_first_impact_is_exact(integrator):
 # ---- energy -------------------------------------------------------------------------
 def energy_error(integrator, cfl, **over):
     cfg = rodjit.Config().override({"time.t_end": 10.0, "time.cfl": cfl,
-                                    "time.integrator": integrator,
+                                    "time.integrator": integrator, "time.control": "cfl",
                                     "output.snapshot_interval": 0.0, **over})
     res = rodjit.simulate(cfg)
     return res.energy_error(), res.n_bounces
@@ -80,12 +80,12 @@ def test_energy_is_conserved_over_many_bounces_at_second_order(integrator, gamma
     assert err / err_fine >= 6.0
 
 
-@pytest.mark.parametrize("integrator, bound", [("verlet", 2e-5), ("semi-implicit", 2e-3)])
+@pytest.mark.parametrize("integrator, bound", [("verlet", 2e-5), ("semi-implicit", 4.5e-4)])
 def test_energy_balance_with_viscosity(integrator, bound):
     """μ = 100 (the paper's second figure): E(t) + dissipated(t) = E(0).  The viscous
     sub-steps remove exactly the kinetic energy they report, so the balance error is the
     schemes' O(dt²) splitting error: it falls 4× when cfl halves.  The bound is 4× the
-    value measured at cfl = 0.05 (verlet 5.8e-6, semi-implicit 5.0e-4)."""
+    value measured at cfl = 0.05 (verlet 5.8e-6, semi-implicit 1.1e-4)."""
     errs = []
     for cfl in (0.05, 0.025):
         res = rodjit.simulate(quiet(**{"rod.mu": 100.0, "time.cfl": cfl,

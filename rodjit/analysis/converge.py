@@ -230,6 +230,8 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     failed = [f"{key} = {v}: {r['reason']}" for v, r in zip(values, runs)
               if r["status"] == "failed"]
     warnings += [f"run failed at {x}" for x in failed]
+    # the model's own limits (the shock-forming μ = γ = 0 rod), once each along the ladder
+    warnings += list(dict.fromkeys(w for c in configs for w in c.warnings()))
     out = {}
     for name in observables:
         s = study(name, _levels(key, values), _values_of(runs, name))
@@ -256,24 +258,33 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                        t_runs)
 
 
+def _by_tolerance(base) -> bool:
+    """Whether time.rtol/atol choose the steps (energy, or time.control = "tolerance")."""
+    return base.time.integrator == "energy" or base.time.control == "tolerance"
+
+
 def _check_time_key(key: str, base) -> None:
     """The tolerance ladder must vary what controls the integrator's steps."""
     integ = base.time.integrator
-    if key in ("time.rtol", "time.atol") and integ != "energy":
-        raise ValueError(f"also: {key} controls the steps of the 'energy' integrator only; "
-                         f"time.integrator = {integ!r} takes its steps from time.cfl (or "
-                         f"time.dt): use --also time.cfl=...")
+    if key in ("time.rtol", "time.atol") and not _by_tolerance(base):
+        raise ValueError(f"also: {key} does not choose the steps of time.integrator = "
+                         f"{integ!r} with time.control = 'cfl': use --also time.cfl=...")
+    if key == "time.cfl" and _by_tolerance(base):
+        raise ValueError(f"also: time.cfl does not choose the steps of time.integrator = "
+                         f"{integ!r} under tolerance control: use --also time.rtol=... "
+                         f"(or set time.control = 'cfl')")
     if key == "time.cfl" and base.time.dt is not None:
         raise ValueError("also: time.cfl has no effect with a fixed step time.dt; ladder "
                          "time.dt instead")
 
 
 def default_time_ladder(base) -> dict:
-    """The tolerance ladder of the base config's integrator: time.rtol (energy) or
-    time.cfl (verlet, semi-implicit), the base value and two refinements by 4."""
+    """The tolerance ladder of the base config's integrator: time.rtol (energy, or any
+    integrator under tolerance control) or time.cfl (time.control = "cfl"), the base value
+    and two refinements by 4."""
     if base.time.dt is not None:
         return {"time.dt": [base.time.dt, base.time.dt / 4, base.time.dt / 16]}
-    if base.time.integrator == "energy":
+    if _by_tolerance(base):
         r = base.time.rtol
         return {"time.rtol": [r, r / 4, r / 16]}
     c = base.time.cfl

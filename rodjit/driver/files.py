@@ -26,7 +26,7 @@ from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
 from .progress import close as close_progress
 from .progress import run_progress
-from .run import Run, SimulationError
+from .run import Run, SimulationError, warn_config
 from .signals import StopFlag
 
 __all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists", "check_output"]
@@ -110,6 +110,7 @@ def run_to_file(config, path, *, overwrite: bool = False,
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
+    warn_config(config)
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
     # the writer lock, held from the last check until the file is closed: no second
     # writer can create, replace or resume the file meanwhile

@@ -14,9 +14,11 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 
 import numpy as np
 
+from ..config import ModelWarning
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
@@ -63,6 +65,12 @@ class Block:
         self.episodes = run.episodes[:int(c[L.N_EP])]
         self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
         self.finite = bool(np.all(np.isfinite(self.diagnostics)))
+
+
+def warn_config(config, stacklevel: int = 3) -> None:
+    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller)."""
+    for text in config.warnings():
+        warnings.warn(text, ModelWarning, stacklevel=stacklevel)
 
 
 class Run:

@@ -6,7 +6,7 @@ from ..records.result import MemorySink, Result
 from ..stepping import layout as L
 from .progress import close as close_progress
 from .progress import run_progress
-from .run import Run, SimulationError
+from .run import Run, SimulationError, warn_config
 
 __all__ = ["simulate"]
 
@@ -36,12 +36,18 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
         Invalid input (before anything runs).
     SimulationError
         A run that cannot continue; it carries the partial ``result``.
+
+    Warns
+    -----
+    ModelWarning
+        A configuration with known limits (``Config.warnings``).
     """
     if config is None:
         config = Config()
     elif not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     run = Run(config, u0=u0, v0=v0)
+    warn_config(config)
     sink = MemorySink()
     progress = run_progress(progress)
     try:

@@ -48,6 +48,11 @@ class RunSummary:
     writer_alive: bool | None = None
 
     @property
+    def warnings(self) -> tuple[str, ...]:
+        """What the run's results cannot be trusted for (``Config.warnings``)."""
+        return self.config.warnings()
+
+    @property
     def n_bounces(self) -> int:
         return int(self.bounces["t_impact"].size)
 
@@ -63,7 +68,8 @@ class RunSummary:
             n_episodes=self.counts["episodes"], energy_error=self.energy_error,
             min_strain=self.min_strain, min_u0=self.min_u0, steps=self.steps,
             rejected=self.rejected_steps, compile_time=self.compile_time,
-            run_time=self.run_time, node_steps_per_second=self.node_steps_per_second)
+            run_time=self.run_time, node_steps_per_second=self.node_steps_per_second,
+            warnings=self.warnings)
 
     def report(self, max_bounces: int | None = 20) -> str:
         """A short plain-text report: bounces (at most ``max_bounces`` rows, None: all),

@@ -21,8 +21,9 @@ class RunFacts:
 
     def __init__(self, *, name, status, message, config, t_start, t, t_end, bounces,
                  n_episodes, energy_error, min_strain, min_u0, steps, rejected,
-                 compile_time, run_time, node_steps_per_second):
+                 compile_time, run_time, node_steps_per_second, warnings=()):
         self.name, self.status, self.message, self.config = name, status, message, config
+        self.warnings = tuple(warnings)   # what the results do not mean (Config.warnings)
         self.t_start, self.t, self.t_end = t_start, t, t_end
         self.bounces, self.n_episodes = bounces, n_episodes
         self.energy_error, self.min_strain, self.min_u0 = energy_error, min_strain, min_u0
@@ -51,6 +52,7 @@ class RunFacts:
                               f"({self.compile_time:.3g} s compiling)")]
         if self.message:
             rows.insert(0, ("message", self.message))
+        rows.extend(("warning", w) for w in self.warnings)
         return rows
 
     def text(self) -> str:
@@ -68,6 +70,7 @@ class RunFacts:
                  f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
         if self.message:
             lines.append(f"  {self.message}")
+        lines.extend(f"  warning: {w}" for w in self.warnings)
         b = self.bounces
         n = int(b["t_impact"].size)
         lines.append(f"  {n} bounce{'s' if n != 1 else ''}, "

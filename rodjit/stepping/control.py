@@ -18,7 +18,8 @@ from .._jit import step_kernel
 
 __all__ = ["Control", "build", "output_tolerance", "propose", "gap_limit", "step_to",
            "gap_keep", "GROWTH", "GAP_MAX", "REJECT_SHRINK", "EVENT_MIN", "OUTPUT_TOL",
-           "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry"]
+           "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry",
+           "STABILITY_CFL"]
 
 # A proposal grows at most by this factor per step: after a rejection the step recovers
 # over a few steps instead of jumping back to the size that just failed.
@@ -48,6 +49,11 @@ SPLIT_BELOW = 2.0
 # than the last step predicted), and any step that closed more than GAP_CLOSE_MAX of it.
 GAP_REJECT = 2.0
 GAP_CLOSE_MAX = 0.9
+
+# Under tolerance control (time.control = "tolerance") an explicit scheme's step is the one
+# its error estimate allows, capped at this fraction of its stability limit 2/ω (a bound
+# from Gershgorin, itself above the true ω): accuracy decides, stability only caps.
+STABILITY_CFL = 0.5
 
 
 class Control(NamedTuple):

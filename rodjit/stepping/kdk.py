@@ -1,6 +1,6 @@
 """Kick–drift–kick schemes: ``verlet`` and ``semi-implicit`` as rows of one stage table.
 
-A step is the Strang composition
+A step is the symmetric composition
 
     V(dt/2) ∘ K(dt/2) ∘ D(dt) ∘ K(dt/2) ∘ V(dt/2),
 
@@ -11,42 +11,78 @@ sub-step.  A row of ``STAGES`` chooses each operator:
 scheme         K kicks with                   D                                     V
 ============== ============================== ===================================== ==========
 verlet         stretch, bending, floor, g     u += dt v                             CN
-semi-implicit  stretch, floor, g              implicit midpoint on u' = v,          SDIRK2
-                                              M v' = −γBu (``beam``; u += dt v
+semi-implicit  stretch, floor, g, and the     implicit midpoint on u' = v,          none
+               viscous term (IMEX_KICK)       M v' = −γBu (``beam``; u += dt v
                                               when γ = 0)
 ============== ============================== ===================================== ==========
 
 ``verlet`` is symmetric, second order, symplectic for μ = 0, and stable for dt·ω ≤ 2 with
 ω² bounded in ``accel`` (bending included), and CN's viscous limit μ·dt·4/h² ≤ 4·cfl keeps
-Crank–Nicolson from ringing.  ``semi-implicit`` keeps the stiff linear parts implicit (the
-midpoint rule is exact on the beam's quadratic energy; SDIRK2 is L-stable), so its bound
-has stretch and floor alone, whatever γ and μ.  Second order both.
+Crank–Nicolson from ringing.
+
+``semi-implicit`` (IMEX_KICK) puts the viscosity inside the kicks:
+
+    v½ = (M + dt/2·μK)⁻¹ (M v + dt/2·F(u))        backward Euler in μK, F explicit
+    (u⁺, v½') = D(dt)(u, v½)                       midpoint beam drift (u⁺ = u + dt v½ at γ = 0)
+    v⁺ = v½' + dt/2·M⁻¹(F(u⁺) − μK v½')            its adjoint: forward Euler in μK
+
+The last kick is the adjoint of the first and D is symmetric, so the step is symmetric,
+hence second order; in the viscous term the two kicks compose to Crank–Nicolson (|R| ≤ 1,
+unconditionally stable).  The velocity that moves u has been through the implicit viscous
+kick, so short waves feel the viscous resistance that balances the stretch and floor
+forces: a viscous sub-step split off the kicks (V) does not, and is O(1) wrong once
+μ·dt·4/h² ≫ 1.  Its bound has stretch and floor alone, whatever γ and μ.  One tridiagonal
+solve per step (its factorisation is kept while dt is unchanged).  The full-step velocity
+of the stiffest viscous modes alternates in sign (CN's R → −1); v½ does not.
+
+Error control (``tolerance``): the predicted local error of u is dt³/6·ȧ, estimated from
+the two kicks' accelerations as dt²/6·(a⁺ − a) (O(dt³), the leading term of the exact local
+error of the verlet step), scaled componentwise by atol + rtol·max(|u|, |u⁺|); a ratio
+above 1 rejects the step (INACCURATE), and the next step is dt·0.9·ratio^(−1/3), capped at
+``control.STABILITY_CFL`` × the stability limit.  The estimate costs one pass over the
+arrays, no force evaluation.
 
 The row is a compile-time constant of the scheme's parameter type (``stages``): each
 scheme compiles to its own straight-line step.  A new kick–drift–kick variant is one more
 parameter class and one more row (plus its line in ``registry``).
 """
+import math
 from typing import NamedTuple
 
 from numba.extending import overload
 
-from ..kernels.forces import OK, accel, kick
+from ..kernels.banded import tridiag_solve
+from ..kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
+from ..kernels.mass import node_mass
 from . import workspace as W
 from .beam import beam_midpoint
+from .control import STABILITY_CFL
+from .energy import FAC_MIN, SAFETY, _step_factor
 from .stability import explicit_dt
 from .step_result import StepResult
-from .viscous import viscous_cn, viscous_sdirk2
+from .viscous import _factored, viscous_cn, viscous_sdirk2
 from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
 
 __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "step"]
 
 
 class Verlet(NamedTuple):
+    """``tolerance``: steps from the local error estimate (rtol, atol), capped at
+    ``control.STABILITY_CFL`` × the stability limit; else cfl × the stability limit."""
+
     cfl: float
+    rtol: float = 1e-6
+    atol: float = 1e-9
+    tolerance: bool = False
 
 
 class SemiImplicit(NamedTuple):
+    """As ``Verlet``."""
+
     cfl: float
+    rtol: float = 1e-6
+    atol: float = 1e-9
+    tolerance: bool = False
 
 
 # the drift D and the viscous sub-step V
@@ -54,6 +90,7 @@ DRIFT = 0            # u += dt v
 BEAM_MIDPOINT = 1    # implicit midpoint on u' = v, M v' = −γBu (a plain drift when γ = 0)
 CRANK_NICOLSON = 0
 SDIRK2 = 1
+IMEX_KICK = 2        # no V: the kicks carry the viscous term (first implicit, second explicit)
 
 
 class Stages(NamedTuple):
@@ -61,14 +98,14 @@ class Stages(NamedTuple):
 
     kick_bending: bool    # K includes the bending force (and ω² its stiffness)
     drift: int            # DRIFT or BEAM_MIDPOINT
-    viscous: int          # CRANK_NICOLSON or SDIRK2
+    viscous: int          # CRANK_NICOLSON, SDIRK2 or IMEX_KICK
     viscous_limit: bool   # the step bound includes the viscous sub-step's limit
 
 
 STAGES = {
     Verlet: Stages(kick_bending=True, drift=DRIFT, viscous=CRANK_NICOLSON,
                    viscous_limit=True),
-    SemiImplicit: Stages(kick_bending=False, drift=BEAM_MIDPOINT, viscous=SDIRK2,
+    SemiImplicit: Stages(kick_bending=False, drift=BEAM_MIDPOINT, viscous=IMEX_KICK,
                          viscous_limit=False),
 }
 
@@ -84,15 +121,29 @@ def _stages_ov(scheme):
     return lambda scheme: row
 
 
+@step_kernel
+def _suggest(scheme, st, system, floor, om2, u0, v0):
+    """The stability-based step: cfl × the limit, or under tolerance control its cap
+    STABILITY_CFL × the limit.  Crank–Nicolson's viscous limit is one of accuracy (it
+    rings, and the split viscous sub-step lags the kicks), not of stability, so it stays
+    at time.cfl under either control."""
+    if not scheme.tolerance:
+        return explicit_dt(system, floor, om2, u0, v0, scheme.cfl, st.viscous_limit)
+    dt = explicit_dt(system, floor, om2, u0, v0, STABILITY_CFL, False)
+    if st.viscous_limit and system.mu > 0.0:
+        dt = min(dt, scheme.cfl * system.h * system.h / (2.0 * system.mu))
+    return dt
+
+
 @kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
-    """Acceleration of the initial state and the first step's bound."""
+    """Acceleration of the initial state and the first step's bound (under tolerance
+    control the first trial is the cap; its error ratio shortens it if it must)."""
     st = stages(scheme)
     status, val, emin, fl, om2 = accel(u, a, work[W.S], work[W.K], system, rod, floor,
                                        st.kick_bending)
     return StepResult(status, val, emin, fl,
-                      explicit_dt(system, floor, om2, u[0], v[0], scheme.cfl,
-                                  st.viscous_limit), 0.0, 0.0)
+                      _suggest(scheme, st, system, floor, om2, u[0], v[0]), 0.0, 0.0)
 
 
 @step_kernel
@@ -103,17 +154,74 @@ def _viscous(st, vin, vout, tau, system, work):
 
 
 @step_kernel
+def _stiffness(v, h, n):
+    """vᵀKv = Σ (v_{i+1} − v_i)²/h, twice the Rayleigh function over μ."""
+    acc = 0.0
+    for i in range(n):
+        d = v[i + 1] - v[i]
+        acc += d * d
+    return acc / h
+
+
+@step_kernel
+def _imex_first_kick(v, a, v2, tau, system, work):
+    """v2 = (M + τμK)⁻¹ M (v + τ a): the half kick implicit in the viscous term."""
+    n = system.n
+    h = system.h
+    off = _factored(tau * system.mu, h, n, work)
+    rhs = work[W.VRHS]
+    for i in range(n + 1):
+        rhs[i] = node_mass(i, n, h) * (v[i] + tau * a[i])
+    tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, v2)
+
+
+@step_kernel
+def _imex_second_kick(v2, a2, tau, system):
+    """v2 += τ(a2 − μM⁻¹K v2), its explicit adjoint (in place: K v2 is formed first)."""
+    n = system.n
+    h = system.h
+    c = tau * system.mu / h
+    prev = v2[0]
+    for i in range(n + 1):
+        kv = 0.0
+        if i > 0:
+            kv += v2[i] - prev
+        if i < n:
+            kv += v2[i] - v2[i + 1]
+        prev = v2[i]
+        v2[i] += tau * a2[i] - c * kv / node_mass(i, n, h)
+
+
+@step_kernel
+def _error_ratio(scheme, u, u2, a, a2, dt):
+    """max_i dt²/6·|a2_i − a_i| / (atol + rtol·max(|u_i|, |u2_i|)): the predicted local
+    error of u (dt³/6·ȧ) over its tolerance."""
+    c = dt * dt / 6.0
+    r = 0.0
+    for i in range(u.size):
+        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
+        r = max(r, c * abs(a2[i] - a[i]) / su)
+    return r
+
+
+@step_kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
 
-    ``dt_suggest`` is cfl × the stability limit at the new state.
+    ``dt_suggest`` is cfl × the stability limit at the new state, or under tolerance
+    control the step from the error ratio (at most STABILITY_CFL × the limit); a step
+    whose ratio exceeds 1 returns INACCURATE.
     """
     st = stages(scheme)
     n = system.n
     h = system.h
     hdt = 0.5 * dt
     diss = 0.0
-    if system.mu > 0.0:
+    imex = st.viscous == IMEX_KICK and system.mu > 0.0
+    if imex:
+        _imex_first_kick(v, a, v2, hdt, system, work)
+        diss += hdt * system.mu * _stiffness(v2, h, n)
+    elif system.mu > 0.0:
         diss += _viscous(st, v, v2, hdt, system, work)
         for i in range(n + 1):
             v2[i] += hdt * a[i]
@@ -129,9 +237,21 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                                        st.kick_bending)
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, diss)
-    w = kick(v2, a2, hdt, h)
-    if system.mu > 0.0:   # both viscous sub-steps conserve momentum: w is unchanged
-        diss += _viscous(st, v2, v2, hdt, system, work)
-    return StepResult(OK, 0.0, emin, fl,
-                      explicit_dt(system, floor, om2, u2[0], v2[0], scheme.cfl,
-                                  st.viscous_limit), w, diss)
+    if imex:
+        diss += hdt * system.mu * _stiffness(v2, h, n)
+        _imex_second_kick(v2, a2, hdt, system)
+        w = momentum(v2, h)
+    else:
+        w = kick(v2, a2, hdt, h)
+        if system.mu > 0.0:   # both viscous sub-steps conserve momentum: w is unchanged
+            diss += _viscous(st, v2, v2, hdt, system, work)
+    dts = _suggest(scheme, st, system, floor, om2, u2[0], v2[0])
+    if scheme.tolerance:
+        err = _error_ratio(scheme, u, u2, a, a2, dt)
+        if not math.isfinite(err):
+            return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, diss)
+        if err > 1.0:
+            return StepResult(INACCURATE, err, emin, fl,
+                              min(dts, dt * max(FAC_MIN, _step_factor(err))), w, diss)
+        dts = min(dts, dt * _step_factor(err))
+    return StepResult(OK, 0.0, emin, fl, dts, w, diss)

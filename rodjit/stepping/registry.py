@@ -40,13 +40,16 @@ class Scheme:
     gap_control: bool = True
 
 
+def _kdk(tc, P):
+    """Kick–drift–kick parameters: cfl, tolerances, and whether the tolerances choose."""
+    return P(float(tc.cfl), float(tc.rtol), float(tc.atol), tc.control == "tolerance")
+
+
 _ENERGY_WORK_ROWS = 17   # rows S … D of stepping/energy.py (tests check it)
 
 SCHEMES: tuple[Scheme, ...] = (
-    Scheme("verlet", "rodjit.stepping.kdk", "Verlet",
-           lambda tc, P: P(float(tc.cfl)), workspace.WORK_ROWS),
-    Scheme("semi-implicit", "rodjit.stepping.kdk", "SemiImplicit",
-           lambda tc, P: P(float(tc.cfl)), workspace.WORK_ROWS),
+    Scheme("verlet", "rodjit.stepping.kdk", "Verlet", _kdk, workspace.WORK_ROWS),
+    Scheme("semi-implicit", "rodjit.stepping.kdk", "SemiImplicit", _kdk, workspace.WORK_ROWS),
     Scheme("energy", "rodjit.stepping.energy", "Energy",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), _ENERGY_WORK_ROWS,
            counters=("newton_iterations", "newton_failures"), gap_control=False),

@@ -27,24 +27,25 @@ _COMMON = {"time.t_end": 1.0, "time.dt": None, "time.dt_max": None, "time.dt_min
            "output.snapshot_interval": 0.01, "output.diagnostics_interval": 0.002,
            "output.compression": "none"}
 
-# name -> overrides; rtol/atol matter for the energy step, cfl for the other two
+# name -> overrides; rtol/atol matter for the energy step, cfl (time.control = "cfl") for
+# the other two
 CASES: dict[str, dict] = {
-    "verlet_mu0": {"time.integrator": "verlet", "time.cfl": 0.05},
-    "verlet_mu10_gamma": {"time.integrator": "verlet", "time.cfl": 0.05, "rod.mu": 10.0,
+    "verlet_mu0": {"time.integrator": "verlet", "time.cfl": 0.05, "time.control": "cfl"},
+    "verlet_mu10_gamma": {"time.integrator": "verlet", "time.cfl": 0.05, "time.control": "cfl", "rod.mu": 10.0,
                           "rod.gamma": 1e-4, "rod.N": 12},
-    "semi_implicit_mu100": {"time.integrator": "semi-implicit", "time.cfl": 0.05,
+    "semi_implicit_mu100": {"time.integrator": "semi-implicit", "time.cfl": 0.05, "time.control": "cfl",
                             "rod.mu": 100.0},
-    "semi_implicit_gamma": {"time.integrator": "semi-implicit", "time.cfl": 0.05,
+    "semi_implicit_gamma": {"time.integrator": "semi-implicit", "time.cfl": 0.05, "time.control": "cfl",
                             "rod.gamma": 1e-3, "rod.N": 16, "rod.mu": 1.0},
     "energy_mu0": {"time.integrator": "energy", "time.rtol": 1e-6, "time.atol": 1e-9},
     "energy_mu100_gamma": {"time.integrator": "energy", "time.rtol": 1e-5,
                            "time.atol": 1e-8, "rod.mu": 100.0, "rod.gamma": 1e-4,
                            "rod.N": 10},
-    "verlet_fixed_dt": {"time.integrator": "verlet", "time.dt": 2e-4},
+    "verlet_fixed_dt": {"time.integrator": "verlet", "time.dt": 2e-4, "time.control": "cfl"},
 }
 RESUMED = ("energy_mu0", "semi_implicit_mu100")   # also written in two sessions
 SWEEP_GRID = {"rod.mu": [0.0, 10.0], "floor.kappa_b": [1000.0, 3000.0]}
-SWEEP_BASE = {"time.integrator": "verlet", "time.cfl": 0.05, "time.t_end": 0.8}
+SWEEP_BASE = {"time.integrator": "verlet", "time.cfl": 0.05, "time.control": "cfl", "time.t_end": 0.8}
 
 
 def config(name: str) -> rodjit.Config:

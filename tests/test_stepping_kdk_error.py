@@ -1,0 +1,105 @@
+"""The kick–drift–kick schemes' local error estimate and tolerance control.
+
+The estimate dt²/6·|a⁺ − a| is the leading term dt³/6·ȧ of the verlet step's local error in
+u: on a smooth flight it is O(dt³) and matches the true local error (from a converged
+SciPy solution of the NumPy right-hand side) with constant 1 as dt → 0.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import rodjit
+from rodjit.driver.run import Run
+from rodjit.kernels.forces import INACCURATE, OK
+from rodjit.model import reference as ref
+from rodjit.records.result import MemorySink
+from rodjit.stepping import kdk
+
+
+def _flight(integrator, mu=0.0, gamma=0.0):
+    cfg = rodjit.Config().override({
+        "rod.N": 8, "rod.mu": mu, "rod.gamma": gamma, "initial.height": 3.0,
+        "initial.velocity": 0.5, "initial.strain": 0.05, "time.integrator": integrator,
+        "time.t_end": 1.0})
+    run = Run(cfg)
+    n1 = cfg.rod.N + 1
+    x = np.linspace(0.0, 1.0, n1)
+    u = run.state[0]
+    u += 0.02 * np.sin(np.pi * x)          # a non-uniform strain: internal motion
+    run.state[1] += 0.3 * np.cos(2 * np.pi * x)
+    run.start(MemorySink())
+    return run
+
+
+def _one_step(run, scheme, dt):
+    u, v, a = (r.copy() for r in run.state)
+    u2, v2, a2 = np.zeros_like(u), np.zeros_like(u), np.zeros_like(u)
+    work = np.zeros_like(run.work)
+    r = kdk.step(scheme, run.system, run.rod, run.floor, u, v, a, u2, v2, a2, work,
+                 np.zeros(4, np.int64), dt)
+    return r, u, v, a, u2, a2
+
+
+def _exact_u(run, dt):
+    n1 = run.state.shape[1]
+    y0 = np.concatenate([run.state[0], run.state[1]])
+    sol = solve_ivp(lambda t, y: ref.rhs(t, y, run.system, run.rod, run.floor), (0.0, dt),
+                    y0, method="DOP853", rtol=1e-13, atol=1e-15)
+    return sol.y[:n1, -1]
+
+
+@pytest.mark.parametrize("integrator", ["verlet", "semi-implicit"])
+def test_estimate_is_the_leading_local_error_on_a_smooth_flight(integrator):
+    run = _flight(integrator)
+    scheme = run.scheme._replace(tolerance=True, rtol=0.0, atol=1.0)   # ratio = the error
+    ests, trues = [], []
+    for dt in (2.5e-4, 1.25e-4, 6.25e-5, 3.125e-5):
+        r, u, v, a, u2, a2 = _one_step(run, scheme, dt)
+        assert r.status in (OK, INACCURATE)
+        ests.append(kdk._error_ratio(scheme, u, u2, a, a2, dt))
+        trues.append(np.abs(u2 - _exact_u(run, dt)).max())
+    ests, trues = np.array(ests), np.array(trues)
+    order = np.log2(ests[:-1] / ests[1:])
+    assert np.all(np.abs(order - 3.0) < 0.15), order
+    assert np.all(np.abs(np.log2(trues[:-1] / trues[1:]) - 3.0) < 0.2), trues
+    assert abs(ests[-1] / trues[-1] - 1.0) < 0.05, ests / trues   # the expected constant
+
+
+def test_a_step_over_the_tolerance_is_rejected_with_a_shorter_suggestion():
+    run = _flight("verlet")
+    scheme = run.scheme._replace(tolerance=True, rtol=1e-10, atol=1e-12)
+    r = _one_step(run, scheme, 1e-3)[0]
+    assert r.status == INACCURATE and r.value > 1.0
+    assert 0.0 < r.dt_suggest < 1e-3
+    r2 = _one_step(run, scheme, r.dt_suggest)[0]
+    assert r2.value < r.value
+
+
+def test_cfl_control_is_the_plain_fraction_of_the_stability_limit():
+    """time.control = "cfl" never rejects for accuracy and suggests cfl × the limit."""
+    run = _flight("verlet")
+    a = _one_step(run, run.scheme._replace(tolerance=False, cfl=0.05), 1e-3)[0]
+    b = _one_step(run, run.scheme._replace(tolerance=False, cfl=0.1), 1e-3)[0]
+    assert a.status == b.status == OK
+    assert b.dt_suggest == pytest.approx(2.0 * a.dt_suggest)
+
+
+@pytest.mark.parametrize("integrator", ["verlet", "semi-implicit"])
+def test_tighter_tolerance_gives_a_smaller_first_bounce_error(integrator):
+    base = rodjit.load_preset("paper-mu100").override({
+        "rod.mu": 1.0, "time.integrator": integrator, "time.t_end": 1.2,
+        "output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0})
+    fine = rodjit.simulate(base.override({"time.rtol": 1e-9, "time.atol": 1e-12}))
+    errs, steps = [], []
+    for rtol in (1e-4, 1e-6):
+        res = rodjit.simulate(base.override({"time.rtol": rtol, "time.atol": rtol * 1e-3}))
+        errs.append(abs(res.bounces["restitution"][0] - fine.bounces["restitution"][0]))
+        steps.append(res.stats["steps"])
+    assert errs[1] < 0.5 * errs[0] and steps[1] > steps[0], (errs, steps)
+
+
+def test_config_refuses_an_unknown_control():
+    with pytest.raises(ValueError, match="time.control"):
+        rodjit.Config().override({"time.control": "fast"})
