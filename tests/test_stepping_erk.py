@@ -24,10 +24,11 @@ FLIGHT = {"rod.N": 5, "initial.height": 3.0, "initial.strain": 0.1, "initial.vel
 # contact: pressed into a soft floor for the whole interval (u_0 < 0 throughout, so the
 # force is smooth: the kink at u_0 = 0 is handled by the adaptive loop, not by fixed steps)
 CONTACT = {"rod.N": 8, "initial.height": -0.05, "initial.velocity": -1.0, "rod.mu": 0.1,
-           "floor.kappa_b": 100.0, "floor.beta": 0.2, "time.t_end": 0.01}
-# dt sequences (halving) whose errors lie between ~1e-4 and ~1e-11: asymptotic, above rounding
-DTS = {("dp54", "flight"): 5e-3, ("dp54", "contact"): 2.5e-4,
-       ("dop853", "flight"): 1e-2, ("dop853", "contact"): 2e-3}
+           "floor.kappa_b": 10.0, "floor.beta": 1.0, "time.t_end": 0.1}
+# the largest of three halving steps: errors between ~1e-5 and ~1e-11, in the asymptotic
+# range and above the rounding floor (1e-13 … 1e-12 for these runs)
+DTS = {("dp54", "flight"): 1.25e-3, ("dp54", "contact"): 1e-3,
+       ("dop853", "flight"): 1e-2, ("dop853", "contact"): 1.6e-2}
 
 
 def _cfg(integrator, over):
@@ -65,17 +66,17 @@ def test_tableaus_have_their_design_order_conditions():
 @pytest.mark.parametrize("integrator", sorted(PAIRS))
 def test_order_in_dt(integrator, case):
     over = FLIGHT if case == "flight" else CONTACT
-    dts = [DTS[integrator, case] / 2**k for k in range(4)]
+    dts = [DTS[integrator, case] / 2**k for k in range(3)]
     ref = _fixed("dop853", dts[-1] / 8, over)
     errs = np.array([np.abs(_fixed(integrator, dt, over) - ref).max() for dt in dts])
     orders = np.log2(errs[:-1] / errs[1:])
-    assert errs[-1] > 1e-12, errs                       # above rounding
+    assert errs[-1] > 3e-12, errs                        # above rounding
     assert np.all(np.abs(orders - PAIRS[integrator]) <= 0.2), (orders, errs)
 
 
 def test_contact_case_stays_in_contact():
     res = rodjit.simulate(_cfg("dp54", {**CONTACT, "time.dt": 1e-4,
-                                        "output.diagnostics_interval": 1e-4}))
+                                        "output.diagnostics_interval": 1e-3}))
     assert res.diagnostics["u_bottom"].max() < 0.0
 
 
@@ -83,22 +84,30 @@ def _paper(integrator, **over):
     return _cfg(integrator, {"time.t_end": 1.5, **over})
 
 
-@pytest.mark.parametrize("integrator", sorted(PAIRS))
-def test_agrees_with_energy_and_the_other_pair_through_bounces(integrator):
-    """The paper's run (μ = 0, N = 5) over 1.5 s, through its first bounce: each adaptive
-    step that crosses u_0 = 0 is redone to end on the crossing, so at tight tolerance the
-    pairs agree with each other, and with ``energy`` at its own tight tolerance."""
-    tight = {"time.rtol": 1e-10, "time.atol": 1e-12}
-    res = rodjit.simulate(_paper(integrator, **tight))
-    assert res.stats["steps"] > 0 and len(res.bounces) >= 1
-    other = rodjit.simulate(_paper("dop853" if integrator == "dp54" else "dp54", **tight))
-    y = np.concatenate([res.u_final, res.v_final])
-    y2 = np.concatenate([other.u_final, other.v_final])
-    assert np.abs(y - y2).max() < 1e-7
-    en = rodjit.simulate(_paper("energy", **{"time.rtol": 1e-9, "time.atol": 1e-12}))
-    ye = np.concatenate([en.u_final, en.v_final])
-    assert np.abs(y - ye).max() < 1e-5
-    assert abs(res.bounces["t_impact"][0] - other.bounces["t_impact"][0]) < 1e-9
+def _final(integrator, rtol, atol):
+    res = rodjit.simulate(_paper(integrator, **{"time.rtol": rtol, "time.atol": atol}))
+    return np.concatenate([res.u_final, res.v_final]), res
+
+
+def test_accuracy_through_bounces_follows_the_tolerance():
+    """The paper's run (μ = 0, N = 5) over 1.5 s, through its first bounce and the chatter
+    of the bottom node: each adaptive step that crosses u_0 = 0 is redone to end on the
+    crossing, so no step integrates across the kink of σ_b and the error keeps falling with
+    the tolerance (a pair stepping across the kink stalls near 1e-4).  Reference: dop853 at
+    rtol 1e-13; ``energy`` at its own tight tolerance agrees."""
+    ref, rref = _final("dop853", 1e-13, 1e-15)
+    assert len(rref.bounces) >= 1
+    errs = {}
+    for integrator in PAIRS:
+        for rtol in (1e-8, 1e-10):
+            y, res = _final(integrator, rtol, rtol * 1e-2)
+            errs[integrator, rtol] = np.abs(y - ref).max()
+            assert abs(res.bounces["t_impact"][0] - rref.bounces["t_impact"][0]) < 1e3 * rtol
+    assert errs["dp54", 1e-10] < 1e-5 and errs["dop853", 1e-10] < 1e-7, errs
+    for integrator in PAIRS:
+        assert errs[integrator, 1e-10] < errs[integrator, 1e-8] / 20, errs
+    ye, _ = _final("energy", 1e-9, 1e-12)
+    assert np.abs(ye - ref).max() < 5e-4    # energy's own error (second order): 1.3e-4
 
 
 @pytest.mark.parametrize("integrator", sorted(PAIRS))
