@@ -23,13 +23,15 @@ returns its failure code and the loop retries a quarter of the step.  The floor 
 a kink at u_0 = 0 (σ_b' jumps from 0 to 3κ_b/β): the loop ends an adaptive step on each
 crossing (``loop.advance``), so no step integrates across it and the pairs keep their order.
 
-Explicit pairs are stability-bound: dt·ω must stay inside the pair's stability region
-(|dt λ| ≲ 3.3 for dp54, ≲ 6 for dop853 on the imaginary axis; viscosity adds real
-eigenvalues −μ·4/(h²m)), so for stiff viscosity, stiff floors or long rods the error
-controller keeps the step near that limit and ``energy`` is the better choice.
+Explicit pairs are stability-bound: dt times every eigenvalue of the linearised system must
+stay inside the pair's stability region (it reaches about −3.3 on the negative real axis for
+dp54 and about −6 for dop853; viscosity adds real eigenvalues down to about −8μ/h², the
+floor in contact frequencies up to √(6κ_b/(βh))), so with stiff viscosity, a stiff floor
+or a long rod the error controller keeps the step near that limit (rejecting the steps
+that grow past it) and ``energy`` is the better choice.
 
-The energy is not conserved exactly: for μ = 0 its drift per unit time is of the order of
-the tolerance.  The dissipated energy is the pair's quadrature of ∫2R(v) dt over the
+The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
+tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature of ∫2R(v) dt over the
 stages (weights b_j), consistent to the pair's order.
 """
 from __future__ import annotations
