@@ -25,14 +25,14 @@ crossing (``loop.advance``), so no step integrates across it and the pairs keep 
 
 Explicit pairs are stability-bound: dt times every eigenvalue of the linearised system must
 stay inside the pair's stability region (it reaches about −3.3 on the negative real axis for
-dp54 and about −6 for dop853; viscosity adds real eigenvalues down to about −8μ/h², the
-floor in contact frequencies up to √(6κ_b/(βh))), so with stiff viscosity, a stiff floor
+dp54 and about −6 for dop853; viscosity adds real eigenvalues down to about −4μ/h², the
+floor in contact frequencies from √(6κ_b/(βh)) up), so with stiff viscosity, a stiff floor
 or a long rod the error controller keeps the step near that limit (rejecting the steps
 that grow past it) and ``energy`` is the better choice.
 
 The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
-tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature of ∫2R(v) dt over the
-stages (weights b_j), consistent to the pair's order.
+tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature
+of ∫2R(v) dt over the stages (weights b_j), consistent to the pair's order.
 """
 from __future__ import annotations
 
