@@ -21,7 +21,8 @@ dp54, 7 for dop853).  Under fixed steps (``time.dt``) the loop accepts every val
 Admissibility: every stage state is checked (ε > −1, u_0 > −β, finite); a stage outside
 returns its failure code and the loop retries a quarter of the step.  The floor force has
 a kink at u_0 = 0 (σ_b' jumps from 0 to 3κ_b/β): the loop ends an adaptive step on each
-crossing (``loop.advance``), so no step integrates across it and the pairs keep their order.
+crossing (``loop.advance``), so a step straddles it by a sliver at most and the error keeps
+following the tolerance through the bounces (a pair stepping across it stalls near 1e-4).
 
 Explicit pairs are stability-bound: dt times every eigenvalue of the linearised system must
 stay inside the pair's stability region (it reaches about −3.3 on the negative real axis for
@@ -178,7 +179,7 @@ def _factor(err, q):
 
 @step_kernel
 def _rate(system, v):
-    """2R(v)/… : μ/h Σ (v_{i+1} − v_i)², the viscous dissipation rate."""
+    """2R(v) = μ/h Σ (v_{i+1} − v_i)², the viscous dissipation rate."""
     r = 0.0
     for i in range(system.n):
         d = v[i + 1] - v[i]
