@@ -88,7 +88,8 @@ SETTINGS = {
     "floor-N1000": {"preset": "paper-mu0", "over": {"rod.N": 1000, **STIFF_FLOOR},
                     "peers": [("cyrk", "DOP853"), ("cvode", "BDF"), ("scipy", "LSODA")]},
 }
-RODJIT = ("verlet", "semi-implicit", "energy")
+RODJIT = ("verlet", "semi-implicit", "energy", "dp54", "dop853")
+CFL_DRIVEN = ("verlet", "semi-implicit")   # the others take rtol = atol = the scanned value
 PEER_DISTRIBUTIONS = {"cyrk": "cyrk", "cvode": "scikit-sundae", "scipy": "scipy"}
 
 
@@ -234,7 +235,7 @@ def run_scipy(pb, method, tol, t_eval=None):
 
 def run_rodjit(pb, integrator, value):
     over = {"time.integrator": integrator}
-    if integrator == "energy":
+    if integrator not in CFL_DRIVEN:
         over.update({"time.rtol": value, "time.atol": value})
     else:
         over["time.cfl"] = value
@@ -256,7 +257,7 @@ class Method:
     def __init__(self, lib, name):
         self.lib, self.name = lib, name
         self.label = f"rodjit {name}" if lib == "rodjit" else f"{lib} {name}"
-        self.knob = ("cfl" if name in ("verlet", "semi-implicit") else "tol") \
+        self.knob = ("cfl" if name in CFL_DRIVEN else "tol") \
             if lib == "rodjit" else "rtol=atol"
         self.grid = (CFLS if self.knob == "cfl" else TOLS)
         self.points = []

@@ -49,6 +49,15 @@ def _capacity(n1: int) -> int:
     return int(min(1024, max(1, 2**21 // n1)))
 
 
+def _rows_needed(interval: float, span: float) -> int:
+    """Output rows a run over ``span`` writes every ``interval`` (both ends and a rounding
+    row included; 1 when the output is off).  A buffer of this size is never FULL, and a
+    short run does not allocate (and page in) buffers for thousands of rows it never writes;
+    a run extended later (``set_t_end``) fills its buffers and drains them, as any long run
+    does, with the same steps."""
+    return int(min(2**31, span / interval)) + 2 if interval > 0 else 1
+
+
 _BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
 
 
@@ -78,7 +87,7 @@ class Run:
     until it returns ``layout.DONE``."""
 
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
-                 diag_capacity=4096, event_capacity=1024):
+                 diag_capacity=None, event_capacity=1024):
         self.config = config
         self.system, self.rod, self.floor = build_system(config)
         self.scheme = make_scheme(config.time)
@@ -102,7 +111,11 @@ class Run:
         self.clock[L.SNAP_DT] = out.snapshot_interval
         self.clock[L.DIAG_DT] = out.diagnostics_interval
         self._set_tolerance()
-        self._shapes = (snapshot_capacity or _capacity(n1), n1, diag_capacity, event_capacity)
+        if snapshot_capacity is None:
+            snapshot_capacity = min(_capacity(n1), _rows_needed(out.snapshot_interval, tc.t_end))
+        if diag_capacity is None:
+            diag_capacity = min(4096, _rows_needed(out.diagnostics_interval, tc.t_end))
+        self._shapes = (snapshot_capacity, n1, diag_capacity, event_capacity)
         (self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
          self.bounces) = self._buffers()
         self._spare = None          # a second set of buffers (``double_buffer``)

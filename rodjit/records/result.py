@@ -112,6 +112,14 @@ class Result:
         return {"diagnostics": diag, "bounces": bounces, "episodes": episodes}
 
 
+def _joined(parts, empty_shape):
+    """The blocks a sink copied, as one array: the block itself when there is one (it is
+    the sink's own copy already), else their concatenation."""
+    if not parts:
+        return np.zeros(empty_shape)
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
 class MemorySink(Sink):
     """Collects drained blocks in lists; ``result`` concatenates them once at the end."""
 
@@ -136,16 +144,17 @@ class MemorySink(Sink):
 
     def result(self, run, status="completed", message="") -> Result:
         n1 = run.system.n + 1
-        cat = lambda parts, shape: np.concatenate(parts) if parts else np.zeros(shape)
-        diag = cat(self._diag, (0, len(DIAG_COLUMNS)))
-        ep = cat(self._ep, (0, len(EPISODE_COLUMNS)))
+        diag = _joined(self._diag, (0, len(DIAG_COLUMNS)))
+        # one transposed copy: each column a contiguous row of it
+        diag_t = np.ascontiguousarray(diag.T)
+        ep = _joined(self._ep, (0, len(EPISODE_COLUMNS)))
         return Result(
             config=run.config,
             x=np.arange(n1) / run.system.n,
-            t=cat(self._t, (0,)),
-            u=cat(self._u, (0, n1)),
-            v=cat(self._v, (0, n1)),
-            diagnostics={name: diag[:, j].copy() for j, name in enumerate(DIAG_COLUMNS)},
+            t=_joined(self._t, (0,)),
+            u=_joined(self._u, (0, n1)),
+            v=_joined(self._v, (0, n1)),
+            diagnostics={name: diag_t[j] for j, name in enumerate(DIAG_COLUMNS)},
             episodes={name: ep[:, j].copy() for j, name in enumerate(EPISODE_COLUMNS)},
             bounces=bounce_table(self._b, run.pending_bounce()),
             stats=run.stats(),

@@ -53,6 +53,10 @@ SCHEMES: tuple[Scheme, ...] = (
     Scheme("energy", "rodjit.stepping.energy", "Energy",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), _ENERGY_WORK_ROWS,
            counters=("newton_iterations", "newton_failures"), gap_control=False),
+    Scheme("dp54", "rodjit.stepping.erk", "DP54",
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 12, gap_control=False),
+    Scheme("dop853", "rodjit.stepping.erk", "DOP853",
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 24, gap_control=False),
 )
 
 NAMES: tuple[str, ...] = tuple(s.name for s in SCHEMES)

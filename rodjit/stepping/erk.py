@@ -1,0 +1,321 @@
+"""Embedded explicit Runge–Kutta pairs: ``dp54`` (Dormand–Prince 5(4)) and ``dop853``
+(Dormand–Prince 8(5,3)), with error control, for smooth motion at tight tolerances.
+
+Both integrate the first-order form of MODEL.md §2, y = (u, v), y' = (v, a(u, v)), with
+``a`` the full acceleration M⁻¹(−∇V(u) − μKv) (``energy.full_accel``).  A step of length
+dt from yⁿ with stages k_j = f(Y_j), Y_j = yⁿ + dt Σ_{l<j} a_jl k_l, is
+
+    yⁿ⁺¹ = yⁿ + dt Σ_j b_j k_j,       error estimate  dt Σ_j e_j k_j  (j up to the new point)
+
+(the coefficients are Dormand and Prince's, as in Hairer, Nørsett & Wanner, *Solving
+Ordinary Differential Equations I*, and SciPy's RK45/DOP853).  Both pairs are FSAL: the
+last stage is f(yⁿ⁺¹), so the new state's derivative (v, a) is the state's own rows and the
+next step reuses it; a resumed run reads it from the checkpointed state (``a`` row).
+
+Error norm (Hairer's): the root mean square over all 2(N+1) components of u and v of the
+error divided by atol + rtol·max(|yⁿ|, |yⁿ⁺¹|); for dop853 the combined 5th/3rd-order
+estimate err₅²/√(err₅² + 0.01 err₃²).  ≤ 1 accepts; > 1 returns INACCURATE and the loop
+retries at ``dt_suggest``.  The next step is dt·0.9·err^(−1/(q+1)) in [0.2, 10]× (q = 4 for
+dp54, 7 for dop853).  Under fixed steps (``time.dt``) the loop accepts every valid step.
+
+Admissibility: every stage state is checked (ε > −1, u_0 > −β, finite); a stage outside
+returns its failure code and the loop retries a quarter of the step.  The floor force has
+a kink at u_0 = 0 (σ_b' jumps from 0 to 3κ_b/β): the loop ends an adaptive step on each
+crossing (``loop.advance``), so a step straddles it by a sliver at most and the error keeps
+following the tolerance through the bounces (a pair stepping across it stalls near 1e-4).
+
+Explicit pairs are stability-bound: dt times every eigenvalue of the linearised system must
+stay inside the pair's stability region (it reaches about −3.3 on the negative real axis for
+dp54 and about −6 for dop853; viscosity adds real eigenvalues down to about −4μ/h², the
+floor in contact frequencies from √(6κ_b/(βh)) up), so with stiff viscosity, a stiff floor
+or a long rod the error controller keeps the step near that limit (rejecting the steps
+that grow past it) and ``energy`` is the better choice.
+
+The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
+tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature
+of ∫2R(v) dt over the stages (weights b_j), consistent to the pair's order.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba.extending import overload
+
+from ..kernels.forces import INACCURATE, NON_FINITE, OK, momentum
+from .energy import full_accel
+from .step_result import StepResult
+from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
+
+__all__ = ["DP54", "DOP853", "TABLEAUS", "tableau", "initial", "step", "work_rows"]
+
+
+class DP54(NamedTuple):
+    """Dormand–Prince 5(4): six stages and the new point (FSAL), order 5."""
+
+    rtol: float
+    atol: float
+
+
+class DOP853(NamedTuple):
+    """Dormand–Prince 8(5,3): twelve stages and the new point (FSAL), order 8."""
+
+    rtol: float
+    atol: float
+
+
+SAFETY = 0.9
+FAC_MIN = 0.2
+FAC_MAX = 10.0
+
+# rows of the scratch array ``work``: the stresses and curvatures of ``accel``, then for each
+# stage j ≥ 1 its velocity (the u-derivative) and acceleration (the v-derivative); stage 0
+# is the state's own (v, a), the new point the trial's (v2, a2)
+S = 0
+K = 1
+
+
+@step_kernel
+def stage_rows(j):
+    """The work rows (velocity, acceleration) of stage j ≥ 1."""
+    return 2 * j, 2 * j + 1
+
+
+_A54 = np.array([
+    [0.0, 0.0, 0.0, 0.0, 0.0],
+    [0.2, 0.0, 0.0, 0.0, 0.0],
+    [0.075, 0.225, 0.0, 0.0, 0.0],
+    [0.9777777777777777, -3.7333333333333334, 3.5555555555555554, 0.0, 0.0],
+    [2.9525986892242035, -11.595793324188385, 9.822892851699436, -0.2908093278463649, 0.0],
+    [2.8462752525252526, -10.757575757575758, 8.906422717743473, 0.2784090909090909,
+     -0.2735313036020583]])
+_B54 = np.array([0.09114583333333333, 0.0, 0.44923629829290207, 0.6510416666666666,
+                 -0.322376179245283, 0.13095238095238096])
+_E54 = np.array([-0.0012326388888888888, 0.0, 0.0042527702905061394, -0.03697916666666667,
+                 0.05086379716981132, -0.0419047619047619, 0.025])
+
+_A853 = np.array([
+    [0.0] * 11,
+    [0.05260015195876773] + [0.0] * 10,
+    [0.0197250569845379, 0.0591751709536137] + [0.0] * 9,
+    [0.02958758547680685, 0.0, 0.08876275643042054] + [0.0] * 8,
+    [0.2413651341592667, 0.0, -0.8845494793282861, 0.924834003261792] + [0.0] * 7,
+    [0.037037037037037035, 0.0, 0.0, 0.17082860872947386, 0.12546768756682242] + [0.0] * 6,
+    [0.037109375, 0.0, 0.0, 0.17025221101954405, 0.06021653898045596, -0.017578125]
+    + [0.0] * 5,
+    [0.03709200011850479, 0.0, 0.0, 0.17038392571223998, 0.10726203044637328,
+     -0.015319437748624402, 0.008273789163814023] + [0.0] * 4,
+    [0.6241109587160757, 0.0, 0.0, -3.3608926294469414, -0.868219346841726,
+     27.59209969944671, 20.154067550477894, -43.48988418106996] + [0.0] * 3,
+    [0.47766253643826434, 0.0, 0.0, -2.4881146199716677, -0.590290826836843,
+     21.230051448181193, 15.279233632882423, -33.28821096898486, -0.020331201708508627]
+    + [0.0] * 2,
+    [-0.9371424300859873, 0.0, 0.0, 5.186372428844064, 1.0914373489967295,
+     -8.149787010746927, -18.52006565999696, 22.739487099350505, 2.4936055526796523,
+     -3.0467644718982196, 0.0],
+    [2.273310147516538, 0.0, 0.0, -10.53449546673725, -2.0008720582248625,
+     -17.9589318631188, 27.94888452941996, -2.8589982771350235, -8.87285693353063,
+     12.360567175794303, 0.6433927460157636]])
+_B853 = np.array([0.054293734116568765, 0.0, 0.0, 0.0, 0.0, 4.450312892752409,
+                  1.8915178993145003, -5.801203960010585, 0.3111643669578199,
+                  -0.1521609496625161, 0.20136540080403034, 0.04471061572777259])
+_E5_853 = np.array([0.01312004499419488, 0.0, 0.0, 0.0, 0.0, -1.2251564463762044,
+                    -0.4957589496572502, 1.6643771824549864, -0.35032884874997366,
+                    0.3341791187130175, 0.08192320648511571, -0.022355307863886294, 0.0])
+_E3_853 = np.array([-0.18980075407240762, 0.0, 0.0, 0.0, 0.0, 4.450312892752409,
+                    1.8915178993145003, -5.801203960010585, -0.4226823213237919,
+                    -0.1521609496625161, 0.20136540080403034, 0.02265179219836082, 0.0])
+
+
+class Tableau(NamedTuple):
+    """A pair's coefficients: ``a`` (s, s−1) strictly lower, ``b`` (s), the error weights
+    ``e`` (s+1, the new point last), the second estimate ``e3`` of a combined norm (zeros
+    for a plain one), ``combined`` and the order ``q`` of the error estimate."""
+
+    a: np.ndarray
+    b: np.ndarray
+    e: np.ndarray
+    e3: np.ndarray
+    combined: bool
+    q: int
+
+
+TABLEAUS = {
+    DP54: Tableau(_A54, _B54, _E54, np.zeros(7), False, 4),
+    DOP853: Tableau(_A853, _B853, _E5_853, _E3_853, True, 7),
+}
+
+
+def work_rows(params_type) -> int:
+    """Scratch rows the pair needs: S, K and two per stage after the first."""
+    return 2 * TABLEAUS[params_type].b.size
+
+
+def tableau(scheme):
+    t = TABLEAUS[type(scheme)]
+    return t.a, t.b, t.e, t.e3, t.combined, t.q
+
+
+@overload(tableau, jit_options=STEP_JIT_OPTIONS)
+def _tableau_ov(scheme):
+    t = TABLEAUS[scheme.instance_class]
+    a, b, e, e3, combined, q = t.a, t.b, t.e, t.e3, t.combined, t.q
+    return lambda scheme: (a, b, e, e3, combined, q)
+
+
+@step_kernel
+def _power(x, p):
+    return math.pow(x, p)
+
+
+@step_kernel
+def _factor(err, q):
+    """SAFETY·err^(−1/(q+1)) clamped to [FAC_MIN, FAC_MAX]."""
+    if not err > 0.0:
+        return FAC_MAX
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * _power(err, -1.0 / (q + 1.0))))
+
+
+@step_kernel
+def _rate(system, v):
+    """2R(v) = μ/h Σ (v_{i+1} − v_i)², the viscous dissipation rate."""
+    r = 0.0
+    for i in range(system.n):
+        d = v[i + 1] - v[i]
+        r += d * d
+    return system.mu / system.h * r
+
+
+@kernel
+def initial(scheme, system, rod, floor, u, v, a, work):
+    """Full acceleration of the initial state and Hairer's starting step: h0 = 0.01‖y‖/‖f‖,
+    then from a trial Euler step the step whose error (‖f'‖ h^(q+1)) is 0.01, at most 100 h0,
+    and at most 2/ω (the explicit stability scale)."""
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
+    if status != OK:
+        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
+    _, _, _, _, _, q = tableau(scheme)
+    n1 = u.size
+    d0 = 0.0
+    d1 = 0.0
+    for i in range(n1):
+        su = scheme.atol + scheme.rtol * abs(u[i])
+        sv = scheme.atol + scheme.rtol * abs(v[i])
+        d0 += (u[i] / su) ** 2 + (v[i] / sv) ** 2
+        d1 += (v[i] / su) ** 2 + (a[i] / sv) ** 2
+    m = 2.0 * n1
+    d0 = math.sqrt(d0 / m)
+    d1 = math.sqrt(d1 / m)
+    h0 = 0.01 * d0 / d1 if d0 > 1e-5 and d1 > 1e-5 else 1e-6
+    if om2 > 0.0:
+        h0 = min(h0, 2.0 / math.sqrt(om2))
+    u1 = work[2]   # stage rows as scratch
+    v1 = work[3]
+    a1 = work[4]
+    for i in range(n1):
+        u1[i] = u[i] + h0 * v[i]
+        v1[i] = v[i] + h0 * a[i]
+    st1 = full_accel(system, rod, floor, u1, v1, a1, work[S], work[K], False)[0]
+    dt = h0
+    if st1 == OK:
+        d2 = 0.0
+        for i in range(n1):
+            su = scheme.atol + scheme.rtol * abs(u[i])
+            sv = scheme.atol + scheme.rtol * abs(v[i])
+            d2 += ((v1[i] - v[i]) / su) ** 2 + ((a1[i] - a[i]) / sv) ** 2
+        d2 = math.sqrt(d2 / m) / h0
+        dm = max(d1, d2)
+        h1 = (max(1e-6, 1e-3 * h0) if dm <= 1e-15
+              else _power(0.01 / dm, 1.0 / (q + 1.0)))
+        dt = min(100.0 * h0, h1)
+        if om2 > 0.0:
+            dt = min(dt, 2.0 / math.sqrt(om2))
+    return StepResult(OK, 0.0, emin, fl, dt, 0.0, 0.0)
+
+
+@step_kernel
+def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
+    """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
+
+    Returns OK or INACCURATE (valid state, error estimate > 1: retry with ``dt_suggest``),
+    or the failure code of the first stage outside the admissible set."""
+    A, B, E, E3, combined, q = tableau(scheme)
+    ns = B.size
+    n1 = u.size
+    diss = 0.0
+    if system.mu > 0.0:
+        diss = B[0] * _rate(system, v)
+    # stages 1 … ns−1; the stage height goes into u2 (scratch until the new point)
+    for j in range(1, ns):
+        rv, ra = stage_rows(j)
+        vj = work[rv]
+        aj = work[ra]
+        for i in range(n1):
+            du = A[j, 0] * v[i]
+            dv = A[j, 0] * a[i]
+            for l in range(1, j):
+                cl = A[j, l]
+                if cl != 0.0:
+                    du += cl * work[2 * l, i]
+                    dv += cl * work[2 * l + 1, i]
+            u2[i] = u[i] + dt * du
+            vj[i] = v[i] + dt * dv
+        status, val, emin, fl, _ = full_accel(system, rod, floor, u2, vj, aj, work[S],
+                                              work[K], False)
+        if status != OK:
+            return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
+        if system.mu > 0.0 and B[j] != 0.0:
+            diss += B[j] * _rate(system, vj)
+    # the new point
+    for i in range(n1):
+        du = B[0] * v[i]
+        dv = B[0] * a[i]
+        for l in range(1, ns):
+            cl = B[l]
+            if cl != 0.0:
+                du += cl * work[2 * l, i]
+                dv += cl * work[2 * l + 1, i]
+        u2[i] = u[i] + dt * du
+        v2[i] = v[i] + dt * dv
+    status, val, emin, fl, _ = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K],
+                                          False)
+    if status != OK:
+        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
+    # error norm over u and v (module docstring)
+    e5 = 0.0
+    e3 = 0.0
+    for i in range(n1):
+        eu = E[0] * v[i] + E[ns] * v2[i]
+        ev = E[0] * a[i] + E[ns] * a2[i]
+        fu = E3[0] * v[i] + E3[ns] * v2[i]
+        fv = E3[0] * a[i] + E3[ns] * a2[i]
+        for l in range(1, ns):
+            cl = E[l]
+            if cl != 0.0:
+                eu += cl * work[2 * l, i]
+                ev += cl * work[2 * l + 1, i]
+            if combined:
+                c3 = E3[l]
+                if c3 != 0.0:
+                    fu += c3 * work[2 * l, i]
+                    fv += c3 * work[2 * l + 1, i]
+        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
+        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
+        e5 += (eu / su) ** 2 + (ev / sv) ** 2
+        if combined:
+            e3 += (fu / su) ** 2 + (fv / sv) ** 2
+    m = 2.0 * n1
+    if combined:
+        den = e5 + 0.01 * e3
+        err = dt * e5 / math.sqrt(den * m) if den > 0.0 else 0.0
+    else:
+        err = dt * math.sqrt(e5 / m)
+    if not math.isfinite(err):
+        return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
+    w = momentum(v2, system.h)
+    diss *= dt
+    fac = _factor(err, q)
+    if err > 1.0:
+        return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
+    return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)

@@ -1,0 +1,201 @@
+"""The embedded Runge–Kutta pairs (``time.integrator = "dp54"`` and ``"dop853"``).
+
+Checked: convergence order in fixed steps dt (5 and 8, within ±0.2) in flight and in
+contact, the energy drift at μ = 0 following the tolerance, agreement with ``energy`` and
+between the pairs through bounces (the loop's landing on the floor crossings), the stage
+admissibility checks, exact free-fall momentum, dissipation bookkeeping, and resume bit
+for bit.
+"""
+import numpy as np
+import pytest
+
+import rodjit
+from rodjit.driver.run import Run, SimulationError
+from rodjit.kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE, OK
+from rodjit.records.result import MemorySink
+from rodjit.stepping import erk, layout as L, registry
+
+QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
+PAIRS = {"dp54": 5, "dop853": 8}
+
+# flight: the paper's rod high above the floor, pre-strained, vibrating as it falls
+FLIGHT = {"rod.N": 5, "initial.height": 3.0, "initial.strain": 0.1, "initial.velocity": 0.0,
+          "time.t_end": 0.5}
+# contact: pressed into a soft floor for the whole interval (u_0 < 0 throughout, so the
+# force is smooth: the kink at u_0 = 0 is handled by the adaptive loop, not by fixed steps)
+CONTACT = {"rod.N": 8, "initial.height": -0.05, "initial.velocity": -1.0, "rod.mu": 0.1,
+           "floor.kappa_b": 10.0, "floor.beta": 1.0, "time.t_end": 0.1}
+# the largest of three halving steps: errors between ~1e-5 and ~1e-11, in the asymptotic
+# range and above the rounding floor (1e-13 … 1e-12 for these runs)
+DTS = {("dp54", "flight"): 1.25e-3, ("dp54", "contact"): 1e-3,
+       ("dop853", "flight"): 1e-2, ("dop853", "contact"): 1.6e-2}
+
+
+def _cfg(integrator, over):
+    return rodjit.Config().override({"time.integrator": integrator, **QUIET, **over})
+
+
+def _fixed(integrator, dt, over):
+    res = rodjit.simulate(_cfg(integrator, {"time.dt": dt, **over}))
+    return np.concatenate([res.u_final, res.v_final])
+
+
+def test_registry_lines():
+    for name, params in (("dp54", erk.DP54), ("dop853", erk.DOP853)):
+        entry = registry.get(name)
+        assert registry.load(entry)[1] is params
+        assert entry.work_rows == erk.work_rows(params)
+        assert entry.gap_control is False and entry.counters == ()
+        s = registry.make_scheme(rodjit.Config().override(
+            {"time.integrator": name, "time.rtol": 1e-7, "time.atol": 1e-11}).time)
+        assert s == params(1e-7, 1e-11)
+
+
+def test_tableaus_have_their_design_order_conditions():
+    """Row sums c_i = Σ_j a_ij; Σ b = 1, Σ b c = 1/2, Σ b c² = 1/3, Σ b c³ = 1/4 (and up to
+    c⁷ for dop853); the error weights sum to 0 (both solutions are consistent)."""
+    for params, order in ((erk.DP54, 5), (erk.DOP853, 8)):
+        t = erk.TABLEAUS[params]
+        c = t.a.sum(axis=1)
+        for k in range(order):
+            assert abs(t.b @ c**k - 1.0 / (k + 1)) < 1e-13, (params, k)
+        assert abs(t.e.sum()) < 1e-13 and abs(t.e3.sum()) < 1e-13
+
+
+@pytest.mark.parametrize("case", ["flight", "contact"])
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_order_in_dt(integrator, case):
+    over = FLIGHT if case == "flight" else CONTACT
+    dts = [DTS[integrator, case] / 2**k for k in range(3)]
+    ref = _fixed("dop853", dts[-1] / 8, over)
+    errs = np.array([np.abs(_fixed(integrator, dt, over) - ref).max() for dt in dts])
+    orders = np.log2(errs[:-1] / errs[1:])
+    assert errs[-1] > 3e-12, errs                        # above rounding
+    assert np.all(np.abs(orders - PAIRS[integrator]) <= 0.2), (orders, errs)
+
+
+def test_contact_case_stays_in_contact():
+    res = rodjit.simulate(_cfg("dp54", {**CONTACT, "time.dt": 1e-4,
+                                        "output.diagnostics_interval": 1e-3}))
+    assert res.diagnostics["u_bottom"].max() < 0.0
+
+
+def _paper(integrator, **over):
+    return _cfg(integrator, {"time.t_end": 1.5, **over})
+
+
+def _final(integrator, rtol, atol):
+    res = rodjit.simulate(_paper(integrator, **{"time.rtol": rtol, "time.atol": atol}))
+    return np.concatenate([res.u_final, res.v_final]), res
+
+
+def test_accuracy_through_bounces_follows_the_tolerance():
+    """The paper's run (μ = 0, N = 5) over 1.5 s, through its first bounce and the chatter
+    of the bottom node: each adaptive step that crosses u_0 = 0 is redone to end on the
+    crossing, so no step integrates across the kink of σ_b and the error keeps falling with
+    the tolerance (a pair stepping across the kink stalls near 1e-4).  Reference: dop853 at
+    rtol 1e-13; ``energy`` at its own tight tolerance agrees."""
+    ref, rref = _final("dop853", 1e-13, 1e-15)
+    assert len(rref.bounces) >= 1
+    errs = {}
+    for integrator in PAIRS:
+        for rtol in (1e-8, 1e-10):
+            y, res = _final(integrator, rtol, rtol * 1e-2)
+            errs[integrator, rtol] = np.abs(y - ref).max()
+            assert abs(res.bounces["t_impact"][0] - rref.bounces["t_impact"][0]) < 1e3 * rtol
+    assert errs["dp54", 1e-10] < 1e-5 and errs["dop853", 1e-10] < 1e-7, errs
+    for integrator in PAIRS:
+        assert errs[integrator, 1e-10] < errs[integrator, 1e-8] / 20, errs
+    ye, _ = _final("energy", 1e-9, 1e-12)
+    assert np.abs(ye - ref).max() < 5e-4    # energy's own error (second order): 1.3e-4
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_energy_drift_follows_the_tolerance(integrator):
+    """μ = 0: the energy is not an invariant of the pairs, but its drift over a bouncing run
+    shrinks with the tolerance (by ≥ 100× for 1000× tighter) and stays below it × E."""
+    drift = []
+    for rtol in (1e-5, 1e-8):
+        res = rodjit.simulate(_paper(integrator, **{"time.t_end": 2.0, "time.rtol": rtol,
+                                                    "time.atol": rtol * 1e-2,
+                                                    "output.diagnostics_interval": 0.01}))
+        e = res.diagnostics["energy_total"]
+        drift.append(np.abs(e - e[0]).max() / abs(e[0]))
+        assert drift[-1] < 100 * rtol
+    assert drift[1] < drift[0] / 100, drift
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_free_fall_momentum_and_dissipation(integrator):
+    """No contact: w = w0 + g t to rounding (every stage adds g to each node's
+    acceleration; internal forces cancel); with μ > 0, E + dissipated = E0 to the
+    tolerance."""
+    res = rodjit.simulate(_cfg(integrator, {**FLIGHT, "rod.mu": 0.05, "rod.gamma": 1e-3,
+                                            "time.rtol": 1e-9, "time.atol": 1e-12,
+                                            "output.diagnostics_interval": 0.05}))
+    d = res.diagnostics
+    np.testing.assert_allclose(d["cm_velocity"], -9.81 * d["t"], rtol=0, atol=1e-12)
+    bal = d["energy_total"] + d["dissipated"]
+    assert d["dissipated"][-1] > 1e-4
+    assert np.abs(bal - bal[0]).max() < 1e-7 * abs(bal[0])
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_a_stage_outside_the_admissible_set_is_rejected(integrator):
+    """A step far too long for a hard impact: a stage (or the new point) leaves ε > −1 or
+    u_0 > −β; the step reports which, and leaves its inputs untouched."""
+    cfg = _cfg(integrator, {"initial.height": 0.001, "initial.velocity": -5.0})
+    run = Run(cfg)
+    run.start(MemorySink())
+    scheme, _, system, rod, floor = run._args()
+    before = run.state.copy()
+    trial = np.zeros_like(run.state)
+    r = erk.step(scheme, system, rod, floor, run.state[0], run.state[1], run.state[2],
+                 trial[0], trial[1], trial[2], run.work, run.sstats, 0.05)
+    assert r.status in (BAD_FLOOR, BAD_STRAIN, NON_FINITE)
+    np.testing.assert_array_equal(run.state, before)
+    # the loop retries shorter and the run stays admissible through the impact
+    res = rodjit.simulate(_cfg(integrator, {"initial.height": 0.001, "initial.velocity": -5.0,
+                                            "time.t_end": 0.3, "time.rtol": 1e-4,
+                                            "output.diagnostics_interval": 1e-3}))
+    assert res.diagnostics["u_bottom"].min() > -cfg.floor.beta and res.stats["rejected_steps"] > 0
+    assert res.diagnostics["min_strain"].min() > -1.0
+    # fixed steps cannot retry: a clear failure naming time.dt
+    with pytest.raises(SimulationError, match="time.dt"):
+        rodjit.simulate(_cfg(integrator, {"initial.height": 0.001, "initial.velocity": -5.0,
+                                          "time.dt": 0.05, "time.t_end": 0.3}))
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_resume_is_bit_identical(integrator):
+    cfg = _cfg(integrator, {"rod.N": 10, "rod.mu": 0.2, "time.t_end": 0.9, "time.rtol": 1e-7})
+    one = Run(cfg)
+    one.start(MemorySink())
+    while one.advance(MemorySink()) != L.DONE:
+        pass
+    first = Run(cfg)
+    first.start(MemorySink())
+    first.advance(MemorySink(), max_steps=333)
+    assert first.t < cfg.time.t_end
+    second = Run.from_checkpoint(cfg, first.checkpoint())
+    while second.advance(MemorySink()) != L.DONE:
+        pass
+    np.testing.assert_array_equal(second.state, one.state)
+    assert second.steps == one.steps and second.rejected == one.rejected
+    assert second.dissipated == one.dissipated
+
+
+def test_step_is_ok_and_fsal():
+    """An accepted step leaves the new state's full acceleration in a2 (the next step's
+    first stage), equal to a fresh evaluation at (u2, v2)."""
+    cfg = _cfg("dp54", {"rod.mu": 0.3, "rod.gamma": 1e-3})
+    run = Run(cfg)
+    run.start(MemorySink())
+    scheme, _, system, rod, floor = run._args()
+    trial = np.zeros_like(run.state)
+    r = erk.step(scheme, system, rod, floor, run.state[0], run.state[1], run.state[2],
+                 trial[0], trial[1], trial[2], run.work, run.sstats, 1e-4)
+    assert r.status == OK
+    a = np.zeros_like(trial[2])
+    erk.full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1], False)
+    np.testing.assert_array_equal(a, trial[2])
