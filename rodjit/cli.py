@@ -346,6 +346,16 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
     click.echo(f"wrote {written}")
 
 
+def _is_convergence(path: str) -> bool:
+    """Whether ``path`` is a convergence file (``rodjit converge -o``)."""
+    from .output.h5files import file_kind
+
+    try:
+        return file_kind(path) == "convergence"
+    except (ValueError, OSError):
+        return False
+
+
 def plot_run(path: str, output: str | None, kind: str) -> None:
     from .plotting import plot_file
 
@@ -362,7 +372,8 @@ def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
 # importing those modules would load numpy, h5py and Numba before every command
 RUN_KINDS = ("heights", "energy", "bounces")
 SWEEP_KINDS = ("restitution", "heatmap")
-PLOT_KINDS = RUN_KINDS + SWEEP_KINDS
+CONVERGENCE_KINDS = ("convergence",)
+PLOT_KINDS = RUN_KINDS + SWEEP_KINDS + CONVERGENCE_KINDS
 
 
 @main.command("info")
@@ -386,9 +397,10 @@ def info_command(file):
               help="Run files: heights (all nodes against time, the paper's figures; the "
                    "default), energy (components and dissipation), bounces (restitution per "
                    "bounce).  Sweep files: restitution (against --x, one line per value of "
-                   "the other keys; the default), heatmap (over two keys at --at values).")
+                   "the other keys; the default), heatmap (over two keys at --at values).  "
+                   "Convergence files: convergence (error against the level, log-log).")
 @click.option("--quantity", metavar="COLUMN",
-              help="Sweep files: the summary column drawn [default: restitution_first].")
+              help="Sweep files: the summary column drawn [default: restitution_impact, the first-impact restitution, 0 without lift-off].")
 @click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
               "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
@@ -396,7 +408,15 @@ def info_command(file):
               help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "
                    "the first value of each other key].")
 def plot_command(file, output, kind, quantity, x_key, y_key, at):
-    """Draw a figure of a rodjit file (a run or a sweep)."""
+    """Draw a figure of a rodjit file (a run, a sweep or a convergence study)."""
+    if _is_convergence(file):
+        if kind not in (None, *CONVERGENCE_KINDS) or quantity or x_key or y_key or at:
+            raise UsageError("a convergence file takes no --kind but 'convergence' and no "
+                             "--quantity, --x, --y or --at")
+        from .plotting.convergence import plot_convergence_file
+
+        _draw(plot_convergence_file, file, output, "convergence")
+        return
     kind_of_file = _kind(file)
     if kind_of_file == "run":
         if kind is not None and kind not in RUN_KINDS:

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..records.bounces import bounce_table
 from ..records.extremes import Extremes
+from ..records.observables import ImpactTrack
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .h5files import history_with, now, open_for_writing, writer_attrs
@@ -51,11 +52,14 @@ class RunWriter(Sink):
         self.checkpoint = checkpoint
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
+        self.track = ImpactTrack()       # the columns of the first-impact observables
         b = self.tables["bounces"]       # every bounce row, kept for the summary
         self._bounces = [[np.zeros(0, buf.dtype) if new else d[:b.length]]
                          for d, buf in zip(b.ds, b.buf)]
         if not new:
             self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
+            self.track.read(f, self.tables["diagnostics"].length,
+                            self.tables["episodes"].length)
         self.final = None        # what closing leaves in the file (status, bounces, ...)
 
     # Sink interface: drained blocks of the compiled loop
@@ -65,9 +69,11 @@ class RunWriter(Sink):
     def diagnostics(self, rows):
         self.tables["diagnostics"].append(list(rows.T))
         self.extremes.update_rows(rows)
+        self.track.diagnostics(rows)
 
     def episodes(self, rows):
         self.tables["episodes"].append(list(rows.T))
+        self.track.episodes(rows)
 
     def bounces(self, rows, pending=None):
         """Closed bounce rows, or (``rows`` None) the ``pending`` bounce of the run."""

@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass, field
 
 from ..records.extremes import Extremes
+from ..records.observables import ImpactTrack, impact_line, impact_values
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive
@@ -44,6 +45,8 @@ class RunSummary:
     run_time: float
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
+    impact: dict = field(default_factory=dict)   # the first macroscopic contact
+                                                 # (records.observables.IMPACT_COLUMNS)
     writer_alive: bool | None = None
 
     @property
@@ -81,6 +84,8 @@ class RunSummary:
                              f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
                              f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
                              f"  {e:>11}")
+        if self.impact:
+            lines.append(f"  {'first impact':<22}{impact_line(self.impact)}")
         if math.isnan(self.energy_error):
             lines.append(f"  {self.energy_label():<22}not measured (no diagnostics: "
                          f"output.diagnostics_interval = 0)")
@@ -117,10 +122,12 @@ def summarize(path) -> RunSummary:
                   for name, cols in TABLES.items()}
         extremes = Extremes()
         extremes.read(f["diagnostics"], counts["diagnostics"])
+        track = ImpactTrack()
+        track.read(f, counts["diagnostics"], counts["episodes"])
         status = str(f.attrs["status"])
         return _summary(
             path, status, str(f.attrs["message"]), read_config(f), read_checkpoint(f),
-            counts, read_table(f, "bounces"), extremes,
+            counts, read_table(f, "bounces"), extremes, track,
             {k: f.attrs[k] for k in SUMMARY_ATTRS if k in f.attrs},
             writer_alive(f) if status == "running" else None)
 
@@ -131,11 +138,11 @@ def closed_summary(writer: RunWriter) -> RunSummary:
     fin = writer.final
     return _summary(writer.path, fin["status"], fin["message"], writer.config,
                     writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
-                    fin["attrs"], None)
+                    writer.track, fin["attrs"], None)
 
 
-def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes, attrs,
-             alive) -> RunSummary:
+def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes,
+             track: ImpactTrack, attrs, alive) -> RunSummary:
     clock, count = ck["clock"], ck["count"]
     e0 = float(clock[L.E0])
     ext = extremes.with_bounces(bounces)
@@ -152,4 +159,5 @@ def _summary(path, status, message, config, ck, counts, bounces, extremes: Extre
         compile_time=ck["compile_time"], run_time=run_time,
         node_steps_per_second=node_steps_per_second(steps, config.rod.N + 1, run_time),
         attrs=attrs, writer_alive=alive,
+        impact=impact_values(config, float(clock[L.T]), ck["state"][0], track, bounces),
     )

@@ -16,7 +16,7 @@ from .mpl import new_figure
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
 
 KINDS = ("restitution", "heatmap")
-DEFAULT_QUANTITY = "restitution_first"
+DEFAULT_QUANTITY = "restitution_impact"
 MAX_LINES = 24
 MAX_ANNOTATED = 15     # cells per side up to which a heatmap prints its values
 _SYMBOLS = {"rod.mu": "μ", "rod.kappa": "κ", "rod.gamma": "γ", "floor.kappa_b": "κ_b",
