@@ -452,6 +452,16 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
     click.echo(f"wrote {written}")
 
 
+def _is_convergence(path: str) -> bool:
+    """Whether ``path`` is a convergence file (``rodjit converge -o``)."""
+    from .output.h5files import file_kind
+
+    try:
+        return file_kind(path) == "convergence"
+    except (ValueError, OSError):
+        return False
+
+
 def plot_run(path: str, output: str | None, kind: str, options: dict) -> None:
     from .plotting import plot_file
 
@@ -468,7 +478,8 @@ def plot_sweep(path: str, output: str | None, kind: str, options: dict) -> None:
 # importing those modules would load numpy, h5py and Numba before every command
 RUN_KINDS = ("heights", "energy", "bounces", "spacetime", "contact")
 SWEEP_KINDS = ("restitution", "heatmap")
-PLOT_KINDS = RUN_KINDS + SWEEP_KINDS
+CONVERGENCE_KINDS = ("convergence",)
+PLOT_KINDS = RUN_KINDS + SWEEP_KINDS + CONVERGENCE_KINDS
 
 
 def _figsize(text: str | None):
@@ -505,11 +516,14 @@ def info_command(file):
               help="Run files: heights (all nodes against time, the paper's figures; the "
                    "default), energy (components, and the drift or balance error), bounces "
                    "(restitution per bounce), spacetime (strain over time and x, contact "
-                   "marked), contact (u_0 with -beta, and the floor force).  Sweep files: restitution (against --x, one line per value of "
-                   "the other keys; the default), heatmap (over two keys at --at values).")
+                   "marked), contact (u_0 with -beta, and the floor force).  Sweep files: restitution "
+                   "(against --x, one line per value of the other keys; the default), heatmap "
+                   "(over two keys at --at values).  Convergence files: convergence (error "
+                   "against the level, log-log).")
 @click.option("--quantity", metavar="COLUMN",
               help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
-                   "Sweep files: the summary column drawn [default: restitution_first].")
+                   "Sweep files: the summary column drawn [default: restitution_impact, the "
+                   "first-impact restitution, 0 without lift-off].")
 @click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
               "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
@@ -524,6 +538,14 @@ def info_command(file):
 def plot_command(file, output, kind, quantity, x_key, y_key, at, panels, dpi, figsize):
     """Draw a figure of a rodjit file (a run or a sweep) as PNG, PDF or SVG (by the suffix
     of -o)."""
+    if _is_convergence(file):
+        if kind not in (None, *CONVERGENCE_KINDS) or quantity or x_key or y_key or at:
+            raise UsageError("a convergence file takes no --kind but 'convergence' and no "
+                             "--quantity, --x, --y or --at")
+        from .plotting.convergence import plot_convergence_file
+
+        _draw(plot_convergence_file, file, output, "convergence")
+        return
     kind_of_file = _kind(file)
     style = {"dpi": dpi, "figsize": _figsize(figsize)}
     if kind_of_file == "run":

@@ -17,6 +17,7 @@ import numpy as np
 from ..records.bounces import bounce_table
 from ..records.columns import BOOL_COLUMNS
 from ..records.extremes import Extremes
+from ..records.observables import ImpactTrack
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .cf import LIBVER
@@ -54,12 +55,15 @@ class RunWriter(Sink):
         self.checkpoint = checkpoint
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
+        self.track = ImpactTrack()       # the columns of the first-impact observables
         b = self.tables["bounces"]       # every bounce row, kept for the summary
         self._bounces = [[np.zeros(0, _kept(name, buf.dtype)) if new else
                           d[:b.length].astype(_kept(name, d.dtype))]
                          for name, d, buf in zip(TABLES["bounces"], b.ds, b.buf)]
         if not new:
             self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
+            self.track.read(f, self.tables["diagnostics"].length,
+                            self.tables["episodes"].length)
         self.final = None        # what closing leaves in the file (status, bounces, ...)
 
     # Sink interface: drained blocks of the compiled loop
@@ -69,9 +73,11 @@ class RunWriter(Sink):
     def diagnostics(self, rows):
         self.tables["diagnostics"].append(list(rows.T))
         self.extremes.update_rows(rows)
+        self.track.diagnostics(rows)
 
     def episodes(self, rows):
         self.tables["episodes"].append(list(rows.T))
+        self.track.episodes(rows)
 
     def bounces(self, rows, pending=None):
         """Closed bounce rows, or (``rows`` None) the ``pending`` bounce of the run."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 from ..records.extremes import Extremes
 from ..records.overview import RunFacts, energy_label
+from ..records.observables import ImpactTrack, impact_line, impact_values
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive
@@ -45,6 +46,8 @@ class RunSummary:
     run_time: float
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
+    impact: dict = field(default_factory=dict)   # the first macroscopic contact
+                                                 # (records.observables.IMPACT_COLUMNS)
     writer_alive: bool | None = None
 
     @property
@@ -69,7 +72,7 @@ class RunSummary:
             min_strain=self.min_strain, min_u0=self.min_u0, steps=self.steps,
             rejected=self.rejected_steps, compile_time=self.compile_time,
             run_time=self.run_time, node_steps_per_second=self.node_steps_per_second,
-            warnings=self.warnings)
+            warnings=self.warnings, impact=self.impact)
 
     def report(self, max_bounces: int | None = 20) -> str:
         """A short plain-text report: bounces (at most ``max_bounces`` rows, None: all),
@@ -91,10 +94,12 @@ def summarize(path) -> RunSummary:
                   for name, cols in TABLES.items()}
         extremes = Extremes()
         extremes.read(f["diagnostics"], counts["diagnostics"])
+        track = ImpactTrack()
+        track.read(f, counts["diagnostics"], counts["episodes"])
         status = str(f.attrs["status"])
         return _summary(
             path, status, str(f.attrs["message"]), read_config(f), read_checkpoint(f),
-            counts, read_table(f, "bounces"), extremes,
+            counts, read_table(f, "bounces"), extremes, track,
             {k: f.attrs[k] for k in SUMMARY_ATTRS if k in f.attrs},
             writer_alive(f) if status == "running" else None)
 
@@ -105,11 +110,11 @@ def closed_summary(writer: RunWriter) -> RunSummary:
     fin = writer.final
     return _summary(writer.path, fin["status"], fin["message"], writer.config,
                     writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
-                    fin["attrs"], None)
+                    writer.track, fin["attrs"], None)
 
 
-def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes, attrs,
-             alive) -> RunSummary:
+def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes,
+             track: ImpactTrack, attrs, alive) -> RunSummary:
     clock, count = ck["clock"], ck["count"]
     e0 = float(clock[L.E0])
     ext = extremes.with_bounces(bounces)
@@ -126,4 +131,5 @@ def _summary(path, status, message, config, ck, counts, bounces, extremes: Extre
         compile_time=ck["compile_time"], run_time=run_time,
         node_steps_per_second=node_steps_per_second(steps, config.rod.N + 1, run_time),
         attrs=attrs, writer_alive=alive,
+        impact=impact_values(config, float(clock[L.T]), ck["state"][0], track, bounces),
     )

@@ -16,7 +16,7 @@ from .mpl import NothingToDraw, new_figure, save
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
 
 KINDS = ("restitution", "heatmap")
-DEFAULT_QUANTITY = "restitution_first"
+DEFAULT_QUANTITY = "restitution_impact"
 MAX_LINES = 24
 MAX_PANELS = 6
 MARKERS = "osD^vP*X"   # one per line, so lines can be told apart without colour

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 from .._display import html_table, number, text
+from .observables import impact_line
 
 __all__ = ["RunFacts", "energy_label"]
 
@@ -21,9 +22,10 @@ class RunFacts:
 
     def __init__(self, *, name, status, message, config, t_start, t, t_end, bounces,
                  n_episodes, energy_error, min_strain, min_u0, steps, rejected,
-                 compile_time, run_time, node_steps_per_second, warnings=()):
+                 compile_time, run_time, node_steps_per_second, warnings=(), impact=None):
         self.name, self.status, self.message, self.config = name, status, message, config
         self.warnings = tuple(warnings)   # what the results do not mean (Config.warnings)
+        self.impact = impact or {}        # the first macroscopic contact (records.observables)
         self.t_start, self.t, self.t_end = t_start, t, t_end
         self.bounces, self.n_episodes = bounces, n_episodes
         self.energy_error, self.min_strain, self.min_u0 = energy_error, min_strain, min_u0
@@ -91,6 +93,8 @@ class RunFacts:
                              f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
                              f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
                              f"  {e:>11}")
+        if self.impact:
+            lines.append(f"  {'first impact':<22}{impact_line(self.impact)}")
         label = energy_label(c.rod.mu)
         if math.isnan(self.energy_error):
             lines.append(f"  {label:<22}not measured (no diagnostics: "

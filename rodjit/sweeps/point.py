@@ -24,6 +24,7 @@ from ..model.laws import get_law
 from ..records.bounces import bounce_table, empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.extremes import Extremes
+from ..records.observables import IMPACT_COLUMNS, ImpactTrack, impact_values
 from ..records.sink import Sink
 from ..stepping import layout as L
 
@@ -41,6 +42,7 @@ SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
                                    "bounce (NaN if none)"),
     "restitution_mean": ("float", "mean restitution over the complete bounces (NaN if none)"),
     "contact_time_first": ("float", "t_release - t_impact of the first complete bounce"),
+    **IMPACT_COLUMNS,
     "min_u0": ("float", "lowest bottom height u_0 (deepest penetration if < 0)"),
     "max_floor_force": ("float", "largest floor force sigma_b(u_0)"),
     "min_strain": ("float", "smallest segment strain"),
@@ -115,14 +117,20 @@ def law_modules(config) -> tuple[str, ...]:
 
 
 class _PointSink(Sink):
-    """Keeps what a summary row needs: running extremes and the bounce rows."""
+    """Keeps what a summary row needs: running extremes, the few diagnostics columns of
+    the first-impact observables (``ImpactTrack``), episodes and the bounce rows."""
 
     def __init__(self):
         self.extremes = Extremes()
+        self.track = ImpactTrack()
         self.rows: list[np.ndarray] = []
 
     def diagnostics(self, rows):
         self.extremes.update_rows(rows)
+        self.track.diagnostics(rows)
+
+    def episodes(self, rows):
+        self.track.episodes(rows)
 
     def bounces(self, rows):
         self.rows.append(rows.copy())
@@ -159,6 +167,7 @@ def _run_in_memory(config) -> tuple[dict, dict]:
               "energy_error": ext.energy_error(run.energy0), "steps": run.steps,
               "rejected_steps": run.rejected, "compile_time": run.compile_time,
               "run_time": run.run_time, "t_final": run.t, "run_file": ""}
+    values.update(impact_values(config, run.t, run.u, sink.track, bounces))
     return values, bounces
 
 
@@ -180,7 +189,7 @@ def _run_to_file(config, path: str) -> tuple[dict, dict]:
               "energy_error": s.energy_error,
               "steps": s.steps, "rejected_steps": s.rejected_steps,
               "compile_time": s.compile_time, "run_time": s.run_time, "t_final": s.t,
-              "run_file": os.path.basename(path)}
+              "run_file": os.path.basename(path), **s.impact}
     return values, {name: np.asarray(s.bounces[name]) for name in BOUNCE_COLUMNS}
 
 
