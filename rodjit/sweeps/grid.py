@@ -16,7 +16,7 @@ from typing import Any, Iterator, Mapping
 
 import numpy as np
 
-from ..config import Config, _FIELDS, _unknown_key_error, parse_value
+from ..config import Config, field_spec, parse_value
 
 __all__ = ["Grid", "parse_grid_option", "format_value"]
 
@@ -24,10 +24,7 @@ _RANGE = re.compile(r"^\s*(linspace|logspace)\s*\((.*)\)\s*$")
 
 
 def _field(key: str):
-    section, _, name = key.partition(".")
-    if section not in _FIELDS or name not in _FIELDS[section]:
-        raise _unknown_key_error(key)
-    return _FIELDS[section][name]
+    return field_spec(key)
 
 
 def _range_values(key: str, kind: str, args: str) -> list[float]:
@@ -103,9 +100,7 @@ class Grid:
                              "e.g. {'rod.mu': [0, 1, 10]}")
         keys, values = [], []
         for key, vals in spec.items():
-            if not isinstance(key, str):
-                raise _unknown_key_error(str(key))
-            _field(key)
+            _field(str(key))
             if isinstance(vals, str):
                 vals = _values_from_text(key, vals)
             elif np.isscalar(vals):
