@@ -11,6 +11,7 @@ from .bounces import bounce_table
 from .columns import DIAG_COLUMNS, EPISODE_COLUMNS
 from .datasets import run_dataset, strain_of
 from .extremes import Extremes
+from .observables import ImpactTrack, impact_values
 from .overview import RunFacts
 from .sink import Sink
 
@@ -76,7 +77,20 @@ class Result:
             rejected=int(s.get("rejected_steps", 0)),
             compile_time=float(s.get("compile_time", 0.0)),
             run_time=float(s.get("run_time", 0.0)),
-            node_steps_per_second=float(s.get("node_steps_per_second", 0.0)))
+            node_steps_per_second=float(s.get("node_steps_per_second", 0.0)),
+            warnings=self.config.warnings(), impact=self.impact())
+
+    def impact(self) -> dict:
+        """The first macroscopic contact (``records.observables.IMPACT_COLUMNS``), as a run
+        file's summary and a sweep row report it."""
+        track = ImpactTrack()
+        d = self.diagnostics
+        track.diagnostics(np.stack([d[c] for c in DIAG_COLUMNS], axis=1)
+                          if d["t"].size else np.zeros((0, len(DIAG_COLUMNS))))
+        e = self.episodes
+        track.episodes(np.stack([e[c] for c in EPISODE_COLUMNS], axis=1)
+                       if e["t_start"].size else np.zeros((0, len(EPISODE_COLUMNS))))
+        return impact_values(self.config, self.t_final, self.u_final, track, self.bounces)
 
     def report(self, max_bounces: int | None = 20) -> str:
         """The plain-text report ``rodjit run`` prints: bounces (at most ``max_bounces``
