@@ -21,3 +21,9 @@ def test_every_column_is_described_and_nothing_else(table):
 def test_unknown_column_names_table_and_column():
     with pytest.raises(KeyError, match="'nope'.*'bounces'"):
         meaning("bounces", "nope")
+
+
+def test_every_sweep_summary_column_is_described():
+    from rodjit.sweeps.point import SUMMARY_COLUMNS
+
+    assert set(SUMMARY_COLUMNS) <= set(COLUMN_MEANINGS["summary"])

@@ -98,4 +98,19 @@ COLUMN_MEANINGS["summary"] = {
     "run_time": Meaning("wall time stepping in compiled code", "s"),
     "t_final": Meaning("simulated time reached", "s"),
     "run_file": Meaning("the point's run file", ""),
+    # the first macroscopic contact (records.observables.IMPACT_COLUMNS)
+    "restitution_impact": Meaning("restitution of the first macroscopic contact "
+                                  "(0: no lift-off)", "1"),
+    "impact_status": Meaning("outcome of the first macroscopic contact (lift-off, no "
+                             "lift-off, open, no impact, undefined)", ""),
+    "impact_reason": Meaning("why restitution_impact is 0 or missing", ""),
+    "restitution_apex": Meaning("apex-height restitution of the first macroscopic contact",
+                                "1"),
+    "contact_time_impact": Meaning("duration of the first macroscopic contact", "s"),
+    "w_impact": Meaning("centre-of-mass velocity at the first impact", "m s-1"),
+    "rebound_speed": Meaning("largest centre-of-mass velocity after the first impact",
+                             "m s-1"),
+    "min_u0_impact": Meaning("deepest penetration in the first macroscopic contact", "m"),
+    "vibration_ratio": Meaning("vibration energy over the rigid-body kinetic energy at the "
+                               "first impact", "1"),
 }
