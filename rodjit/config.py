@@ -23,6 +23,9 @@ from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrat
 # time.control of the kick–drift–kick integrators: "tolerance" (steps from time.rtol and
 # time.atol, stability as a cap) or "cfl" (time.cfl × the stability limit, no estimate)
 CONTROLS = ("tolerance", "cfl")
+# keys that a stored configuration may lack (written before they existed), with the value
+# that reproduces what such a run did
+STORED_DEFAULTS = {"time.control": "cfl"}
 
 
 class ModelWarning(UserWarning):
@@ -397,6 +400,23 @@ class Config:
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"configuration is not valid TOML: {exc}") from None
         return cls()._replaced(_flatten(data), text=False)
+
+    @classmethod
+    def from_stored_toml(cls, text: str) -> "Config":
+        """The configuration a file recorded (``config_toml``), as the run that wrote it ran.
+
+        A key added to rodjit after the file was written takes the value that reproduces
+        the old behaviour, not today's default: files written before ``time.control``
+        existed stepped by ``time.cfl`` (``"cfl"``), so they resume bit for bit.
+        """
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"configuration is not valid TOML: {exc}") from None
+        flat = _flatten(data)
+        for key, value in STORED_DEFAULTS.items():
+            flat.setdefault(key, value)
+        return cls()._replaced(flat, text=False)
 
     def override(self, changes: Mapping[str, Any]) -> "Config":
         """A new config with dotted keys replaced, e.g. ``{"rod.mu": 100.0}``.

@@ -81,7 +81,8 @@ def test_info_and_plot_of_a_sweep_file(tmp_path, monkeypatch):
 def test_failed_points_exit_1_and_resume_reruns_them(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     r = invoke("sweep", "--grid", "initial.velocity=0,-100", "--set", "time.dt=1e-3",
-               "--set", "time.t_end=0.5", "--scheduler", "inline")
+               "--set", "time.t_end=0.5", "--set", "time.integrator=verlet",
+               "--scheduler", "inline")
     assert r.exit_code == 1
     assert "1 completed, 1 failed" in r.stdout and "failed points (1):" in r.stdout
     assert "1: initial.velocity=-100: fixed step time.dt = 0.001 failed" in r.stdout
@@ -135,7 +136,8 @@ def test_ctrl_c_stops_a_real_sweep_and_resume_finishes_it(tmp_path):
     workers go away, the file keeps every finished point, --resume runs the rest and the
     table equals a sweep run in one go."""
     args = ["--grid", "floor.beta=linspace(0.01,0.05,16)", "--set", "time.t_end=6", "--set",
-            "rod.N=200", "--jobs", "2", "-o", "s.h5"]          # ~0.4 s a point
+            "rod.N=200", "--set", "time.integrator=verlet", "--set", "time.control=cfl",
+            "--jobs", "2", "-o", "s.h5"]          # ~0.4 s a point
     proc = subprocess.Popen([sys.executable, "-m", "rodjit", "sweep", *args], cwd=tmp_path,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:

@@ -41,7 +41,7 @@ def test_each_key_is_commented_with_meaning_unit_default_and_range():
     assert text[i - 1] == ("# viscosity mu of the rod; unit N s; default 0.0; float >= 0")
     i = text.index("# dt is unset")
     assert "fixed time step; unit s; default unset; float > 0" in text[i - 1]
-    i = text.index('integrator = "verlet"')
+    i = text.index(f'integrator = "{Config().time.integrator}"')
     assert "one of 'verlet'" in text[i - 1]
 
 

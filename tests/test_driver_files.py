@@ -16,7 +16,8 @@ from rodjit.stepping import layout as L
 
 from conftest import assert_same_files, datasets, final_state, rodjit_cli
 
-FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0}   # fixed step through the floor
+# a fixed explicit step through the floor (the energy step stays admissible)
+FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0, "time.integrator": "verlet"}
 
 
 def _interrupt_at(call: int, signum=signal.SIGINT):

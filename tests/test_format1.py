@@ -59,7 +59,8 @@ def test_format_1_run_loads():
 
 def test_format_1_run_equals_the_same_run_today(tmp_path):
     """The current code computes what 0.1.0 wrote (only the layout changed)."""
-    cfg = rodjit.Config.from_toml(FIXTURES / "format1_run.toml")
+    with h5py.File(RUN, "r") as f:   # the configuration as that run resolved it
+        cfg = rodjit.Config.from_stored_toml(f.attrs["config_toml"])
     rodjit.run_to_file(cfg, tmp_path / "now.h5", handle_signals=False)
     _assert_same_results(rodjit.load_file(RUN), rodjit.load_file(tmp_path / "now.h5"))
 
@@ -71,7 +72,8 @@ def test_format_1_partial_resumes_bit_for_bit(tmp_path):
     with h5py.File(path, "r") as f:
         assert int(f.attrs["format_version"]) == 1       # continued in its own format
         assert f["bounces/open"].dtype == bool
-    cfg = rodjit.Config.from_toml(FIXTURES / "format1_run.toml")
+    with h5py.File(RUN, "r") as f:   # the configuration as that run resolved it
+        cfg = rodjit.Config.from_stored_toml(f.attrs["config_toml"])
     rodjit.run_to_file(cfg, tmp_path / "ref.h5", handle_signals=False)
     _assert_same_results(rodjit.load_file(path), rodjit.load_file(tmp_path / "ref.h5"))
     _assert_same_results(rodjit.load_file(path), rodjit.load_file(RUN))
@@ -121,5 +123,7 @@ def test_format_1_files_plot(tmp_path):
         out = plot_run.plot_file(RUN, tmp_path / f"{kind}.png", kind=kind)
         assert Path(out).stat().st_size > 0
     for kind in plot_sweep.KINDS:
-        out = plot_sweep.plot_sweep_file(SWEEP, tmp_path / f"sweep_{kind}.png", kind=kind)
+        # the fixture's short points end before a complete bounce: restitutions are NaN
+        out = plot_sweep.plot_sweep_file(SWEEP, tmp_path / f"sweep_{kind}.png", kind=kind,
+                                         quantity="min_u0")
         assert Path(out).stat().st_size > 0

@@ -27,7 +27,7 @@ def check_run_file(f: h5py.File, path=None) -> None:
 
 def read_config(f: h5py.File) -> Config:
     """The configuration the file's run runs (root attribute ``config_toml``)."""
-    return Config.from_toml_string(f.attrs["config_toml"])
+    return Config.from_stored_toml(f.attrs["config_toml"])
 
 
 def read_checkpoint(f: h5py.File) -> dict:

@@ -204,6 +204,8 @@ def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
+    if quantity is None and DEFAULT_QUANTITY not in table.columns:
+        quantity = "restitution_first"   # a sweep file older than the first-impact columns
     quantity = _check_quantity(quantity)
     fig = ax.figure if ax is not None else new_figure(figsize=figsize or (7.5, 4.8),
                                                       layout="constrained")

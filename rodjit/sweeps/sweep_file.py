@@ -192,7 +192,7 @@ def check_sweep_file(f: h5py.File, path=None) -> None:
 def read_header(f: h5py.File) -> dict:
     """Base configuration, grid and the root attributes of an open sweep file."""
     attrs = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in f.attrs.items()}
-    return {"base": Config.from_toml_string(f.attrs["base_config_toml"]),
+    return {"base": Config.from_stored_toml(f.attrs["base_config_toml"]),
             "grid": Grid.from_json(f.attrs["grid"]), "attrs": attrs}
 
 
