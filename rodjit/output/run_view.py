@@ -52,7 +52,19 @@ def _lazy_arrays(xr):
 def open_run(path):
     """The run file ``path`` as a lazily read ``xarray.Dataset`` (``Result.to_xarray``'s
     layout); the file stays open until ``ds.close()`` (or the Dataset is collected).
-    ``ds.u.isel(t=-1)`` reads one snapshot; ``ds.load()`` reads them all."""
+    ``ds.u.isel(t=-1)`` reads one snapshot; ``ds.load()`` reads them all.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A run file (format 1 or 2), also one still being written.
+
+    Returns
+    -------
+    xarray.Dataset
+        Snapshots on (t, x), strain on (t, x_segment), diagnostics on t_diag, bounces and
+        episodes along their own dimensions, every variable with units and long_name.
+    """
     xr = need("xarray", "analysis", "rodjit.open_run")
     f = open_file(path)
     try:

@@ -32,8 +32,29 @@ def frame_rows(n_snapshots: int, n_frames: int) -> np.ndarray:
 
 def animate(source, output, *, fps: int = 20, duration: float = 5.0,
             quantity: str = "strain", dpi: int = 100) -> Path:
-    """Write an animation of the run ``source`` (a Result or a run file path) to
-    ``output`` (.gif or .mp4): ``fps * duration`` frames (at most one per snapshot)."""
+    """Write an animation of the run ``source`` to ``output``: ``fps * duration`` frames
+    (at most one per snapshot), read one snapshot at a time.
+
+    Parameters
+    ----------
+    source : Result or str or os.PathLike
+        The run, in memory or a run file.
+    output : str or os.PathLike
+        The movie: ``.gif`` (Pillow) or ``.mp4`` (ffmpeg, when installed).
+    fps : int
+        Frames per second, 1 to 120.
+    duration : float
+        Length of the movie in seconds.
+    quantity : str
+        What colours the rod: ``strain``, ``u`` or ``v``.
+    dpi : int
+        Resolution of the frames.
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     output = Path(output)
     if output.suffix.lower() not in FORMATS:
         raise ValueError(f"output {str(output)!r}: the movie type is taken from the suffix, "

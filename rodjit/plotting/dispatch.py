@@ -15,8 +15,25 @@ def plot(obj, kind: str | None = None, ax=None, **style):
     """Draw ``obj`` — a ``Result``, a run file path, a sweep file path or a ``SweepTable``
     — as figure ``kind`` (runs: ``run.KINDS``, default heights; sweeps: ``sweep.KINDS``,
     default restitution) and return the matplotlib Figure (inline in Jupyter).  With
-    ``ax``, the figure is drawn into that axes.  ``style``: the figure's options
-    (runs: quantity, t_range, figsize; sweeps: quantity, x, y, at, figsize)."""
+    ``ax``, the figure is drawn into that axes.
+
+    Parameters
+    ----------
+    obj : Result or SweepTable or str or os.PathLike
+        What to draw: a run in memory, a sweep table, or a run or sweep file.
+    kind : str, optional
+        The figure (runs: ``heights``, ``energy``, ``bounces``, ``spacetime``,
+        ``contact``; sweeps: ``restitution``, ``heatmap``).
+    ax : matplotlib.axes.Axes, optional
+        Draw into this axes instead of a new figure.
+    **style
+        The figure's options (runs: quantity, t_range, figsize; sweeps: quantity, x, y,
+        at, panels, figsize).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
     if isinstance(obj, SweepTable):
         is_run = False
     elif isinstance(obj, Result):

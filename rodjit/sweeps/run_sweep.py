@@ -47,8 +47,15 @@ class SweepInterrupted(RuntimeError):
 
 
 class SweepFailed(RuntimeError):
-    """Every point of a sweep failed; ``table`` holds their messages (and the file, if any,
-    was closed with them)."""
+    """Every point of a sweep failed (the file, if any, was closed with their messages).
+
+    Parameters
+    ----------
+    message : str
+        What failed, in one line.
+    table : SweepTable
+        The sweep's table, each point's message in its ``message`` column.
+    """
 
     def __init__(self, message: str, table: SweepTable):
         super().__init__(message)
