@@ -22,7 +22,8 @@ from rodjit.stepping import layout as L
 
 from conftest import assert_same_files, final_state
 
-FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0}   # fixed step through the floor
+# a fixed explicit step through the floor (the energy step stays admissible)
+FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0, "time.integrator": "verlet"}
 CASES = {
     "default": {"time.t_end": 1.0},
     "viscous, dense diagnostics": {"time.t_end": 0.6, "rod.N": 12, "rod.mu": 5.0,

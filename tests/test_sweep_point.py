@@ -10,7 +10,8 @@ from rodjit.sweeps.point import BOUNCE_COLUMNS, PointTask, SUMMARY_COLUMNS, law_
 
 from conftest import assert_same_files
 
-FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0}   # fixed step through the floor
+# a fixed explicit step through the floor (the energy step stays admissible)
+FAILING = {"time.dt": 1e-3, "initial.velocity": -100.0, "time.integrator": "verlet"}
 TIMINGS = ("wall_time", "compile_time", "run_time", "run_file")
 
 
