@@ -235,7 +235,7 @@ def test_a_sweep_plot_of_only_nan_says_so_and_exits_1(tmp_path):
                  output=path, scheduler="inline")
     r = CliRunner().invoke(main, ["plot", str(path), "-o", str(tmp_path / "p.png")])
     assert r.exit_code == 1
-    assert "every value of restitution_first in this figure is NaN" in r.output
+    assert "in this figure is NaN" in r.output
     assert not (tmp_path / "p.png").exists()
 
 
@@ -249,7 +249,8 @@ def test_sweep_panels_one_per_value(sweep_file, tmp_path):
         line = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")] or \
             [ln for ln in ax.get_lines() if ln.get_marker() != "None"]
         mask = table["floor.beta"] == beta
-        np.testing.assert_array_equal(line[0].get_ydata(), table["restitution_first"][mask])
+        np.testing.assert_array_equal(line[0].get_ydata(),
+                                      table["restitution_impact"][mask])   # the default
     r = CliRunner().invoke(main, ["plot", str(sweep_file), "--panels", "floor.beta", "-o",
                                   str(tmp_path / "p.png")])
     assert r.exit_code == 0, r.output

@@ -73,6 +73,7 @@ def test_cli_sweep_whose_points_all_failed_exits_1(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     r = CliRunner().invoke(main, ["sweep", "--set", "time.dt=1e-3", "--set",
                                   "initial.velocity=-100", "--set", "time.t_end=0.5",
+                                  "--set", "time.integrator=verlet",
                                   "--grid", "rod.mu=0,1", "--scheduler", "inline",
                                   "-o", "s.h5"])
     assert r.exit_code == 1
