@@ -15,11 +15,19 @@ from .driver.signals import Interrupted, install_early_handlers
 install_early_handlers()         # (already while ``rodjit/__init__`` was imported)
 
 
+def _finish(code: int):
+    """Exit with ``code``. The command's work is over (its files are closed), so SIGINT and
+    SIGTERM are blocked first: the interpreter's shutdown puts the default handlers back,
+    and a signal arriving then would kill the process (-15) after a successful run."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    sys.exit(code)
+
+
 def _exit_interrupted(signum: int):
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     print(f"Error: interrupted by {signal.Signals(signum).name}", file=sys.stderr)
-    sys.exit(128 + signum)
+    _finish(128 + signum)
 
 
 try:
@@ -29,13 +37,13 @@ try:
 
     try:
         code = main.main(prog_name="rodjit", standalone_mode=False)
-        sys.exit(code if isinstance(code, int) else 0)
+        _finish(code if isinstance(code, int) else 0)
     except click.exceptions.Abort:      # click's form of KeyboardInterrupt
         _exit_interrupted(signal.SIGINT)
     except click.exceptions.Exit as exc:
-        sys.exit(exc.exit_code)
+        _finish(exc.exit_code)
     except click.ClickException as exc:
         print(f"Error: {one_line(exc.format_message())}", file=sys.stderr)
-        sys.exit(exc.exit_code)
+        _finish(exc.exit_code)
 except (Interrupted, KeyboardInterrupt) as exc:
     _exit_interrupted(exc.signum if isinstance(exc, Interrupted) else signal.SIGINT)

@@ -159,7 +159,9 @@ def test_ctrl_c_stops_a_real_sweep_and_resume_finishes_it(tmp_path):
     assert r.returncode == 0, r.stderr
     final = rodjit.load_sweep(tmp_path / "s.h5")
     assert final.status == "completed" and final.counts["completed"] == 16
-    ref = rodjit.sweep(rodjit.Config().override({"time.t_end": 6.0, "rod.N": 200}),
+    ref = rodjit.sweep(rodjit.Config().override({"time.t_end": 6.0, "rod.N": 200,
+                                                 "time.integrator": "verlet",
+                                                 "time.control": "cfl"}),
                        {"floor.beta": "linspace(0.01,0.05,16)"}, jobs=2)
     same_values(final, ref)
 
