@@ -175,6 +175,16 @@ def test_animation_gif_has_the_frames_asked_for(run_file, tmp_path):
         assert np.asarray(im.convert("L"), float).std() > 10
 
 
+def test_an_animation_under_pyplot_leaves_no_figure_to_redraw(run_file, tmp_path):
+    """In a notebook the inline backend draws every open pyplot figure after the cell; the
+    animation's figure reads its frames from a file that is closed by then, so pyplot must
+    not keep it."""
+    plt = pytest.importorskip("matplotlib.pyplot")
+    plt.close("all")
+    rodjit.animate(run_file, tmp_path / "rod.gif", fps=4, duration=0.5)
+    assert plt.get_fignums() == []
+
+
 def test_animation_reads_one_snapshot_at_a_time(run_file, tmp_path, monkeypatch):
     import h5py
 

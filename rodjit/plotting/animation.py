@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..records.datasets import strain_of
-from .mpl import NothingToDraw, new_figure
+from .mpl import NothingToDraw, discard, new_figure
 from .source import RunSource
 
 __all__ = ["animate", "FORMATS", "MissingWriter"]
@@ -127,5 +127,8 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
 
         movie = animation.FuncAnimation(fig, draw, frames=rows, blit=False,
                                         cache_frame_data=False)
-        movie.save(output, writer=writer, dpi=dpi)
+        try:
+            movie.save(output, writer=writer, dpi=dpi)
+        finally:
+            discard(fig)
     return output

@@ -6,7 +6,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-__all__ = ["MissingMatplotlib", "NothingToDraw", "new_figure", "save", "IMAGE_SUFFIXES"]
+__all__ = ["MissingMatplotlib", "NothingToDraw", "new_figure", "discard", "save",
+           "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -30,6 +31,15 @@ def new_figure(**kwargs):
     if "matplotlib.pyplot" in sys.modules:
         return sys.modules["matplotlib.pyplot"].figure(**kwargs)
     return Figure(**kwargs)
+
+
+def discard(fig) -> None:
+    """Let pyplot forget ``fig`` (a figure drawn only into a file, like an animation's):
+    otherwise a notebook's inline backend draws it again after the cell, after the data it
+    read from are gone."""
+    pyplot = sys.modules.get("matplotlib.pyplot")
+    if pyplot is not None:
+        pyplot.close(fig)            # a no-op for a figure pyplot does not manage
 
 
 def save(fig, output, dpi: int = 150) -> Path:
