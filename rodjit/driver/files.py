@@ -18,7 +18,8 @@ from ..config import Config
 from ..output import run_writer
 from ..output.estimate import MAX_OUTPUT, MAX_STEPS, check_run
 from ..output.h5files import (FileBusy, OutputExists, WriteFailed, check_output, disk_cause,
-                              open_file, repair_truncated, writer_alive)
+                              open_file, repair_truncated, writer_alive,
+                              writer_pid)
 from ..output.lock import WriterLock, note_failure
 from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
@@ -157,7 +158,7 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         ck = read_checkpoint(f)
         needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
         alive = writer_alive(f, lock=False) if needs_recovery else False
-        pid, host = f.attrs.get("writer_pid"), f.attrs.get("writer_host")
+        pid = writer_pid(f) if alive else None
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
     if t_end is not None:
@@ -169,12 +170,12 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         raise ValueError(f"{str(path)!r} is already complete at t = {t:.9g}; give a later "
                          f"t_end to extend it")
     if alive:
-        raise FileBusy(f"{str(path)!r} is being written by process {pid}; stop it "
-                            f"before resuming")
+        raise FileBusy(f"{str(path)!r} is being written by a live rodjit process on this "
+                       f"machine (process {pid}); stop it before resuming")
     if needs_recovery and alive is None:
-        raise FileBusy(f"{str(path)!r} was being written by process {pid} on host "
-                            f"{host!r}; if that process has stopped, run 'h5clear -s "
-                            f"{path}' and resume again")
+        raise FileBusy(f"{str(path)!r} was being written on another machine, whose process "
+                       f"this one cannot see; if that process has stopped, run 'h5clear -s "
+                       f"{path}' and resume again")
     run = Run.from_checkpoint(config, ck)
     if t_end is not None:
         run.set_t_end(t_end)

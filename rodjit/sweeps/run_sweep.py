@@ -21,7 +21,7 @@ from ..config import Config
 from ..driver.progress import close as close_progress
 from ..driver.progress import sweep_progress
 from ..driver.signals import StopFlag
-from ..output.h5files import FileBusy, check_output, open_file, writer_alive
+from ..output.h5files import FileBusy, check_output, open_file, writer_alive, writer_pid
 from ..output.lock import WriterLock
 from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
@@ -120,9 +120,10 @@ def _open_resume(output, config, grid):
         columns = sweep_file.read_summary(f)
         alive = (writer_alive(f, lock=False) if header["attrs"].get("status") == "running"
                  else False)
+        pid = writer_pid(f) if alive else None
     if alive:
-        raise FileBusy(f"{str(output)!r} is being written by a running sweep (process "
-                            f"{header['attrs'].get('writer_pid')}); stop it before resuming")
+        raise FileBusy(f"{str(output)!r} is being written by a running sweep on this machine "
+                       f"(process {pid}); stop it before resuming")
     base, file_grid = header["base"], header["grid"]
     if config is not None and config != base:
         differ = sorted(k for k, v in config.flat().items() if base.flat()[k] != v)
