@@ -146,8 +146,11 @@ def _progress(flag: bool | None, quiet: bool, bar):
               help="Refuse a run whose file would exceed SIZE (e.g. 500M, 50GiB, inf).")
 @click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
               help="Refuse a fixed time.dt that needs more than N steps.")
+@click.option("--dry-run", is_flag=True,
+              help="Check everything (configuration, output path, limits), print the rows, "
+                   "file size, memory and steps the run would write, and write nothing.")
 def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval,
-                show_progress, max_output, max_steps):
+                show_progress, max_output, max_steps, dry_run):
     """Run CONFIG.toml, a preset (see 'rodjit presets') or the built-in default, streaming
     snapshots, diagnostics, contact episodes and bounces to an HDF5 file.
 
@@ -157,9 +160,28 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
     import warnings
 
     from .config import ModelWarning
-    from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
+    from .driver.files import OutputExists, RunInterrupted, plan_run, resume_file, run_to_file
     from .driver.run import SimulationError
 
+    if dry_run:
+        if resume:
+            raise UsageError("--dry-run checks a new run; it cannot be used with --resume")
+        try:
+            from .output.estimate import parse_size
+
+            cfg, default_name = _load_config(config)
+            cfg = cfg.override(_overrides(sets)) if sets else cfg
+            plan = plan_run(cfg, output or default_name, overwrite=overwrite, t_end=t_end,
+                            max_output=parse_size(max_output), max_steps=max_steps,
+                            flush_interval=flush_interval)
+        except OutputExists as exc:
+            raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        click.echo(plan.report())
+        for text in plan.config.warnings():   # as the run would say them
+            click.echo(f"warning: {text}", err=True)
+        return
     command = _command_line(
         "run", config, [("-o", output), ("--set", sets),
                         ("--t-end", repr(t_end) if t_end is not None else None)],
