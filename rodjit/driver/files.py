@@ -121,13 +121,29 @@ def run_to_file(config, path, *, overwrite: bool = False,
 
 @dataclass
 class RunPlan:
-    """What ``run_to_file`` would do, checked but not done (``plan_run``)."""
+    """What ``run_to_file`` would do, checked but not done (``plan_run``).
+
+    Parameters
+    ----------
+    config : Config
+        The resolved configuration (``t_end`` applied).
+    path : pathlib.Path or None
+        The output, None if no path was checked.
+    estimate : Estimate
+        Snapshot and diagnostics rows, file bytes, memory bytes, fixed steps.
+    replaces : bool
+        The output exists and would be replaced.
+    free : float or None
+        Bytes free on the output's disk (None: unknown).
+    max_output : float
+        The size limit the run was checked against.
+    """
 
     config: Config
-    path: Path | None         # the output (as given), None if no path was checked
-    estimate: Estimate        # rows, file size, memory, fixed steps
-    replaces: bool            # the output exists and would be replaced
-    free: float | None        # bytes free on the output's disk (None: unknown)
+    path: Path | None
+    estimate: Estimate
+    replaces: bool
+    free: float | None
     max_output: float
 
     def report(self) -> str:

@@ -30,16 +30,40 @@ POINT_BYTES = 8 * 2**10
 
 @dataclass
 class SweepPlan:
-    """What ``sweep`` would run and write, checked but not done (``plan_sweep``)."""
+    """What ``sweep`` would run and write, checked but not done (``plan_sweep``).
 
-    config: Config              # the base configuration
+    Parameters
+    ----------
+    config : Config
+        The base configuration.
+    grid : Grid
+        The checked grid.
+    output : pathlib.Path or None
+        The sweep file, None for a sweep kept in memory.
+    replaces : bool
+        The sweep file exists and would be replaced.
+    sweep_bytes : float
+        The estimated sweep file, without bounce rows.
+    runs_dir : pathlib.Path or None
+        The ``save_runs`` directory.
+    runs_bytes : float
+        The run files together (0 without ``save_runs``).
+    worst_index : int
+        The point whose run file is the largest.
+    worst : Estimate
+        That point's estimate (rows, file and memory bytes, fixed steps).
+    max_output : float
+        The size limit the files were checked against.
+    """
+
+    config: Config
     grid: Grid
-    output: Path | None         # the sweep file, None for a sweep kept in memory
-    replaces: bool              # the sweep file exists and would be replaced
-    sweep_bytes: float          # estimated sweep file, without bounce rows
-    runs_dir: Path | None       # --save-runs
-    runs_bytes: float           # the run files together (0 without --save-runs)
-    worst_index: int            # the point whose run file is the largest
+    output: Path | None
+    replaces: bool
+    sweep_bytes: float
+    runs_dir: Path | None
+    runs_bytes: float
+    worst_index: int
     worst: Estimate
     max_output: float
 
