@@ -15,7 +15,8 @@ from . import laws
 from .analysis import (Convergence, FitError, FitResult, TableFit, converge, fit, fit_table,
                        load_convergence, observables)
 from .config import Config
-from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
+from .driver.files import (OutputExists, RunInterrupted, RunPlan, plan_run, resume_file,
+                           run_to_file)
 from .driver.run import SimulationError
 from .driver.simulate import simulate
 from .output.hdf5 import load_file
@@ -24,12 +25,13 @@ from .plotting.animation import animate
 from .plotting.dispatch import plot
 from .presets import load_preset, preset_names
 from .records.result import Result
-from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepTable, load_sweep,
-                     sweep)
+from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepPlan, SweepTable,
+                     load_sweep, plan_sweep, sweep)
 from .version import __version__
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
            "load_preset", "preset_names", "SweepInterrupted", "SweepFailed", "MissingMainGuard",
            "open_run", "plot", "animate", "laws", "converge", "fit", "fit_table", "observables",
-           "Convergence", "FitResult", "FitError", "TableFit", "load_convergence", "__version__"]
+           "Convergence", "FitResult", "FitError", "TableFit", "load_convergence", "plan_run",
+           "RunPlan", "plan_sweep", "SweepPlan", "__version__"]

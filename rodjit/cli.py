@@ -146,8 +146,11 @@ def _progress(flag: bool | None, quiet: bool, bar):
               help="Refuse a run whose file would exceed SIZE (e.g. 500M, 50GiB, inf).")
 @click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
               help="Refuse a fixed time.dt that needs more than N steps.")
+@click.option("--dry-run", is_flag=True,
+              help="Check everything (configuration, output path, limits), print the rows, "
+                   "file size, memory and steps the run would write, and write nothing.")
 def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_interval,
-                show_progress, max_output, max_steps):
+                show_progress, max_output, max_steps, dry_run):
     """Run CONFIG.toml, a preset (see 'rodjit presets') or the built-in default, streaming
     snapshots, diagnostics, contact episodes and bounces to an HDF5 file.
 
@@ -157,9 +160,28 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
     import warnings
 
     from .config import ModelWarning
-    from .driver.files import OutputExists, RunInterrupted, resume_file, run_to_file
+    from .driver.files import OutputExists, RunInterrupted, plan_run, resume_file, run_to_file
     from .driver.run import SimulationError
 
+    if dry_run:
+        if resume:
+            raise UsageError("--dry-run checks a new run; it cannot be used with --resume")
+        try:
+            from .output.estimate import parse_size
+
+            cfg, default_name = _load_config(config)
+            cfg = cfg.override(_overrides(sets)) if sets else cfg
+            plan = plan_run(cfg, output or default_name, overwrite=overwrite, t_end=t_end,
+                            max_output=parse_size(max_output), max_steps=max_steps,
+                            flush_interval=flush_interval)
+        except OutputExists as exc:
+            raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
+        except ValueError as exc:
+            raise UsageError(str(exc)) from None
+        click.echo(plan.report())
+        for text in plan.config.warnings():   # as the run would say them
+            click.echo(f"warning: {text}", err=True)
+        return
     command = _command_line(
         "run", config, [("-o", output), ("--set", sets),
                         ("--t-end", repr(t_end) if t_end is not None else None)],
@@ -281,8 +303,20 @@ def _SweepProgress():
 @click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
 @click.option("--progress/--no-progress", "show_progress", default=None,
               help="Show a progress bar [default: on a terminal].")
+@click.option("--max-output", default="10GiB", show_default=True, metavar="SIZE",
+              help="Refuse a sweep whose sweep file, or (with --save-runs) any run file, "
+                   "would exceed SIZE (e.g. 500M, 50GiB, inf).")
+@click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
+              help="Refuse a point whose fixed time.dt needs more than N steps.")
+@click.option("--max-points", type=float, default=1e6, show_default=True, metavar="N",
+              help="Refuse a grid of more than N points (counted before it is made).")
+@click.option("--dry-run", is_flag=True,
+              help="Check everything (configuration, every point, output paths, limits), "
+                   "print the points, the swept keys and the files' estimated sizes, and "
+                   "write nothing.")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
-                  force_jobs, quiet, show_progress):
+                  force_jobs, quiet, show_progress, max_output, max_steps, max_points,
+                  dry_run):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -290,10 +324,11 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
-    from .sweeps import SweepFailed, SweepInterrupted, sweep
-    from .sweeps.grid import parse_grid_option
+    from .sweeps import SweepFailed, SweepInterrupted, plan_sweep, sweep
     from .driver.files import OutputExists
 
+    if dry_run and resume:
+        raise UsageError("--dry-run checks a new sweep; it cannot be used with --resume")
     command = _command_line(
         "sweep", config, [("--grid", grids), ("--set", sets), ("-o", output), ("--jobs", jobs),
                           ("--scheduler", scheduler), ("--save-runs", save_runs)],
@@ -316,7 +351,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                 cfg, _ = _load_config(config)
                 cfg = cfg.override(_overrides(sets)) if sets else cfg
             if grids:
-                grid = parse_grid_option(grids)
+                grid = _grid(grids, max_points)
             from .sweeps import load_sweep
 
             done = load_sweep(output)
@@ -328,14 +363,28 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             overrides = _overrides(sets)
             if overrides:
                 cfg = cfg.override(overrides)
-            grid = parse_grid_option(grids)
+            grid = _grid(grids, max_points)
             if not output:
                 output = ("sweep.h5" if default_name == DEFAULT_OUTPUT
                           else default_name[:-3] + "_sweep.h5")
+        from .output.estimate import parse_size
+
+        limits = {"max_output": parse_size(max_output), "max_steps": max_steps,
+                  "max_points": max_points}
+        if dry_run:
+            from .sweeps.executors import check_scheduler
+            from .sweeps.run_sweep import check_jobs
+
+            check_jobs(jobs)
+            check_scheduler(scheduler)
+            plan = plan_sweep(cfg, grid, output=output, save_runs=save_runs,
+                              overwrite=overwrite, **limits)
+            click.echo(plan.report())
+            return
         jobs = _cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
         table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                       save_runs=save_runs, resume=resume, overwrite=overwrite,
-                      progress=progress, command=command)
+                      progress=progress, command=command, **limits)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite (or "
                                           "--resume)")) from None
@@ -362,6 +411,13 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         sys.exit(1)
 
 
+def _grid(options, max_points: float):
+    """The Grid of the --grid options, sized (--max-points) before it is made."""
+    from .sweeps.grid import Grid, parse_grid_option
+
+    return Grid.from_spec(parse_grid_option(options), max_points=max_points)
+
+
 def _cap_jobs(jobs, scheduler, grid, force: bool, quiet: bool):
     """--jobs for a local pool: at most the cores (unless forced, with a note when cut) and
     never more than the points."""
@@ -369,7 +425,6 @@ def _cap_jobs(jobs, scheduler, grid, force: bool, quiet: bool):
                                                                                "processes"):
         return jobs
     from .sweeps.executors import default_jobs
-    from .sweeps.grid import Grid
 
     cores = default_jobs()
     if jobs > cores and not force:
@@ -378,7 +433,7 @@ def _cap_jobs(jobs, scheduler, grid, force: bool, quiet: bool):
                        f"(--force-jobs to insist)", err=True)
         jobs = cores
     if grid is not None:
-        jobs = max(1, min(jobs, len(Grid.from_spec(grid))))
+        jobs = max(1, min(jobs, len(grid)))
     return jobs
 
 

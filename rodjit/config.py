@@ -50,7 +50,7 @@ VERLET_WARNING = (
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
            "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning",
-           "valid_keys", "field_spec", "key_lines", "parse_value"]
+           "valid_keys", "field_spec", "key_lines", "parse_value", "CROSS_CHECKS"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
 
@@ -310,9 +310,7 @@ class TimeConfig(_Section):
 
     def __post_init__(self):
         super().__post_init__()
-        if self.dt_max is not None and self.dt_min >= self.dt_max:
-            raise ValueError(f"time.dt_min = {self.dt_min!r} is out of range (float > 0 and "
-                             f"< time.dt_max = {self.dt_max!r})")
+        _check_dt_range(self.dt_min, self.dt_max)
 
 
 @dataclass(frozen=True)
@@ -324,6 +322,36 @@ class OutputConfig(_Section):
     snapshot_interval: float = 0.005
     diagnostics_interval: float = 0.001
     compression: str = "none"
+
+
+def _check_dt_range(dt_min, dt_max) -> None:
+    if dt_max is not None and dt_min >= dt_max:
+        raise ValueError(f"time.dt_min = {dt_min!r} is out of range (float > 0 and "
+                         f"< time.dt_max = {dt_max!r})")
+
+
+def _check_height(height, beta) -> None:
+    if not height > -beta:
+        raise ValueError(
+            f"initial.height = {height!r} is out of range (float > -floor.beta "
+            f"= {-beta!r}: the bottom must start above the floor's bending limit)")
+
+
+def _law_check(kind: str):
+    def check(name) -> None:
+        from .model.laws import get_law  # laws register themselves on import
+        get_law(kind, name)
+    return check
+
+
+# What a Config checks beyond each key's own type and range (``_FIELDS``): the keys whose
+# allowed values depend on each other, and the law names (looked up in the registry).
+# ``Config`` runs every check; a sweep grid checks each key's values once and these only
+# over the combinations of the swept keys they name, not over every point.
+CROSS_CHECKS = ((("rod.law",), _law_check("rod")),
+                (("floor.law",), _law_check("floor")),
+                (("initial.height", "floor.beta"), _check_height),
+                (("time.dt_min", "time.dt_max"), _check_dt_range))
 
 
 _SECTIONS = {"rod": RodConfig, "floor": FloorConfig, "gravity": GravityConfig,
@@ -350,13 +378,8 @@ class Config:
         for name, cls in _SECTIONS.items():
             if not isinstance(getattr(self, name), cls):
                 raise ValueError(f"{name} must be a {cls.__name__}")
-        from .model.laws import get_law  # laws register themselves on import
-        get_law("rod", self.rod.law)
-        get_law("floor", self.floor.law)
-        if not self.initial.height > -self.floor.beta:
-            raise ValueError(
-                f"initial.height = {self.initial.height!r} is out of range (float > -floor.beta "
-                f"= {-self.floor.beta!r}: the bottom must start above the floor's bending limit)")
+        for keys, check in CROSS_CHECKS:
+            check(*(self.get(key) for key in keys))
 
     # ---- construction -------------------------------------------------------------------
     def warnings(self) -> tuple[str, ...]:

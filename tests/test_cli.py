@@ -277,3 +277,34 @@ def test_the_cli_knows_every_kind_of_figure():
     from rodjit.plotting import sweep as sweep_plots
 
     assert cli.RUN_KINDS == plotting.KINDS and cli.SWEEP_KINDS == sweep_plots.KINDS
+
+
+def test_run_dry_run_prints_the_estimate_and_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "old.h5").write_bytes(b"")
+    r = invoke("run", "--dry-run", "--set", "time.t_end=1", "--set", "time.dt=1e-3",
+               "-o", "out.h5")
+    assert r.exit_code == 0, r.output
+    for text in ("dry run: checked, nothing written", f"output       {tmp_path / 'out.h5'} "
+                 "(a new file)", "snapshots    201 rows (every 0.005 s to t = 1)",
+                 "diagnostics  1001 rows", "file         about", "memory       about",
+                 "steps        1000 fixed steps of time.dt = 0.001"):
+        assert text in r.output, r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.h5"]
+    r = invoke("run", "--dry-run", "-o", "old.h5", "--overwrite")
+    assert r.exit_code == 0 and "replaces the existing run file" in r.output
+    assert "steps        adaptive (energy)" in r.output
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.h5"]
+
+
+def test_sweep_dry_run_prints_points_files_and_writes_nothing(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = invoke("sweep", "--dry-run", "--grid", "rod.mu=0,1,10", "--grid",
+               "rod.N=5,50", "--save-runs", "runs", "-o", "s.h5")
+    assert r.exit_code == 0, r.output
+    for text in ("points       6: rod.mu (3 values) x rod.N (2 values)",
+                 f"output       {tmp_path / 's.h5'} (a new file)", "sweep file   about",
+                 f"run files    6 in {tmp_path / 'runs'}, about",
+                 "worst point  1 (rod.mu=0 rod.N=50): 1001 snapshot rows"):
+        assert text in r.output, r.output
+    assert list(tmp_path.iterdir()) == []

@@ -1,5 +1,6 @@
 """run_to_file / resume_file: interruption, resume bit for bit, failure, validation, memory."""
 import os
+import re
 import signal
 import socket
 import subprocess
@@ -11,7 +12,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.output import h5files, hdf5
+from rodjit.output import h5files, hdf5, writer_id
 from rodjit.stepping import layout as L
 
 from conftest import assert_same_files, datasets, final_state, rodjit_cli
@@ -164,7 +165,7 @@ def test_resume_errors(tmp_path, small_config, many_calls):
 KILL_AFTER_SAVE = """
 import os, signal, sys, rodjit
 from rodjit.driver.run import Run
-from rodjit.output import h5files, hdf5
+from rodjit.output import h5files, hdf5, writer_id
 from rodjit.stepping import layout as L
 cfg = rodjit.Config().override({"time.t_end": 1.0})
 run = Run(cfg)
@@ -214,9 +215,10 @@ def test_resume_refuses_a_file_whose_writer_is_alive(tmp_path):
     try:
         assert proc.stdout.readline().strip() == "saved"
         with hdf5.open_file(cut) as f:
-            assert f.attrs["writer_pid"] == proc.pid and hdf5.writer_alive(f) is True
+            assert hdf5.writer_alive(f) is True and h5files.writer_pid(f) == proc.pid
+            assert not {"writer_pid", "writer_host", "writer_tag"} & set(f.attrs)
         before = cut.read_bytes()
-        with pytest.raises(hdf5.FileBusy, match=f"being written by process {proc.pid}"):
+        with pytest.raises(hdf5.FileBusy, match=rf"live rodjit process on this machine \(process {proc.pid}\)"):
             rodjit.resume_file(cut)
         with pytest.raises(hdf5.FileBusy, match="being written by a running rodjit process"):
             rodjit.run_to_file(rodjit.Config(), cut, overwrite=True)
@@ -245,13 +247,60 @@ def test_writer_alive_is_not_fooled_by_a_reused_pid(tmp_path, small_config):
         with h5py.File(path, "r") as f:
             return hdf5.writer_alive(f)
     try:
-        assert alive(writer_pid=other.pid, writer_tag=h5files.process_tag(other.pid)) is True
-        assert alive(writer_tag="another-boot:12345") is False   # same pid, not the writer
-        assert alive(writer_host="elsewhere.example") is None    # cannot tell
+        record = h5files.writer_attrs(other.pid)
+        assert alive(**record) is True
+        with h5py.File(path, "r") as f:
+            assert h5files.writer_pid(f) == other.pid
+        salt, key = record["writer_salt"], writer_id._machine_key()
+        reused = writer_id._process_hash(salt, key, other.pid, "another-boot:12345")
+        assert alive(writer_process=reused) is False              # same pid, not the writer
+        assert alive(**{**record, "writer_machine": "0" * 64}) is None   # another machine
     finally:
         other.kill()
         other.wait()
-    assert alive(writer_host=socket.gethostname()) is False
+    assert alive(**record) is False
+
+
+def test_the_liveness_record_names_neither_host_nor_pid(tmp_path, small_config):
+    """A file tells a stranger neither the writer's host name nor its process id: its
+    record is salted hashes, different in every session."""
+    path = tmp_path / "r.h5"
+    rodjit.run_to_file(small_config, path)
+    with h5py.File(path, "r") as f:
+        first = {k: str(f.attrs[k]) for k in writer_id.WRITER_ATTRS}
+        every = " ".join(str(v) for v in f.attrs.values())
+    assert not {"writer_pid", "writer_host", "writer_tag"} & set(first)
+    assert socket.gethostname() not in every
+    assert not re.search(rf"\b{os.getpid()}\b", " ".join(first.values()))
+    rodjit.resume_file(path, t_end=small_config.time.t_end * 2)
+    with h5py.File(path, "r") as f:
+        second = {k: str(f.attrs[k]) for k in writer_id.WRITER_ATTRS}
+    assert all(first[k] != second[k] for k in first)    # new salt: sessions do not link
+
+
+def test_files_of_older_versions_are_judged_by_host_and_pid(tmp_path, small_config):
+    """A file that records the writer in the clear (rodjit before the hashed record) is
+    still judged by it; a new session replaces it with the hashed record."""
+    path = tmp_path / "r.h5"
+    rodjit.run_to_file(small_config, path)
+    other = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    with h5py.File(path, "r+") as f:
+        for k in writer_id.WRITER_ATTRS:
+            del f.attrs[k]
+        f.attrs.update(writer_host=socket.gethostname(), writer_pid=other.pid,
+                       writer_tag=h5files.process_tag(other.pid))
+    try:
+        with h5py.File(path, "r") as f:
+            assert hdf5.writer_alive(f) is True and h5files.writer_pid(f) == other.pid
+    finally:
+        other.kill()
+        other.wait()
+    with h5py.File(path, "r") as f:
+        assert hdf5.writer_alive(f) is False
+    rodjit.resume_file(path, t_end=small_config.time.t_end * 2)
+    with h5py.File(path, "r") as f:
+        assert not {"writer_pid", "writer_host", "writer_tag"} & set(f.attrs)
+        assert set(writer_id.WRITER_ATTRS) <= set(f.attrs)
 
 
 def test_memory_stays_bounded_for_a_10x_longer_run(tmp_path):

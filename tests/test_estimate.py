@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 import rodjit
@@ -62,3 +63,51 @@ def test_a_file_larger_than_the_free_space_is_refused(tmp_path, monkeypatch):
     monkeypatch.setattr(shutil, "disk_usage", lambda p: usage(10**6, 10**6 - 1000, 1000))
     with pytest.raises(ValueError, match="free on the disk"):
         rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.05}), tmp_path / "x.h5")
+
+
+@pytest.mark.parametrize("dt,ok", [(1e-3, True), (2e-4, True), (1.25e-5, True),
+                                   (3e-4, False), (2e-3, False), (2.5e-3, False)])
+def test_a_fixed_step_must_divide_the_output_intervals(tmp_path, dt, ok):
+    """A fixed time.dt that does not divide an output interval would have its steps
+    shortened before every output time: refused (in memory too), naming the interval and
+    a step that divides them all."""
+    c = rodjit.Config().override({"time.dt": dt, "time.t_end": 0.01})
+    if ok:
+        E.check_fixed_step(c)
+        return
+    with pytest.raises(ValueError, match=r"does not divide output\.\w+_interval .*e\.g\. "
+                                         r"time\.dt = ([0-9.e-]+)") as info:
+        rodjit.run_to_file(c, tmp_path / "x.h5")
+    assert not (tmp_path / "x.h5").exists()
+    suggested = float(info.value.args[0].split("e.g. time.dt = ")[1].split(")")[0])
+    E.check_fixed_step(c.override({"time.dt": suggested}))     # the suggestion divides
+    with pytest.raises(ValueError, match="does not divide"):
+        rodjit.simulate(c)
+    # without outputs every step is time.dt but the last, which ends on time.t_end
+    E.check_fixed_step(c.override({"output.snapshot_interval": 0.0,
+                                   "output.diagnostics_interval": 0.0}))
+
+
+def test_every_step_of_a_dividing_fixed_step_is_that_step():
+    """What the file reports is what was done: the steps of a dividing fixed dt are all
+    dt (their count is t_end / dt) and /diagnostics/dt holds that value."""
+    c = rodjit.Config().override({"time.dt": 2.5e-4, "time.t_end": 0.02,
+                                  "time.integrator": "verlet"})
+    res = rodjit.simulate(c)
+    assert res.stats["steps"] == 80
+    assert np.all(res.diagnostics["dt"] == 2.5e-4)
+
+
+def test_plan_run_says_what_would_be_written_and_writes_nothing(tmp_path):
+    c = rodjit.Config().override({"time.t_end": 1.0, "time.dt": 1e-3})
+    plan = rodjit.plan_run(c, tmp_path / "sub.h5")
+    assert (plan.estimate.snapshots, plan.estimate.diagnostics) == (201, 1001)
+    assert plan.estimate.steps == pytest.approx(1000) and not plan.replaces
+    text = plan.report()
+    assert "201 rows" in text and "1000 fixed steps" in text and str(tmp_path) in text
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(ValueError, match="limit of 1 KiB"):
+        rodjit.plan_run(c, tmp_path / "x.h5", max_output=1024)
+    with pytest.raises(ValueError, match="does not exist"):
+        rodjit.plan_run(c, tmp_path / "nodir" / "x.h5")
+    assert list(tmp_path.iterdir()) == []

@@ -2,7 +2,6 @@
 import math
 import os
 import signal
-import socket
 import subprocess
 import sys
 import tracemalloc
@@ -13,7 +12,7 @@ import pytest
 
 import killer_law  # noqa: F401  (registers "kill-test", which kills its worker)
 import rodjit
-from rodjit.output import hdf5
+from rodjit.output import h5files, hdf5
 from rodjit.sweeps import sweep_file
 from rodjit.sweeps.executors import WORKER_ENV, ProcessPool
 from rodjit.sweeps.grid import Grid
@@ -205,8 +204,7 @@ def test_a_live_sweeps_file_is_not_replaced(tmp_path):
     proc = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
     try:
         with h5py.File(path, "r+") as f:
-            f.attrs.update(status="running", writer_pid=proc.pid, writer_tag="",
-                           writer_host=socket.gethostname())
+            f.attrs.update(status="running", **h5files.writer_attrs(proc.pid))
         before = path.read_bytes()
         with pytest.raises(hdf5.FileBusy, match="being written by a running rodjit process"):
             rodjit.sweep(BASE, {"rod.mu": [1.0]}, output=path, overwrite=True)

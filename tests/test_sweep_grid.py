@@ -82,3 +82,50 @@ def test_validation_names_the_failing_point():
         g.validate(rodjit.Config())
     with pytest.raises(ValueError, match="at least one configuration key"):
         Grid.from_spec({})
+
+
+@pytest.mark.parametrize("spec", [{"rod.mu": "linspace(0, 1, 10000000)"},
+                                  {"rod.mu": "linspace(0, 1, 10000)",
+                                   "rod.kappa": "logspace(1, 3, 1000)"},
+                                  {"rod.mu": range(10**7)}])
+def test_a_grid_is_sized_before_it_is_made(spec):
+    """10^7 points are refused by counting (no value is made: a range of 10^7 would take
+    seconds to build); the limit can be raised."""
+    with pytest.raises(ValueError, match=r"the grid has 10,000,000 points .* more than the "
+                                         r"limit of 1,000,000 points \(raise it with "
+                                         r"--max-points"):
+        Grid.from_spec(spec)
+    with pytest.raises(ValueError, match="limit of 100 points"):
+        Grid.from_spec({"rod.mu": "linspace(0, 1, 101)"}, max_points=100)
+    assert len(Grid.from_spec({"rod.mu": "linspace(0, 1, 101)"}, max_points=101)) == 101
+
+
+def test_validation_runs_over_values_not_points(monkeypatch):
+    """A key that no other key constrains is checked once per value; related keys
+    (initial.height with floor.beta) over their own combinations only."""
+    from rodjit import config
+
+    calls = []
+
+    def counted(keys, check):
+        def run(*values):
+            calls.append(keys)
+            check(*values)
+        return keys, run
+    checks = tuple(counted(keys, fn) for keys, fn in config.CROSS_CHECKS)
+    monkeypatch.setattr("rodjit.sweeps.grid.CROSS_CHECKS", checks)
+    g = Grid.from_spec({"rod.mu": "linspace(0, 1, 1000)", "floor.beta": [0.01, 0.02],
+                        "initial.height": [0.5, 1.0, 2.0]})
+    assert len(g) == 6000
+    g.validate(rodjit.Config())
+    assert len(calls) == 6 and set(calls) == {("initial.height", "floor.beta")}
+    combos = list(g.combinations(("initial.height", "floor.beta")))
+    assert len(combos) == 6 and g.multiplicity(("initial.height", "floor.beta")) == 1000
+    for index, over in combos:
+        assert {k: g.point(index)[k] for k in over} == over
+
+
+def test_a_large_allowed_grid_is_made_and_validated():
+    g = Grid.from_spec({"rod.mu": "linspace(0, 1, 200000)", "rod.N": [4, 8]})
+    g.validate(rodjit.Config())
+    assert len(g) == 400000 and g.values[0][-1] == 1.0

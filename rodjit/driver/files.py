@@ -12,13 +12,16 @@ from __future__ import annotations
 import math
 import signal
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from ..config import Config
 from ..output import run_writer
-from ..output.estimate import MAX_OUTPUT, MAX_STEPS, check_run
+from ..output.estimate import (MAX_OUTPUT, MAX_STEPS, Estimate, check_run, format_size,
+                               free_space)
 from ..output.h5files import (FileBusy, OutputExists, WriteFailed, check_output, disk_cause,
-                              open_file, repair_truncated, writer_alive)
+                              open_file, repair_truncated, writer_alive,
+                              writer_pid)
 from ..output.lock import WriterLock, note_failure
 from ..output.run_reader import check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
@@ -29,7 +32,8 @@ from .progress import run_progress
 from .run import Run, SimulationError, warn_config
 from .signals import StopFlag
 
-__all__ = ["run_to_file", "resume_file", "RunInterrupted", "OutputExists", "check_output"]
+__all__ = ["run_to_file", "plan_run", "RunPlan", "resume_file", "RunInterrupted", "OutputExists",
+           "check_output"]
 
 FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
 OVERLAP = True         # compute the next block in a worker thread while writing the last
@@ -81,7 +85,8 @@ def run_to_file(config, path, *, overwrite: bool = False,
         Refuse (ValueError) a run whose file is estimated above this many bytes, or above
         the free space of its disk (``output.estimate.check_run``).
     max_steps : float, optional
-        Refuse a fixed step that time cannot resolve or that needs more steps than this.
+        Refuse a fixed step that needs more steps than this (and, whatever the limit, one
+        that time cannot resolve or that does not divide the output intervals).
 
     Returns
     -------
@@ -98,15 +103,9 @@ def run_to_file(config, path, *, overwrite: bool = False,
     RunInterrupted
         SIGINT/SIGTERM while ``handle_signals``; likewise after the file is closed.
     """
-    if config is None:
-        config = Config()
-    elif not isinstance(config, Config):
-        raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
-    if t_end is not None:
-        config = config.override({"time.t_end": t_end})
-    _check_interval(flush_interval)
-    path = check_output(path, overwrite, "run")
-    check_run(config, path, max_output=max_output, max_steps=max_steps)
+    plan = plan_run(config, path, overwrite=overwrite, t_end=t_end, max_output=max_output,
+                    max_steps=max_steps, flush_interval=flush_interval)
+    config, path = plan.config, plan.path
     if command is None:
         command = f"rodjit.run_to_file(config, {str(path)!r})"
     run = Run(config)
@@ -118,6 +117,105 @@ def run_to_file(config, path, *, overwrite: bool = False,
         check_output(path, overwrite, "run", held=True)   # again, now that no one else can write it
         return _drive(run, lambda: run_writer.create_run_file(path, config, first, command=command),
                       path, progress, flush_interval, stop, overlap)
+
+
+@dataclass
+class RunPlan:
+    """What ``run_to_file`` would do, checked but not done (``plan_run``).
+
+    Parameters
+    ----------
+    config : Config
+        The resolved configuration (``t_end`` applied).
+    path : pathlib.Path or None
+        The output, None if no path was checked.
+    estimate : Estimate
+        Snapshot and diagnostics rows, file bytes, memory bytes, fixed steps.
+    replaces : bool
+        The output exists and would be replaced.
+    free : float or None
+        Bytes free on the output's disk (None: unknown).
+    max_output : float
+        The size limit the run was checked against.
+    """
+
+    config: Config
+    path: Path | None
+    estimate: Estimate
+    replaces: bool
+    free: float | None
+    max_output: float
+
+    def report(self) -> str:
+        """The lines ``rodjit run --dry-run`` prints."""
+        e, c = self.estimate, self.config
+        lines = ["dry run: checked, nothing written"]
+        if self.path is not None:
+            what = "replaces the existing run file" if self.replaces else "a new file"
+            lines.append(f"output       {self.path.absolute()} ({what})")
+        for name, rows, key in (("snapshots", e.snapshots, "snapshot_interval"),
+                                ("diagnostics", e.diagnostics, "diagnostics_interval")):
+            every = getattr(c.output, key)
+            lines.append(f"{name:<13}{rows} rows" + (f" (every {every:g} s to t = "
+                                                     f"{c.time.t_end:g})" if every else ""))
+        free = f", {format_size(self.free)} free" if self.free is not None else ""
+        lines.append(f"file         about {format_size(e.file_bytes)} before contact "
+                     f"episodes and bounces (limit {format_size(self.max_output)}{free})")
+        lines.append(f"memory       about {format_size(e.memory_bytes)}")
+        lines.append(f"steps        {e.steps:.6g} fixed steps of time.dt = {c.time.dt:g}"
+                     if e.steps is not None else
+                     f"steps        adaptive ({c.time.integrator})")
+        return "\n".join(lines)
+
+
+def plan_run(config=None, path=None, *, overwrite: bool = False, t_end: float | None = None,
+             max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
+             flush_interval: float = FLUSH_INTERVAL) -> RunPlan:
+    """Check everything ``run_to_file`` checks before it writes, and say what it would
+    write, without writing anything (no file, no lock, no directory).
+
+    Parameters
+    ----------
+    config : Config or None
+        The run; ``None`` is ``Config()``.
+    path : str or os.PathLike, optional
+        The run file that would be written: its directory must exist and be writable, and
+        an existing file may be replaced only with ``overwrite`` and only if it is a rodjit
+        run file whose writer is not running.  None: check the configuration only.
+    overwrite : bool
+        As in ``run_to_file``.
+    t_end : float, optional
+        Overrides ``time.t_end``.
+    max_output, max_steps, flush_interval : float, optional
+        As in ``run_to_file``: the largest file (bytes), the most fixed steps allowed, the
+        seconds between checkpoints.
+
+    Returns
+    -------
+    RunPlan
+        The resolved configuration and path, the estimate (snapshot and diagnostics rows,
+        file size, memory, fixed steps) and the free space; ``.report()`` is what
+        ``rodjit run --dry-run`` prints.
+
+    Raises
+    ------
+    ValueError
+        What ``run_to_file`` would refuse, with the same message.
+    """
+    if config is None:
+        config = Config()
+    elif not isinstance(config, Config):
+        raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
+    if t_end is not None:
+        config = config.override({"time.t_end": t_end})
+    _check_interval(flush_interval)
+    replaces = False
+    if path is not None:
+        path = check_output(path, overwrite, "run")
+        replaces = path.exists()
+    estimate = check_run(config, path, max_output=max_output, max_steps=max_steps)
+    return RunPlan(config, path, estimate, replaces,
+                   free_space(path) if path is not None else None, max_output)
 
 
 def resume_file(path, *, t_end: float | None = None, command: str | None = None,
@@ -157,7 +255,7 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         ck = read_checkpoint(f)
         needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
         alive = writer_alive(f, lock=False) if needs_recovery else False
-        pid, host = f.attrs.get("writer_pid"), f.attrs.get("writer_host")
+        pid = writer_pid(f) if alive else None
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
     if t_end is not None:
@@ -169,12 +267,12 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         raise ValueError(f"{str(path)!r} is already complete at t = {t:.9g}; give a later "
                          f"t_end to extend it")
     if alive:
-        raise FileBusy(f"{str(path)!r} is being written by process {pid}; stop it "
-                            f"before resuming")
+        raise FileBusy(f"{str(path)!r} is being written by a live rodjit process on this "
+                       f"machine (process {pid}); stop it before resuming")
     if needs_recovery and alive is None:
-        raise FileBusy(f"{str(path)!r} was being written by process {pid} on host "
-                            f"{host!r}; if that process has stopped, run 'h5clear -s "
-                            f"{path}' and resume again")
+        raise FileBusy(f"{str(path)!r} was being written on another machine, whose process "
+                       f"this one cannot see; if that process has stopped, run 'h5clear -s "
+                       f"{path}' and resume again")
     run = Run.from_checkpoint(config, ck)
     if t_end is not None:
         run.set_t_end(t_end)

@@ -1,7 +1,10 @@
 """``simulate``: the one Python entry point for an in-memory run."""
 from __future__ import annotations
 
+import math
+
 from ..config import Config
+from ..output.estimate import check_fixed_step
 from ..records.result import MemorySink, Result
 from ..stepping import layout as L
 from .progress import close as close_progress
@@ -33,7 +36,8 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
     Raises
     ------
     ValueError
-        Invalid input (before anything runs).
+        Invalid input (before anything runs), a fixed ``time.dt`` below the resolution of
+        t or one that does not divide the output intervals.
     SimulationError
         A run that cannot continue; it carries the partial ``result``.
 
@@ -46,6 +50,7 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
         config = Config()
     elif not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
+    check_fixed_step(config, max_steps=math.inf)   # a step that never advances or lands
     run = Run(config, u0=u0, v0=v0)
     warn_config(config)
     sink = MemorySink()

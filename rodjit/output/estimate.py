@@ -6,15 +6,17 @@ writing until the disk is full or looping without progress.
 from __future__ import annotations
 
 import math
-import os
 import shutil
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..stepping.control import LAND_FIXED
 from .run_layout import TABLES
 
-__all__ = ["Estimate", "estimate_run", "check_run", "parse_size", "format_size",
-           "MAX_OUTPUT", "MAX_STEPS"]
+__all__ = ["Estimate", "estimate_run", "estimate_values", "check_run", "check_fixed_step",
+           "fixed_step_error", "free_space", "too_large", "parse_size", "format_size",
+           "ESTIMATE_KEYS", "MAX_OUTPUT", "MAX_STEPS"]
 
 MAX_OUTPUT = 10 * 2**30     # bytes a run file may reach unless the caller raises the limit
 MAX_STEPS = 10**10          # fixed steps a run may need unless the caller raises the limit
@@ -40,48 +42,130 @@ def _rows(span: float, interval: float) -> float:
     return 0.0 if not interval else math.floor(span / interval) + 1
 
 
+# the configuration keys an estimate and the fixed-step checks depend on (a sweep computes
+# them once per combination of these keys, not once per point)
+ESTIMATE_KEYS = ("rod.N", "time.t_end", "time.dt", "output.snapshot_interval",
+                 "output.diagnostics_interval")
+_INTERVALS = ("output.snapshot_interval", "output.diagnostics_interval")
+
+
+def _values(config) -> dict:
+    return {key: config.get(key) for key in ESTIMATE_KEYS}
+
+
 def estimate_run(config) -> Estimate:
     """The output and memory of ``config`` from t = 0 to time.t_end."""
-    n1 = config.rod.N + 1
-    span = float(config.time.t_end)
-    snaps = _rows(span, config.output.snapshot_interval)
-    diags = _rows(span, config.output.diagnostics_interval)
+    return estimate_values(_values(config))
+
+
+def estimate_values(values) -> Estimate:
+    """``estimate_run`` from the values of ``ESTIMATE_KEYS`` (a mapping)."""
+    n1 = values["rod.N"] + 1
+    span = float(values["time.t_end"])
+    snaps = _rows(span, values["output.snapshot_interval"])
+    diags = _rows(span, values["output.diagnostics_interval"])
     file_bytes = _OVERHEAD + snaps * (2 * n1 + 2) * 8 + diags * len(TABLES["diagnostics"]) * 8
     snap_buffer = max(1, min(snaps, max(16, 2**22 // n1)))
     memory = 8 * n1 * (3 * 3 + 8) + snap_buffer * 2 * n1 * 8 * 2 + 4096 * 64 * 8
-    dt = config.time.dt
+    dt = values["time.dt"]
     steps = None if dt is None else span / float(dt)
     return Estimate(int(min(snaps, 2**62)), int(min(diags, 2**62)), file_bytes, memory, steps)
+
+
+def fixed_step_error(values, max_steps: float = MAX_STEPS) -> str | None:
+    """Why a fixed time.dt (in ``values``, a mapping of ``ESTIMATE_KEYS``) cannot run as
+    asked, or None: a step below the resolution of t (the run would never advance), more
+    than ``max_steps`` steps, or a step that does not divide an output interval (the loop
+    would shorten a step before every output time to land on it: not the fixed step asked
+    for).  The last step is the only one that may be shorter, to end on time.t_end."""
+    dt, t_end = values["time.dt"], float(values["time.t_end"])
+    if dt is None:
+        return None
+    dt = float(dt)
+    if t_end + dt == t_end:
+        return (f"time.dt = {dt!r} is below the resolution of t near time.t_end = {t_end!r} "
+                f"(t + dt == t): the run would never advance")
+    steps = t_end / dt
+    if steps > max_steps:
+        return (f"time.dt = {dt!r} needs {steps:.3g} steps to reach time.t_end = {t_end!r}, "
+                f"more than the limit of {max_steps:.3g} (raise it with --max-steps / "
+                f"max_steps=)")
+    intervals = [float(values[key]) for key in _INTERVALS if float(values[key]) > 0]
+    for key in _INTERVALS:
+        interval = float(values[key])
+        if interval > 0 and not _divides(dt, interval):
+            return (f"time.dt = {dt!r} does not divide {key} = {interval!r} ({key} / "
+                    f"time.dt = {interval / dt:.6g}): a fixed step must divide every output "
+                    f"interval, so that every step is time.dt (e.g. time.dt = "
+                    f"{_divisor(dt, interval, intervals)}); or unset time.dt for adaptive "
+                    f"steps")
+    return None
+
+
+def _divides(dt: float, interval: float) -> bool:
+    """Whether ``interval`` is a whole multiple of ``dt`` up to the rounding the loop's
+    landing on output times absorbs (``LAND_FIXED``) and that of the division itself."""
+    ratio = interval / dt
+    n = round(ratio)
+    return n >= 1 and abs(ratio - n) <= LAND_FIXED + 4 * sys.float_info.epsilon * ratio
+
+
+def _divisor(dt: float, interval: float, intervals) -> str:
+    """A short step below ``dt`` that divides every interval (for the message)."""
+    first = max(math.ceil(interval / dt), 1)
+    for k in range(first, 4 * first + 16):
+        candidate = float(f"{interval / k:.3g}")
+        if all(_divides(candidate, i) for i in intervals):
+            return repr(candidate)
+    return repr(interval / first)
+
+
+def check_fixed_step(config, max_steps: float = MAX_STEPS) -> None:
+    """ValueError (one line) if ``config``'s fixed time.dt cannot run as asked
+    (``fixed_step_error``)."""
+    error = fixed_step_error(_values(config), max_steps)
+    if error:
+        raise ValueError(error)
+
+
+def free_space(path) -> float | None:
+    """Bytes free on the disk that holds ``path`` (a file to be written, or a directory
+    that may not exist yet: its nearest existing ancestor); None if unknown."""
+    p = Path(path).absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    if p.is_file():
+        p = p.parent
+    try:
+        return shutil.disk_usage(p).free
+    except OSError:
+        return None
+
+
+def too_large(what: str, e: Estimate, max_output: float) -> str | None:
+    """The refusal of a file of estimate ``e`` above ``max_output`` bytes, or None."""
+    if e.file_bytes <= max_output:
+        return None
+    return (f"{what} would write {e.describe()}: more than the limit of "
+            f"{format_size(max_output)} (raise it with --max-output / max_output=, or write "
+            f"less: output.snapshot_interval, output.diagnostics_interval, time.t_end)")
 
 
 def check_run(config, path=None, *, max_output: float = MAX_OUTPUT,
               max_steps: float = MAX_STEPS, what: str = "the run") -> Estimate:
     """ValueError (one line, with the estimate) unless ``config`` can finish and fit: a
-    fixed time.dt that time can resolve (t + dt > t at t_end) and needing at most
-    ``max_steps`` steps; a file of at most ``max_output`` bytes and no more than the free
-    space of the disk of ``path``."""
-    e = estimate_run(config)
-    t_end, dt = float(config.time.t_end), config.time.dt
-    if dt is not None:
-        if t_end + float(dt) == t_end:
-            raise ValueError(f"time.dt = {dt!r} is below the resolution of t near time.t_end "
-                             f"= {t_end!r} (t + dt == t): the run would never advance")
-        if e.steps > max_steps:
-            raise ValueError(f"time.dt = {dt!r} needs {e.steps:.3g} steps to reach time.t_end "
-                             f"= {t_end!r}, more than the limit of {max_steps:.3g} (raise it "
-                             f"with --max-steps / max_steps=)")
-    if e.file_bytes > max_output:
-        raise ValueError(f"{what} would write {e.describe()}: more than the limit of "
-                         f"{format_size(max_output)} (raise it with --max-output / "
-                         f"max_output=, or write less: output.snapshot_interval, "
-                         f"output.diagnostics_interval, time.t_end)")
+    fixed time.dt that time can resolve (t + dt > t at t_end), needing at most
+    ``max_steps`` steps and dividing the output intervals; a file of at most
+    ``max_output`` bytes and no more than the free space of the disk of ``path``."""
+    values = _values(config)
+    e = estimate_values(values)
+    error = fixed_step_error(values, max_steps) or too_large(what, e, max_output)
+    if error:
+        raise ValueError(error)
     if path is not None:
-        parent = Path(path).parent if str(Path(path).parent) else Path(".")
-        try:
-            free = shutil.disk_usage(parent).free
-        except OSError:
-            free = None
+        free = free_space(path)
         if free is not None and e.file_bytes > free:
+            parent = Path(path).parent if str(Path(path).parent) else Path(".")
             raise ValueError(f"{what} would write {e.describe()}, more than the "
                              f"{format_size(free)} free on the disk of {str(parent)!r}")
     return e

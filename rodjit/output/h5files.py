@@ -1,6 +1,6 @@
 """Opening rodjit's HDF5 files and telling what they are: read-only opening of a file
 that may be being written (SWMR), the kind and format checks, opening for writing, the
-record of which process writes a file and whether it is still alive, and the checks an
+liveness of the process that writes a file (``output.writer_id``), and the checks an
 output path passes before a run or a sweep writes to it.
 
 Both file kinds (runs, ``output.run_writer``; sweeps, ``sweeps.sweep_file``) use these.
@@ -11,18 +11,18 @@ import datetime
 import errno
 import os
 import re
-import socket
 from pathlib import Path
 
 import h5py
 
 from .cf import LIBVER
 from .lock import FileBusy, is_locked
+from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
-           "writer_alive", "is_live", "check_output", "WriteFailed", "disk_cause",
-           "truncation", "repair_truncated"]
+           "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
+           "WriteFailed", "disk_cause", "truncation", "repair_truncated"]
 
 
 class NotARunFile(ValueError):
@@ -118,46 +118,21 @@ def history_with(f: h5py.File, entry: str) -> list[str]:
     return [str(s) for s in f.attrs.get("history", [])] + [f"{now()} {entry}"]
 
 
-def process_tag(pid: int) -> str:
-    """Boot id and start time of process ``pid`` (Linux), so a reused pid is not mistaken
-    for the writer; "" where /proc does not tell."""
-    try:
-        with open("/proc/sys/kernel/random/boot_id") as fh:
-            boot = fh.read().strip()
-        with open(f"/proc/{pid}/stat") as fh:
-            start = fh.read().rsplit(")", 1)[1].split()[19]   # field 22: start time
-        return f"{boot}:{start}"
-    except (OSError, IndexError):
-        return ""
-
-
-def writer_attrs() -> dict:
-    """The root attributes naming the writing process (this one): host, pid, start tag."""
-    pid = os.getpid()
-    return {"writer_host": socket.gethostname(), "writer_pid": pid,
-            "writer_tag": process_tag(pid)}
-
-
 def writer_alive(f: h5py.File, lock: bool = True) -> bool | None:
     """Is the process that last wrote ``f`` still running?  True if a process holds the
     file's writer lock (``output.lock``; skipped with ``lock=False``, for the holder
-    itself); otherwise judged from the host, pid and start tag recorded in the file (files
-    of rodjit versions without the lock); None if it ran on another host."""
+    itself); otherwise judged from the liveness record in the file (``output.writer_id``:
+    also for files of rodjit versions without the lock); None if it ran on another
+    machine."""
     if lock and is_locked(f.filename):
         return True
-    if f.attrs.get("writer_host") != socket.gethostname():
-        return None
-    pid = int(f.attrs.get("writer_pid", -1))
-    if pid <= 0 or pid == os.getpid():
-        return False
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        pass
-    tag = str(f.attrs.get("writer_tag", ""))
-    return not tag or process_tag(pid) in ("", tag)
+    return find_writer(f.attrs)[0]
+
+
+def writer_pid(f: h5py.File) -> int | None:
+    """The process id of ``f``'s writer if it is alive on this machine (for the messages
+    that ask to stop it; the file itself does not record it)."""
+    return find_writer(f.attrs)[1]
 
 
 def is_live(path, lock: bool = True) -> bool:

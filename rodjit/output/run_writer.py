@@ -22,10 +22,11 @@ from ..records.sink import Sink
 from ..stepping import layout as L
 from .cf import LIBVER
 from .h5files import (WriteFailed, disk_cause, history_with, now, open_for_writing,
-                      writer_attrs)
+                      stamp_writer)
 from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
                          overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
+from .writer_id import LEGACY_ATTRS, WRITER_ATTRS
 
 __all__ = ["RunWriter", "create_run_file", "reopen_run_file", "recover"]
 
@@ -197,8 +198,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         f.attrs["history"] = history_with(f, history)
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
-        for key, value in writer_attrs().items():
-            f.attrs[key] = value
+        stamp_writer(f.attrs)
         f.swmr_mode = True
         return RunWriter(f, path, read_config(f), ck)
     except BaseException:
@@ -217,6 +217,8 @@ def recover(path) -> None:
         ck = read_checkpoint(src)
         attrs = {k: v for k, v in src.attrs.items()}
         attrs.pop("format_version")       # the rebuilt file has the current layout
+        for name in LEGACY_ATTRS + WRITER_ATTRS:   # this process's record, not the old one
+            attrs.pop(name, None)
         t = float(ck["clock"][L.T])
         attrs["history"] = history_with(src, f"recovered at the checkpoint t = {t!r} after the "
                                          f"writer stopped without closing the file")

@@ -16,18 +16,19 @@ from typing import Any, Iterator, Mapping
 
 import numpy as np
 
-from ..config import Config, field_spec, parse_value
+from ..config import CROSS_CHECKS, Config, field_spec, parse_value
 
-__all__ = ["Grid", "parse_grid_option", "format_value"]
+__all__ = ["Grid", "parse_grid_option", "format_value", "MAX_POINTS"]
 
 _RANGE = re.compile(r"^\s*(linspace|logspace)\s*\((.*)\)\s*$")
+MAX_POINTS = 10**6      # points a grid may have unless the caller raises the limit
 
 
 def _field(key: str):
     return field_spec(key)
 
 
-def _range_values(key: str, kind: str, args: str) -> list[float]:
+def _range_args(key: str, kind: str, args: str) -> tuple[float, float, int]:
     parts = [p.strip() for p in args.split(",")]
     usage = f"grid {key}: {kind}(a, b, n) takes two numbers and a whole number n >= 1"
     if len(parts) != 3:
@@ -37,16 +38,44 @@ def _range_values(key: str, kind: str, args: str) -> list[float]:
         n = float(parts[2])
     except ValueError:
         raise ValueError(f"{usage}, got {kind}({args})") from None
-    if not (math.isfinite(a) and math.isfinite(b)) or not n.is_integer() or n < 1:
+    if (not (math.isfinite(a) and math.isfinite(b)) or not math.isfinite(n)
+            or not n.is_integer() or n < 1):
         raise ValueError(f"{usage}, got {kind}({args})")
-    fn = np.linspace if kind == "linspace" else np.logspace
-    return [float(x) for x in fn(a, b, int(n))]
+    return a, b, int(n)
+
+
+def _count(key: str, vals) -> int:
+    """How many values ``vals`` gives ``key``, without making them."""
+    if isinstance(vals, str):
+        m = _RANGE.match(vals)
+        if m:
+            return _range_args(key, m.group(1), m.group(2))[2]
+        return sum(1 for t in vals.split(",") if t.strip())
+    if np.isscalar(vals):
+        return 1
+    try:
+        return len(vals)
+    except TypeError:
+        raise ValueError(f"grid {key}: values must be a list, an array or text such as "
+                         f"'linspace(0, 1, 5)', got {type(vals).__name__}") from None
+
+
+def _check_size(counts: dict[str, int], max_points: float) -> None:
+    """ValueError naming the count if the grid of these axis lengths is too large."""
+    n = math.prod(counts.values())
+    if n > max_points:
+        axes = " x ".join(f"{c:,} ({k})" for k, c in counts.items())
+        raise ValueError(f"the grid has {n:,} points ({axes}), more than the limit of "
+                         f"{max_points:,.0f} points (raise it with --max-points / "
+                         f"max_points=, or sweep fewer values)")
 
 
 def _values_from_text(key: str, text: str) -> list[Any]:
     m = _RANGE.match(text)
     if m:
-        return _range_values(key, m.group(1), m.group(2))
+        a, b, n = _range_args(key, m.group(1), m.group(2))
+        fn = np.linspace if m.group(1) == "linspace" else np.logspace
+        return fn(a, b, n).tolist()
     items = [t for t in (s.strip() for s in text.split(",")) if t != ""]
     if not items:
         raise ValueError(f"grid {key}: no values given (e.g. --grid {key}=1,2,3 or "
@@ -57,18 +86,27 @@ def _values_from_text(key: str, text: str) -> list[Any]:
 def _coerce(key: str, values) -> tuple[Any, ...]:
     """Check every value against the key's type and range (one line naming both)."""
     spec = _field(key)
-    out = []
-    for value in values:
-        if isinstance(value, np.generic):
-            value = value.item()
-        if isinstance(value, str) and spec.kind != "str":
-            value = parse_value(key, value)
-        out.append(spec.coerce(key, value))
-    seen = set()
-    for value in out:
-        if value in seen:
-            raise ValueError(f"grid {key} lists the value {value!r} twice")
-        seen.add(value)
+    if (spec.kind == "float" and all(type(v) is float for v in values)
+            and all(map(math.isfinite, values))):
+        # the common case (ranges, float lists): only the range is left to check
+        out = values
+        bad = next((v for v in out if not spec.check(v)), None) if spec.check else None
+        if bad is not None:
+            spec.coerce(key, bad)     # raises, naming the key and its range
+    else:
+        out = []
+        for value in values:
+            if isinstance(value, np.generic):
+                value = value.item()
+            if isinstance(value, str) and spec.kind != "str":
+                value = parse_value(key, value)
+            out.append(spec.coerce(key, value))
+    if len(set(out)) != len(out):
+        seen = set()
+        for value in out:
+            if value in seen:
+                raise ValueError(f"grid {key} lists the value {value!r} twice")
+            seen.add(value)
     if not out:
         raise ValueError(f"grid {key}: no values given")
     return tuple(out)
@@ -90,28 +128,34 @@ class Grid:
     values: tuple[tuple[Any, ...], ...]
 
     @classmethod
-    def from_spec(cls, spec: Mapping[str, Any]) -> "Grid":
+    def from_spec(cls, spec: Mapping[str, Any], max_points: float = MAX_POINTS) -> "Grid":
         """From ``{"rod.mu": [0, 1, 10], "floor.beta": "linspace(0.01, 0.05, 3)"}``: lists,
-        arrays, or text as on the command line."""
+        arrays, or text as on the command line.  A grid of more than ``max_points`` points
+        is refused (ValueError naming the count) before any value is made."""
         if isinstance(spec, Grid):
+            _check_size(dict(zip(spec.keys, spec.shape)), max_points)
             return spec
         if not isinstance(spec, Mapping) or not spec:
             raise ValueError("grid must map at least one configuration key to its values, "
                              "e.g. {'rod.mu': [0, 1, 10]}")
+        for key in spec:
+            _field(str(key))
+        _check_size({key: _count(key, vals) for key, vals in spec.items()}, max_points)
         keys, values = [], []
         for key, vals in spec.items():
-            _field(str(key))
             if isinstance(vals, str):
                 vals = _values_from_text(key, vals)
             elif np.isscalar(vals):
                 vals = [vals]
             keys.append(key)
-            values.append(_coerce(key, list(vals)))
+            values.append(_coerce(key, vals.tolist() if isinstance(vals, np.ndarray)
+                                  else list(vals)))
         return cls(tuple(keys), tuple(values))
 
     @classmethod
     def from_json(cls, text: str) -> "Grid":
-        return cls.from_spec(json.loads(text))
+        """The grid a sweep file stored (``to_json``); its size was allowed when written."""
+        return cls.from_spec(json.loads(text), max_points=math.inf)
 
     def to_json(self) -> str:
         """The grid as stored in a sweep file: ``{"key": [values...], ...}`` in order."""
@@ -157,12 +201,41 @@ class Grid:
         except ValueError as exc:
             raise ValueError(f"grid point {index} ({self.describe(index)}): {exc}") from None
 
+    def combinations(self, keys) -> Iterator[tuple[int, dict[str, Any]]]:
+        """The distinct combinations of the swept keys among ``keys``: (the first point
+        that has it, its overrides).  Whatever depends only on ``keys`` is the same at every
+        point of a combination, so it needs checking or computing once per combination."""
+        axes = [j for j, k in enumerate(self.keys) if k in keys]
+        if not axes:
+            yield 0, {}
+            return
+        for combo in itertools.product(*(range(len(self.values[j])) for j in axes)):
+            idx = [0] * len(self.keys)
+            for j, i in zip(axes, combo):
+                idx[j] = i
+            index = int(np.ravel_multi_index(idx, self.shape))
+            yield index, {self.keys[j]: self.values[j][i] for j, i in zip(axes, combo)}
+
+    def multiplicity(self, keys) -> int:
+        """How many points share each combination of ``combinations(keys)``."""
+        return math.prod(len(v) for k, v in zip(self.keys, self.values) if k not in keys)
+
     def validate(self, base: Config) -> None:
-        """Build every point's configuration once (and drop it, so memory does not grow with
-        the grid): a bad point raises ValueError naming the point, the field and its range,
-        before anything runs or is written."""
-        for i in range(len(self)):
-            self.config(base, i)
+        """Check every point's configuration before anything runs or is written, in time
+        that grows with the values, not the points: each key's values were checked on
+        their own when the grid was made; the checks that relate keys (``CROSS_CHECKS``)
+        run over the combinations of the swept keys they name.  A bad point raises
+        ValueError naming the point, the field and its range."""
+        flat = base.flat()
+        for keys, check in CROSS_CHECKS:
+            if not set(keys) & set(self.keys):
+                continue
+            for index, over in self.combinations(keys):
+                try:
+                    check(*(over.get(k, flat[k]) for k in keys))
+                except ValueError as exc:
+                    raise ValueError(f"grid point {index} ({self.describe(index)}): "
+                                     f"{exc}") from None
 
 
 def parse_grid_option(items) -> dict[str, str]:

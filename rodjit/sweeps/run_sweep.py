@@ -9,7 +9,6 @@ point; ``resume=True`` runs only the points that are still pending or failed.
 from __future__ import annotations
 
 import math
-import os
 import signal
 import time
 from dataclasses import dataclass
@@ -21,12 +20,14 @@ from ..config import Config
 from ..driver.progress import close as close_progress
 from ..driver.progress import sweep_progress
 from ..driver.signals import StopFlag
-from ..output.h5files import FileBusy, check_output, open_file, writer_alive
+from ..output.estimate import MAX_OUTPUT, MAX_STEPS
+from ..output.h5files import FileBusy, check_output, open_file, writer_alive, writer_pid
 from ..output.lock import WriterLock
 from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
-from .grid import Grid
+from .grid import MAX_POINTS, Grid
 from .main_guard import check_main
+from .plan import check_runs_dir, plan_sweep
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules
 from .sweep_table import SweepTable
 
@@ -81,7 +82,7 @@ class SweepProgress:
         return self.elapsed / self.run * (self.todo - self.run)
 
 
-def _check_jobs(jobs) -> int:
+def check_jobs(jobs) -> int:
     if jobs is None:
         return default_jobs()
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:
@@ -93,43 +94,24 @@ def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
     return {**sweep_file.key_columns(grid), **empty_columns(len(grid))}
 
 
-def _prepare_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
-    """Check the --save-runs directory (created later, once everything else is valid)."""
-    if save_runs is None:
-        return None
-    d = Path(save_runs).resolve()
-    if d.exists() and not d.is_dir():
-        raise ValueError(f"--save-runs {str(save_runs)!r} is not a directory")
-    existing = d.parent
-    while not existing.exists():
-        existing = existing.parent
-    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
-        raise ValueError(f"--save-runs directory {str(save_runs)!r} cannot be created here")
-    if d.is_dir() and not (overwrite or resume):
-        clash = next((grid.run_name(i) for i in todo if (d / grid.run_name(i)).exists()), None)
-        if clash:
-            raise ValueError(f"--save-runs {str(save_runs)!r} already holds {clash!r}; use "
-                             f"--overwrite to replace its run files, or --resume")
-    return d
-
-
-def _open_resume(output, config, grid):
+def _open_resume(output, config, grid, max_points):
     """Base config, grid, columns and attributes of the sweep file to continue."""
     with sweep_file.open_sweep(output) as f:
         header = sweep_file.read_header(f)
         columns = sweep_file.read_summary(f)
         alive = (writer_alive(f, lock=False) if header["attrs"].get("status") == "running"
                  else False)
+        pid = writer_pid(f) if alive else None
     if alive:
-        raise FileBusy(f"{str(output)!r} is being written by a running sweep (process "
-                            f"{header['attrs'].get('writer_pid')}); stop it before resuming")
+        raise FileBusy(f"{str(output)!r} is being written by a running sweep on this machine "
+                       f"(process {pid}); stop it before resuming")
     base, file_grid = header["base"], header["grid"]
     if config is not None and config != base:
         differ = sorted(k for k, v in config.flat().items() if base.flat()[k] != v)
         raise ValueError(f"the configuration differs from the one in {str(output)!r} "
                          f"({', '.join(differ)}); --resume continues the file's sweep: drop "
                          f"the changes or start a new sweep")
-    if grid is not None and Grid.from_spec(grid) != file_grid:
+    if grid is not None and Grid.from_spec(grid, max_points=max_points) != file_grid:
         raise ValueError(f"the grid differs from the one in {str(output)!r} "
                          f"({file_grid.to_json()}); --resume continues the file's sweep: "
                          f"drop --grid or start a new sweep")
@@ -138,7 +120,9 @@ def _open_resume(output, config, grid):
 
 def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, save_runs=None,
           resume: bool = False, overwrite: bool = False, progress=None, command=None,
-          handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL) -> SweepTable:
+          handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL,
+          max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
+          max_points: float = MAX_POINTS) -> SweepTable:
     """Run ``config`` (None: the built-in run) at every point of ``grid`` and return the
     summary table; with ``output``, stream it to that sweep file as points finish.
 
@@ -174,6 +158,14 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         Catch SIGINT/SIGTERM and close the file with every finished point.
     flush_interval : float
         Wall-clock seconds between writes of finished points.
+    max_output : float, optional
+        Refuse (ValueError) a sweep whose sweep file, or with ``save_runs`` whose largest
+        run file, is estimated above this many bytes, or whose files would not fit the
+        free space of their disks (``plan_sweep``).
+    max_steps : float, optional
+        Refuse a point whose fixed step needs more steps than this.
+    max_points : float, optional
+        Refuse a grid of more points than this, before it is made.
 
     Returns
     -------
@@ -183,53 +175,56 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     Raises
     ------
     ValueError
-        Bad input (any point), before anything is written.
+        Bad input (any point), a sweep that could not finish or fit, before anything is
+        written or started.
     SweepInterrupted
         SIGINT or SIGTERM, after the file is closed with every finished point.
     """
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
-    jobs = _check_jobs(jobs)
+    jobs = check_jobs(jobs)
     check_scheduler(scheduler)
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
     if resume and output is None:
         raise ValueError("resume needs the sweep file to continue (output=PATH, or "
                          "rodjit sweep --resume -o PATH)")
+    # a new sweep: every check (grid, points, paths, sizes) before the lock is taken
+    plan = None if resume else plan_sweep(config, grid, output=output, save_runs=save_runs,
+                                          overwrite=overwrite, max_output=max_output,
+                                          max_steps=max_steps, max_points=max_points)
     if output is None:
-        return _sweep(config, grid, None, jobs, scheduler, save_runs, resume, overwrite,
-                      progress, command, handle_signals, flush_interval)
+        return _sweep(config, plan, None, jobs, scheduler, save_runs, resume, overwrite,
+                      progress, command, handle_signals, flush_interval, max_points)
     output = Path(output)
     if resume and not output.is_file():
         open_file(output).close()      # the one-line reason: missing, a directory, ...
-    elif not resume:
-        check_output(output, overwrite, "sweep")
     # the writer lock of the sweep file, held until it is closed (see output.lock)
     with WriterLock(output):
-        return _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite,
-                      progress, command, handle_signals, flush_interval)
+        return _sweep(config, plan if plan is not None else grid, output, jobs, scheduler,
+                      save_runs, resume, overwrite, progress, command, handle_signals,
+                      flush_interval, max_points)
 
 
 def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, progress,
-           command, handle_signals, flush_interval) -> SweepTable:
-    """``sweep`` once this process holds the writer lock of ``output`` (if any)."""
+           command, handle_signals, flush_interval, max_points) -> SweepTable:
+    """``sweep`` once this process holds the writer lock of ``output`` (if any); ``grid``
+    is the checked SweepPlan of a new sweep, the grid given to a resume."""
     attrs = {}
+    plan = None
     if resume:
-        base, grid, columns, attrs = _open_resume(output, config, grid)
+        base, grid, columns, attrs = _open_resume(output, config, grid, max_points)
         if save_runs is None and attrs.get("save_runs"):
             save_runs = attrs["save_runs"]
     else:
-        if grid is None:
-            raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]} or --grid "
-                             "rod.mu=0,1,10")
-        base = config if config is not None else Config()
-        grid = Grid.from_spec(grid)
-        grid.validate(base)
-        columns = _new_columns(grid)
-        if output is not None:
+        plan = grid
+        base, grid = plan.config, plan.grid
+        if output is not None:         # again, now that no one else can write it
             output = check_output(output, overwrite, "sweep", held=True)
+        columns = _new_columns(grid)
     todo = [i for i in range(len(grid)) if columns["status"][i] != "completed"]
-    runs_dir = _prepare_runs_dir(save_runs, grid, todo, overwrite, resume)
+    runs_dir = (plan.runs_dir if plan is not None else
+                check_runs_dir(save_runs, grid, todo, overwrite, resume))
     if command is None:
         command = f"rodjit.sweep(config, grid, output={str(output) if output else None!r})"
 

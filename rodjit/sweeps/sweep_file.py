@@ -22,7 +22,7 @@ import numpy as np
 from ..config import Config, field_spec
 from ..output import cf
 from ..output.h5files import (FileBusy, NotARunFile, check_kind, history_with, now, open_file,
-                              writer_attrs)
+                              stamp_writer, writer_attrs)
 from ..records.bounces import empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
 from ..version import __version__
@@ -124,8 +124,7 @@ def reopen(path, *, history: str) -> None:
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         f.attrs["history"] = history_with(f, history)
-        for key, value in writer_attrs().items():
-            f.attrs[key] = value
+        stamp_writer(f.attrs)
 
 
 def write_results(path, results, wait: float = LOCK_WAIT) -> None:

@@ -1,0 +1,228 @@
+"""What a sweep will run and write, checked before anything starts: the grid's size, every
+point's configuration and fixed step, the sweep file and (``--save-runs``) the run files
+against the size limit and the free space of their disks.
+
+Everything here takes time that grows with the grid's values, not with its points: the
+checks and estimates that depend on a few keys run once per combination of those keys
+(``Grid.combinations``), so a grid of a million points is checked in seconds.
+"""
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+from ..config import Config
+from ..output.estimate import (ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, Estimate, estimate_values,
+                               fixed_step_error, format_size, free_space, too_large)
+from ..output.h5files import check_output
+from .grid import MAX_POINTS, Grid
+
+__all__ = ["SweepPlan", "plan_sweep", "check_runs_dir", "SWEEP_OVERHEAD", "POINT_BYTES"]
+
+# a sweep file's layout and attributes, and what each point adds to it besides its bounce
+# rows (a summary row, its bounce group with one empty dataset per column); measured on
+# files of 1 to 64 points
+SWEEP_OVERHEAD = 48 * 2**10
+POINT_BYTES = 8 * 2**10
+
+
+@dataclass
+class SweepPlan:
+    """What ``sweep`` would run and write, checked but not done (``plan_sweep``).
+
+    Parameters
+    ----------
+    config : Config
+        The base configuration.
+    grid : Grid
+        The checked grid.
+    output : pathlib.Path or None
+        The sweep file, None for a sweep kept in memory.
+    replaces : bool
+        The sweep file exists and would be replaced.
+    sweep_bytes : float
+        The estimated sweep file, without bounce rows.
+    runs_dir : pathlib.Path or None
+        The ``save_runs`` directory.
+    runs_bytes : float
+        The run files together (0 without ``save_runs``).
+    worst_index : int
+        The point whose run file is the largest.
+    worst : Estimate
+        That point's estimate (rows, file and memory bytes, fixed steps).
+    max_output : float
+        The size limit the files were checked against.
+    """
+
+    config: Config
+    grid: Grid
+    output: Path | None
+    replaces: bool
+    sweep_bytes: float
+    runs_dir: Path | None
+    runs_bytes: float
+    worst_index: int
+    worst: Estimate
+    max_output: float
+
+    def report(self) -> str:
+        """The lines ``rodjit sweep --dry-run`` prints."""
+        g = self.grid
+        axes = " x ".join(f"{k} ({len(v)} values)" for k, v in zip(g.keys, g.values))
+        lines = ["dry run: checked, nothing written"]
+        if self.output is not None:
+            what = "replaces the existing sweep file" if self.replaces else "a new file"
+            lines.append(f"output       {self.output.absolute()} ({what})")
+        lines.append(f"points       {len(g):,}: {axes}")
+        if self.output is not None:
+            free = free_space(self.output)
+            lines.append(f"sweep file   about {format_size(self.sweep_bytes)} before bounce "
+                         f"rows (limit {format_size(self.max_output)}"
+                         + (f", {format_size(free)} free)" if free is not None else ")"))
+        if self.runs_dir is not None:
+            free = free_space(self.runs_dir)
+            lines.append(f"run files    {len(g):,} in {self.runs_dir}, about "
+                         f"{format_size(self.runs_bytes)} in total (limit "
+                         f"{format_size(self.max_output)} per file"
+                         + (f", {format_size(free)} free)" if free is not None else ")"))
+        lines.append(f"worst point  {self.worst_index} ({g.describe(self.worst_index)}): "
+                     f"{self.worst.describe()}")
+        return "\n".join(lines)
+
+
+def plan_sweep(config=None, grid=None, *, output=None, save_runs=None, overwrite: bool = False,
+               max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
+               max_points: float = MAX_POINTS) -> SweepPlan:
+    """Check everything ``sweep`` checks before it starts workers or writes, and say what
+    it would write, without writing anything (no file, no lock, no directory).
+
+    Parameters
+    ----------
+    config : Config or None
+        The base configuration; ``None`` is ``Config()``.
+    grid : mapping or Grid
+        As in ``sweep``.
+    output : str or os.PathLike, optional
+        The sweep file: checked as ``sweep`` checks it (directory, an existing file only
+        with ``overwrite`` and only a rodjit sweep file).
+    save_runs : str or os.PathLike, optional
+        The directory for one run file per point.
+    overwrite : bool
+        As in ``sweep``.
+    max_output : float, optional
+        The largest sweep file and the largest run file allowed, in bytes.
+    max_steps : float, optional
+        The most fixed steps a point may need.
+    max_points : float, optional
+        The most points the grid may have (counted before the grid is made).
+
+    Returns
+    -------
+    SweepPlan
+        The grid, the estimated sweep file and run files, the point with the largest run
+        file; ``.report()`` is what ``rodjit sweep --dry-run`` prints.
+
+    Raises
+    ------
+    ValueError
+        What ``sweep`` would refuse, with the same message (a bad point is named).
+    """
+    if config is not None and not isinstance(config, Config):
+        raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
+    if grid is None:
+        raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]} or --grid "
+                         "rod.mu=0,1,10")
+    base = config if config is not None else Config()
+    grid = Grid.from_spec(grid, max_points=max_points)
+    grid.validate(base)
+    worst_index, worst, runs_bytes = _points(base, grid, max_steps)
+    runs_dir = check_runs_dir(save_runs, grid, range(len(grid)), overwrite, False)
+    replaces = False
+    sweep_bytes = SWEEP_OVERHEAD + len(grid) * (POINT_BYTES + 8 * len(grid.keys))
+    if output is not None:
+        output = check_output(output, overwrite, "sweep")
+        replaces = output.exists()
+        if sweep_bytes > max_output:
+            raise ValueError(f"the sweep file would hold {len(grid):,} points, about "
+                             f"{format_size(sweep_bytes)}: more than the limit of "
+                             f"{format_size(max_output)} (raise it with --max-output / "
+                             f"max_output=, or sweep fewer points)")
+    if runs_dir is not None:
+        error = too_large(f"the run file of grid point {worst_index} "
+                          f"({grid.describe(worst_index)})", worst, max_output)
+        if error:
+            raise ValueError(error)
+    _check_free(output, sweep_bytes if output is not None else 0.0, runs_dir,
+                runs_bytes if runs_dir is not None else 0.0)
+    return SweepPlan(base, grid, output, replaces, sweep_bytes, runs_dir,
+                     runs_bytes if runs_dir is not None else 0.0, worst_index, worst,
+                     max_output)
+
+
+def _points(base: Config, grid: Grid, max_steps: float) -> tuple[int, Estimate, float]:
+    """Check every point's fixed step; (the point with the largest run file, its
+    estimate, the run files' total)."""
+    flat = base.flat()
+    share = grid.multiplicity(ESTIMATE_KEYS)
+    worst_index, worst, total = 0, None, 0.0
+    for index, over in grid.combinations(ESTIMATE_KEYS):
+        values = {k: over.get(k, flat[k]) for k in ESTIMATE_KEYS}
+        error = fixed_step_error(values, max_steps)
+        if error:
+            raise ValueError(f"grid point {index} ({grid.describe(index)}): {error}")
+        e = estimate_values(values)
+        total += e.file_bytes * share
+        if worst is None or e.file_bytes > worst.file_bytes:
+            worst_index, worst = index, e
+    return worst_index, worst, total
+
+
+def _device(path: Path):
+    p = path.absolute()
+    while not p.exists() and p != p.parent:
+        p = p.parent
+    try:
+        return os.stat(p).st_dev
+    except OSError:
+        return None
+
+
+def _check_free(output, sweep_bytes: float, runs_dir, runs_bytes: float) -> None:
+    """ValueError if the sweep file and the run files would not fit their disks' free
+    space (together, when they share a disk)."""
+    same = (output is not None and runs_dir is not None
+            and _device(Path(output)) == _device(runs_dir))
+    needs = []
+    if output is not None:
+        needs.append((Path(output), sweep_bytes + (runs_bytes if same else 0.0),
+                      "the sweep file" + (" and the run files" if same else "")))
+    if runs_dir is not None and not same:
+        needs.append((runs_dir, runs_bytes, "the run files"))
+    for path, need, what in needs:
+        free = free_space(path)
+        if free is not None and need > free and math.isfinite(need):
+            where = path.parent if path != runs_dir else path
+            raise ValueError(f"{what} would take about {format_size(need)}, more than the "
+                             f"{format_size(free)} free on the disk of {str(where)!r}")
+
+
+def check_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
+    """Check the --save-runs directory (created later, once everything else is valid)."""
+    if save_runs is None:
+        return None
+    d = Path(save_runs).resolve()
+    if d.exists() and not d.is_dir():
+        raise ValueError(f"--save-runs {str(save_runs)!r} is not a directory")
+    existing = d.parent
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
+        raise ValueError(f"--save-runs directory {str(save_runs)!r} cannot be created here")
+    if d.is_dir() and not (overwrite or resume) and next(d.iterdir(), None) is not None:
+        clash = next((grid.run_name(i) for i in todo if (d / grid.run_name(i)).exists()), None)
+        if clash:
+            raise ValueError(f"--save-runs {str(save_runs)!r} already holds {clash!r}; use "
+                             f"--overwrite to replace its run files, or --resume")
+    return d
