@@ -38,7 +38,20 @@ BATCH_ROWS = 256       # results held before a write at most (unless a reader ho
 
 
 class SweepInterrupted(RuntimeError):
-    """A sweep stopped by SIGINT/SIGTERM; its file holds every finished point (``table``)."""
+    """A sweep stopped by SIGINT/SIGTERM; its file holds every finished point (``table``).
+
+    Running the same sweep again with ``resume=True`` runs only the points not finished.
+
+    Parameters
+    ----------
+    message : str
+        Which signal stopped the sweep, how many points finished, and how to resume.
+    signum : int or None
+        The signal number; None when a second interrupt arrived while stopping.
+    table : SweepTable
+        The table at the stop: finished points ``"completed"`` or ``"failed"``, the rest
+        ``"pending"``.
+    """
 
     def __init__(self, message: str, signum: int | None, table: SweepTable):
         super().__init__(message)
