@@ -77,7 +77,23 @@ class SweepFailed(RuntimeError):
 
 @dataclass
 class SweepProgress:
-    """Where a sweep stands, passed to ``progress`` after every result and heartbeat."""
+    """Where a sweep stands, passed to ``progress`` after every result and heartbeat.
+
+    Attributes
+    ----------
+    done : int
+        Points finished, earlier sessions of a resumed sweep included.
+    total : int
+        Points in the grid.
+    failed : int
+        Points failed so far.
+    run : int
+        Points finished in this call.
+    todo : int
+        Points this call set out to run.
+    elapsed : float
+        Seconds since this call started.
+    """
 
     done: int          # points finished, earlier sessions included
     total: int
