@@ -6,6 +6,8 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import inspect
+import json
+import math
 import re
 import subprocess
 import sys
@@ -215,13 +217,38 @@ def test_every_public_callable_documents_its_parameters():
 
 
 def test_verification_figures_are_made_by_the_script(tmp_path):
+    """The script makes every committed figure and the numbers the page quotes; the
+    committed numbers are the ones a fresh run measures (to rounding across machines)."""
     pytest.importorskip("matplotlib")
     proc = subprocess.run([sys.executable, str(ROOT / "docs" / "scripts" / "verification.py"),
                            str(tmp_path)], capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
+    committed = ROOT / "docs" / "figures"
     made = sorted(p.name for p in tmp_path.glob("*.png"))
-    assert made == sorted(p.name for p in (ROOT / "docs" / "figures").glob("*.png"))
+    assert made == sorted(p.name for p in committed.glob("*.png"))
     page = (ROOT / "docs" / "verification.md").read_text()
     for name in made:
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert f"figures/{name}" in page
+    fresh = json.loads((tmp_path / "verification.json").read_text())
+    stored = json.loads((committed / "verification.json").read_text())
+    assert sorted(fresh) == sorted(stored) and len(fresh) >= 4
+    for name, entry in fresh.items():
+        assert f"<!-- rodjit:measured {name} -->" in page, name
+        assert sorted(entry["numbers"]) == sorted(stored[name]["numbers"]), name
+        for key, value in entry["numbers"].items():
+            assert math.isfinite(value), (name, key)
+            assert value == pytest.approx(stored[name]["numbers"][key], rel=1e-3, abs=1e-12), \
+                f"{name} {key}: rerun docs/scripts/verification.py docs/figures"
+    assert set(generate.MEASURED_MARKER.findall(page)) == set(fresh)
+
+
+def test_measured_markers_become_the_captions_of_the_committed_numbers():
+    stored = json.loads((ROOT / "docs" / "figures" / "verification.json").read_text())
+    page = (ROOT / "docs" / "verification.md").read_text()
+    out = generate.on_page_markdown(page, None, None, None)
+    assert "rodjit:measured" not in out
+    for entry in stored.values():
+        assert entry["caption"] in out
+    with pytest.raises(KeyError, match="no numbers for nothing.png"):
+        generate.measured_caption("nothing.png")
