@@ -212,7 +212,7 @@ def saint_venant(ax_time, ax_rest):
     beta = 0.05
     alphas = np.array([3 * kb / (beta * E) for kb in SAINT_VENANT_KAPPA_B])
     # the delay equation's trapezoidal steps need α·ds small, so the curve stops at α = 200
-    # (20 Python-loop solves of 2000 steps per transit; the dashed line is the limit)
+    # (25 Python-loop solves of 2000 steps per transit; the dashed line is the limit)
     curve = np.geomspace(alphas[0], 200.0, 25)
     exact = np.array([spring_wall_impact(a, 2000) for a in curve])
     ax_time.semilogx(curve, exact[:, 0] / 2, "k-", lw=1, label="linear spring (d'Alembert)")
