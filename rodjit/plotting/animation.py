@@ -7,6 +7,7 @@ ffmpeg (when it is installed).
 """
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -128,4 +129,8 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
         movie = animation.FuncAnimation(fig, draw, frames=rows, blit=False,
                                         cache_frame_data=False)
         movie.save(output, writer=writer, dpi=dpi)
+        # the movie is the output: a pyplot figure left open would be shown (Jupyter draws
+        # open figures after the cell) and redraw a frame from the source closed below
+        if "matplotlib.pyplot" in sys.modules:
+            sys.modules["matplotlib.pyplot"].close(fig)
     return output
