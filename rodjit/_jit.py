@@ -55,7 +55,29 @@ _CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
 JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
                "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
 
-kernel = numba.njit(**JIT_OPTIONS)
+_kernel = numba.njit(**JIT_OPTIONS)
+
+
+def kernel(func):
+    """Compile ``func`` as a rodjit kernel (``rodjit.laws.law_kernel``).
+
+    The options every rodjit kernel has (``JIT_OPTIONS``): cached on disk, NumPy's error
+    model, the GIL released, fused multiply-adds and, where Numba allows, no reference
+    counting, so a kernel must not allocate.
+
+    Parameters
+    ----------
+    func : function
+        A Python function Numba can compile in nopython mode.
+
+    Returns
+    -------
+    numba.core.registry.CPUDispatcher
+        The compiled function, callable from Python and from other kernels.
+    """
+    return _kernel(func)
+
+
 # no fused multiply-adds (module docstring): the banded solvers' elimination recurrences
 exact_kernel = numba.njit(**{**JIT_OPTIONS, "fastmath": False})
 

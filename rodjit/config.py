@@ -201,8 +201,23 @@ _FIELDS: dict[str, dict[str, _Spec]] = {
 
 
 def field_spec(key: str) -> _Spec:
-    """The spec of a dotted key: its kind, range, meaning and unit; unknown keys raise the
-    error that names the closest valid key."""
+    """The spec of a dotted key: its kind, range, meaning and unit.
+
+    Parameters
+    ----------
+    key : str
+        A dotted configuration key, e.g. ``"rod.mu"``.
+
+    Returns
+    -------
+    _Spec
+        The field's specification (``kind``, ``describe()``, ``meaning``, ``unit``).
+
+    Raises
+    ------
+    ValueError
+        For an unknown key, naming the closest valid key.
+    """
     section, _, name = key.partition(".")
     try:
         return _FIELDS[section][name]
@@ -211,7 +226,13 @@ def field_spec(key: str) -> _Spec:
 
 
 def key_lines() -> list[str]:
-    """``rodjit config --keys``: every key with its meaning and unit, one per line."""
+    """``rodjit config --keys``: every key with its meaning and unit, one per line.
+
+    Returns
+    -------
+    list of str
+        One aligned line per key of ``valid_keys()``.
+    """
     width = max(len(k) for k in valid_keys())
     out = []
     for key in valid_keys():
@@ -222,7 +243,13 @@ def key_lines() -> list[str]:
 
 
 def valid_keys() -> list[str]:
-    """Every configuration key, dotted (``rod.mu``, ``floor.kappa_b``, ...)."""
+    """Every configuration key, dotted (``rod.mu``, ``floor.kappa_b``, ...).
+
+    Returns
+    -------
+    list of str
+        The keys in section order, as TOML files and ``--set`` name them.
+    """
     return [f"{s}.{k}" for s, fields in _FIELDS.items() for k in fields]
 
 
@@ -250,7 +277,28 @@ class _Section:
 
 @dataclass(frozen=True)
 class RodConfig(_Section):
-    """The rod: ``N`` segments, elasticity κ, beam regularisation γ, viscosity μ."""
+    """The rod: ``N`` segments, elasticity κ, beam regularisation γ, viscosity μ.
+
+    Every section checks its fields on creation.
+
+    Parameters
+    ----------
+    N : int
+        Number of rod segments (N + 1 nodes), in [1, 10⁷].
+    kappa : float
+        Elastic modulus κ of the rod [N], > 0.
+    gamma : float
+        Bending (beam regularisation) coefficient γ [N m²], >= 0.
+    mu : float
+        Viscosity μ of the rod [N s], >= 0.
+    law : str
+        Name of a registered rod stress law f (``rodjit.laws.law_names("rod")``).
+
+    Raises
+    ------
+    ValueError
+        A field outside its range, naming the key (``rod.<name>``) and the range.
+    """
 
     SECTION: ClassVar[str] = "rod"
 
@@ -263,7 +311,22 @@ class RodConfig(_Section):
 
 @dataclass(frozen=True)
 class FloorConfig(_Section):
-    """The floor: stiffness κ_b and bending limit β."""
+    """The floor: stiffness κ_b and bending limit β.
+
+    Parameters
+    ----------
+    kappa_b : float
+        Stiffness κ_b of the floor [N], > 0.
+    beta : float
+        Bending limit β of the floor [m], > 0: its stress is singular at u_0 = −β.
+    law : str
+        Name of a registered floor stress law σ_b (``rodjit.laws.law_names("floor")``).
+
+    Raises
+    ------
+    ValueError
+        A field outside its range, naming the key and the range.
+    """
 
     SECTION: ClassVar[str] = "floor"
 
@@ -274,7 +337,18 @@ class FloorConfig(_Section):
 
 @dataclass(frozen=True)
 class GravityConfig(_Section):
-    """Signed acceleration along +u; −9.81 pulls down."""
+    """Signed acceleration along +u; −9.81 pulls down.
+
+    Parameters
+    ----------
+    g : float
+        Gravitational acceleration along +u [m s⁻²], finite.
+
+    Raises
+    ------
+    ValueError
+        A non-finite value, naming ``gravity.g``.
+    """
 
     SECTION: ClassVar[str] = "gravity"
 
@@ -283,7 +357,22 @@ class GravityConfig(_Section):
 
 @dataclass(frozen=True)
 class InitialConfig(_Section):
-    """Initial state: bottom height, uniform velocity, uniform pre-strain."""
+    """Initial state: bottom height, uniform velocity, uniform pre-strain.
+
+    Parameters
+    ----------
+    height : float
+        Initial height u_0 of the bottom end [m], > −floor.beta (checked by ``Config``).
+    velocity : float
+        Initial velocity of every node [m s⁻¹], finite.
+    strain : float
+        Initial uniform strain of the rod, > −1.
+
+    Raises
+    ------
+    ValueError
+        A field outside its range, naming the key and the range.
+    """
 
     SECTION: ClassVar[str] = "initial"
 
@@ -294,7 +383,36 @@ class InitialConfig(_Section):
 
 @dataclass(frozen=True)
 class TimeConfig(_Section):
-    """Time span and stepping; ``dt`` set means fixed steps, unset means adaptive."""
+    """Time span and stepping; ``dt`` set means fixed steps, unset means adaptive.
+
+    Parameters
+    ----------
+    t_end : float
+        Time at which the run ends [s], > 0.
+    integrator : str
+        The time integrator, one of ``INTEGRATORS`` (see *Choosing an integrator*).
+    cfl : float
+        Fraction of the stability limit taken as the step, in (0, 1] (``verlet`` and
+        ``semi-implicit`` under ``control = "cfl"``).
+    control : str
+        Step control of ``verlet`` and ``semi-implicit``, one of ``CONTROLS``:
+        ``"tolerance"`` (steps from ``rtol``/``atol``, stability as a cap) or ``"cfl"``.
+    dt_max : float or None
+        Largest adaptive step [s], > 0; None: no cap beyond the scheme's own.
+    dt_min : float
+        Smallest step before the run fails [s], > 0 and < ``dt_max``.
+    dt : float or None
+        Fixed time step [s], > 0; None (the default) for adaptive steps.
+    rtol : float
+        Relative tolerance of the local error per step, in (0, 1).
+    atol : float
+        Absolute tolerance of the local error per step (heights u) [m], > 0.
+
+    Raises
+    ------
+    ValueError
+        A field outside its range, or ``dt_min >= dt_max``, naming the key.
+    """
 
     SECTION: ClassVar[str] = "time"
 
@@ -315,7 +433,22 @@ class TimeConfig(_Section):
 
 @dataclass(frozen=True)
 class OutputConfig(_Section):
-    """Output schedule (simulated seconds between samples) and HDF5 compression."""
+    """Output schedule (simulated seconds between samples) and HDF5 compression.
+
+    Parameters
+    ----------
+    snapshot_interval : float
+        Simulated time between snapshots of u and v [s], >= 0 (0 disables snapshots).
+    diagnostics_interval : float
+        Simulated time between diagnostics rows [s], >= 0 (0 disables diagnostics).
+    compression : str
+        Compression of the HDF5 tables, one of ``COMPRESSIONS``.
+
+    Raises
+    ------
+    ValueError
+        A field outside its range, naming the key and the range.
+    """
 
     SECTION: ClassVar[str] = "output"
 
@@ -362,6 +495,32 @@ _SECTIONS = {"rod": RodConfig, "floor": FloorConfig, "gravity": GravityConfig,
 class Config:
     """A complete run configuration (defaults: the built-in run, the paper's first figure).
 
+    Frozen: ``override`` returns a new configuration.  Every key is listed, with its unit,
+    range and default, in the configuration reference.
+
+    Parameters
+    ----------
+    rod : RodConfig
+        The rod (``rod.*`` keys).
+    floor : FloorConfig
+        The floor (``floor.*``).
+    gravity : GravityConfig
+        Gravity (``gravity.g``).
+    initial : InitialConfig
+        The initial state (``initial.*``).
+    time : TimeConfig
+        Time span, integrator and step control (``time.*``).
+    output : OutputConfig
+        Output schedule and compression (``output.*``).
+
+    Raises
+    ------
+    ValueError
+        A section of the wrong type, an unregistered law, or ``initial.height`` not above
+        ``-floor.beta``.
+
+    Examples
+    --------
     >>> cfg = Config().override({"rod.mu": 100.0})
     >>> cfg.rod.mu
     100.0
@@ -383,8 +542,14 @@ class Config:
 
     # ---- construction -------------------------------------------------------------------
     def warnings(self) -> tuple[str, ...]:
-        """What this configuration's results cannot be trusted for (empty: nothing known):
-        the shock-forming μ = γ = 0 model, verlet at large μ."""
+        """What this configuration's results cannot be trusted for.
+
+        Returns
+        -------
+        tuple of str
+            One sentence per known limitation (empty: nothing known): the shock-forming
+            μ = γ = 0 model, verlet at large μ.
+        """
         out = []
         if self.rod.mu == 0 and self.rod.gamma == 0:
             out.append(SHOCK_WARNING)
@@ -394,12 +559,44 @@ class Config:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Config":
-        """Build from nested ``{"rod": {"mu": 1.0}}`` and/or dotted ``{"rod.mu": 1.0}``."""
+        """Build from nested and/or dotted keys.
+
+        Parameters
+        ----------
+        data : Mapping
+            Nested ``{"rod": {"mu": 1.0}}`` and/or dotted ``{"rod.mu": 1.0}``; missing keys
+            take their defaults.
+
+        Returns
+        -------
+        Config
+
+        Raises
+        ------
+        ValueError
+            An unknown key (naming the closest valid one) or a value out of range.
+        """
         return cls().override(_flatten(data))
 
     @classmethod
     def from_toml(cls, path: str | Path) -> "Config":
-        """Load a TOML file; missing keys take their defaults, unknown keys are errors."""
+        """Load a TOML file; missing keys take their defaults, unknown keys are errors.
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file (sections ``[rod]``, ``[floor]``, ...).
+
+        Returns
+        -------
+        Config
+
+        Raises
+        ------
+        ValueError
+            The file is missing, unreadable or not TOML, or a key is unknown or out of
+            range; the message names the file or the key.
+        """
         path = Path(path)
         try:
             with open(path, "rb") as fh:
@@ -418,6 +615,23 @@ class Config:
 
     @classmethod
     def from_toml_string(cls, text: str) -> "Config":
+        """Read a configuration from TOML text (as ``from_toml`` reads a file).
+
+        Parameters
+        ----------
+        text : str
+            TOML text with sections ``[rod]``, ``[floor]``, ...; missing keys take their
+            defaults.
+
+        Returns
+        -------
+        Config
+
+        Raises
+        ------
+        ValueError
+            The text is not TOML, or a key is unknown or out of range.
+        """
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
@@ -431,6 +645,20 @@ class Config:
         A key added to rodjit after the file was written takes the value that reproduces
         the old behaviour, not today's default: files written before ``time.control``
         existed stepped by ``time.cfl`` (``"cfl"``), so they resume bit for bit.
+
+        Parameters
+        ----------
+        text : str
+            The TOML text stored in a run or sweep file.
+
+        Returns
+        -------
+        Config
+
+        Raises
+        ------
+        ValueError
+            The text is not TOML, or a key is unknown or out of range.
         """
         try:
             data = tomllib.loads(text)
@@ -446,6 +674,21 @@ class Config:
 
         Values may be strings in TOML syntax (``"1e-3"``, ``"'verlet'"``, ``"none"``), as the
         command line's ``--set`` passes them, and NumPy numbers.
+
+        Parameters
+        ----------
+        changes : Mapping
+            Dotted key -> new value.
+
+        Returns
+        -------
+        Config
+            A new configuration; ``self`` is unchanged.
+
+        Raises
+        ------
+        ValueError
+            An unknown key (naming the closest valid one) or a value out of range.
         """
         return self._replaced(changes, text=True)
 
@@ -468,14 +711,33 @@ class Config:
 
     # ---- export -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, dict[str, Any]]:
+        """The configuration as nested plain values, ``{"rod": {"N": 5, ...}, ...}``.
+
+        Returns
+        -------
+        dict
+            Section name -> key -> value; ``Config.from_dict`` reads it back.
+        """
         return {name: dataclasses.asdict(getattr(self, name)) for name in _SECTIONS}
 
     def flat(self) -> dict[str, Any]:
-        """``{"rod.N": 5, "rod.kappa": 100.0, ...}``"""
+        """The configuration as dotted keys, ``{"rod.N": 5, "rod.kappa": 100.0, ...}``.
+
+        Returns
+        -------
+        dict
+            Dotted key -> value, every key of ``valid_keys()``.
+        """
         return {f"{s}.{k}": v for s, d in self.to_dict().items() for k, v in d.items()}
 
     def to_toml(self) -> str:
-        """The full resolved configuration as TOML (unset optional keys are commented)."""
+        """The full resolved configuration as TOML (unset optional keys are commented).
+
+        Returns
+        -------
+        str
+            TOML text that ``from_toml_string`` reads back to an equal configuration.
+        """
         lines = []
         for section, values in self.to_dict().items():
             lines.append(f"[{section}]")
@@ -489,7 +751,13 @@ class Config:
 
     def commented_toml(self) -> str:
         """``to_toml`` with each key preceded by a comment: meaning, unit, default, range
-        (``rodjit config``).  Valid TOML that ``from_toml_string`` reads back."""
+        (``rodjit config``).
+
+        Returns
+        -------
+        str
+            Valid TOML that ``from_toml_string`` reads back.
+        """
         lines = []
         for section, values in self.to_dict().items():
             defaults = dataclasses.asdict(_SECTIONS[section]())
@@ -502,6 +770,18 @@ class Config:
         return "\n".join(lines)
 
     def get(self, key: str) -> Any:
+        """The value of one dotted key.
+
+        Parameters
+        ----------
+        key : str
+            A dotted key, e.g. ``"rod.mu"``.
+
+        Returns
+        -------
+        object
+            Its value (None for an unset optional key).
+        """
         section, name = key.split(".", 1)
         return getattr(getattr(self, section), name)
 
@@ -557,7 +837,21 @@ def _strip_quotes(text: str) -> str:
 
 
 def parse_value(key: str, text: str) -> Any:
-    """Parse a command-line value in TOML syntax; ``none`` unsets an optional key."""
+    """Parse a command-line value in TOML syntax; ``none`` unsets an optional key.
+
+    Parameters
+    ----------
+    key : str
+        The dotted key the value is for (its field checks the result).
+    text : str
+        The value as typed, e.g. ``"1e-3"`` or ``"'verlet'"``.
+
+    Returns
+    -------
+    object
+        The parsed value; None for ``none``/``null``/``unset``; text that is not a TOML
+        value is returned as is, for the field's check to reject with its range.
+    """
     text = text.strip()
     if text.lower() in ("none", "null", "unset"):
         return None

@@ -28,6 +28,23 @@ def preset_names() -> list[str]:
 
 
 def preset_path(name: str):
+    """The TOML file of preset ``name`` (in the installed package data).
+
+    Parameters
+    ----------
+    name : str
+        A name of ``preset_names()``, e.g. ``"paper-mu100"``.
+
+    Returns
+    -------
+    importlib.resources.abc.Traversable or pathlib.Path
+        The file; ``Config.from_toml_string(path.read_text())`` reads it.
+
+    Raises
+    ------
+    ValueError
+        An unknown preset, naming the available ones.
+    """
     files = _files()
     key = name.replace("-", "_") + ".toml"
     if key not in files:

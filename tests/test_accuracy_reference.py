@@ -158,7 +158,7 @@ def _rodjit_first_bounce(integrator, mu, n):
 # Every integrator at its defaults (time.control = "tolerance"), at every μ where it is
 # allowed: verlet splits its viscous sub-step off the kicks and is not allowed above
 # rodjit.config.VERLET_MU_MAX (the configuration warns; measured 2.8e-4 at μ = 100, N = 5,
-# and steps ∝ μN²; see tests/reference/notes/README.md and docs/INTEGRATORS.md).
+# and steps ∝ μN²; see tests/reference/notes/README.md and docs/integrators.md).
 _CASES = [(i, mu, n) for i in ("verlet", "semi-implicit", "energy") for mu in (1, 100, 1000)
           for n in (5, 200) if not (i == "verlet" and mu > VERLET_MU_MAX)]
 

@@ -1,4 +1,4 @@
-"""A default run over 200 s at μ = 0 keeps its energy to 1e-6 relative (docs/INTEGRATORS.md)."""
+"""A default run over 200 s at μ = 0 keeps its energy to 1e-6 relative (docs/integrators.md)."""
 import warnings
 
 import numpy as np

@@ -6,6 +6,9 @@ from __future__ import annotations
 import importlib
 import importlib.util
 import inspect
+import json
+import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -86,6 +89,17 @@ def test_site_has_every_guide_page_and_the_integrator_table(site):
     assert "rodjit:integrators" not in html
 
 
+def test_model_page_renders_its_math_and_the_unit_system_is_written_once(site):
+    html = (site / "MODEL" / "index.html").read_text()
+    assert html.count('class="arithmatex"') >= 5          # $...$ and $$...$$ of MODEL.md
+    assert "$$" not in html and "tex-mml-chtml.js" in html and "mathjax.js" in html
+    assert "give every unit as a UDUNITS string" in " ".join(
+        (site / "units" / "index.html").read_text().split())
+    opening = "The model is written for a rod of natural length 1 and mass 1"
+    sources = [p for p in (ROOT / "docs").rglob("*.md") if opening in p.read_text()]
+    assert sources == [ROOT / "docs" / "MODEL.md"]
+
+
 def test_configuration_reference_lists_every_key_with_range_default_and_unit():
     page = generate.configuration_page()
     rows = {line.split("|")[1].strip(): line for line in page.splitlines()
@@ -109,11 +123,26 @@ def test_configuration_reference_lists_every_key_with_range_default_and_unit():
             assert meaning in line, key
 
 
-def _has_parameters(obj) -> bool:
-    doc = inspect.getdoc(obj) or ""
-    if "Parameters\n----------" in doc:
-        return True
-    return inspect.isclass(obj) and "Attributes\n----------" in doc
+_SECTION_RULE = re.compile(r"^(\w[\w ]*)\n-{3,}$", re.M)
+
+
+def _sections(doc: str) -> dict[str, str]:
+    """numpydoc sections of a docstring: title -> body."""
+    marks = list(_SECTION_RULE.finditer(doc))
+    return {m.group(1): doc[m.end():marks[i + 1].start() if i + 1 < len(marks) else None]
+            for i, m in enumerate(marks)}
+
+
+def _documented_names(doc: str) -> set[str]:
+    """Names described in the Parameters (or, for a class, Attributes) section: the
+    unindented ``name : type`` / ``a, b : type`` lines."""
+    sections = _sections(doc)
+    body = sections.get("Parameters", "") + sections.get("Attributes", "")
+    names = set()
+    for line in body.splitlines():
+        if line and not line[0].isspace():
+            names.update(n.strip().lstrip("*") for n in line.split(" : ")[0].split(","))
+    return names
 
 
 def _parameters(obj) -> list[str]:
@@ -122,47 +151,115 @@ def _parameters(obj) -> list[str]:
     except (TypeError, ValueError):
         return []
     return [p.name for p in sig.parameters.values()
-            if p.name not in ("self", "cls") and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+            if p.name not in ("self", "cls") and not p.name.startswith("_")
+            and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
 
 
-# Public names whose docstrings still describe their parameters in prose, not in a numpydoc
-# "Parameters" section.  The test fails when one of them gains the section (remove it here)
-# and for every other public name, including new ones.
-PROSE_DOCSTRINGS = {"Config", "Result", "SimulationError", "RunInterrupted", "SweepTable",
-                    "SweepInterrupted", "converge", "fit", "fit_table", "Convergence",
-                    "FitResult", "FitError", "TableFit"}
+def _public_callables():
+    """``(qualified name, object)`` of every public callable: the names in the ``__all__``
+    of every module with an API page, and the public methods and properties of the public
+    classes among them."""
+    seen = set()
+    for module in generate.public_modules():
+        mod = importlib.import_module(module)
+        for name in getattr(mod, "__all__", []):
+            obj = getattr(mod, name)
+            if inspect.ismodule(obj) or not callable(obj) or id(obj) in seen:
+                continue
+            seen.add(id(obj))
+            yield f"{module}.{name}", obj
+            if not inspect.isclass(obj):
+                continue
+            for member, attr in vars(obj).items():
+                if member.startswith("_"):
+                    continue
+                if isinstance(attr, (staticmethod, classmethod)):
+                    attr = attr.__func__
+                if isinstance(attr, property) or inspect.isfunction(attr):
+                    yield f"{module}.{name}.{member}", attr
+
+
+def test_public_callables_cover_modules_and_methods():
+    names = {n for n, _ in _public_callables()}
+    for expected in ("rodjit.Config", "rodjit.Config.override", "rodjit.SweepTable.to_xarray",
+                     "rodjit.Result.n_bounces", "rodjit.laws.register",
+                     "rodjit.analysis.first_impact", "rodjit.sweeps.Grid.config",
+                     "rodjit.plotting.figure", "rodjit.presets.preset_path"):
+        assert expected in names, expected
+
+
+def test_documented_names_reads_numpydoc_parameter_lines():
+    doc = inspect.cleandoc("""What it does.
+
+        Parameters
+        ----------
+        a, b : float
+            The ends.
+        **options
+            Passed on.
+
+        Returns
+        -------
+        c : float
+            Not a parameter.
+        """)
+    assert _documented_names(doc) == {"a", "b", "options"}
 
 
 def test_every_public_callable_documents_its_parameters():
     missing = []
-    for name in PROSE_DOCSTRINGS:
-        assert not _has_parameters(getattr(rodjit, name)), f"{name} is documented: drop it from PROSE_DOCSTRINGS"
-    for name in sorted(set(rodjit.__all__) - PROSE_DOCSTRINGS):
-        obj = getattr(rodjit, name)
-        if inspect.ismodule(obj) or not callable(obj):
-            continue
-        if not (inspect.getdoc(obj) or "").strip():
+    for name, obj in _public_callables():
+        doc = inspect.getdoc(obj.fget if isinstance(obj, property) else obj) or ""
+        if not doc.strip():
             missing.append(f"{name}: no docstring")
             continue
+        if isinstance(obj, property):
+            continue
         params = _parameters(obj)
-        if params and not _has_parameters(obj):
+        if not params:
+            continue
+        if not _sections(doc).keys() & {"Parameters", "Attributes"}:
             missing.append(f"{name}: no Parameters section for {params}")
             continue
-        doc = inspect.getdoc(obj)
-        for p in params:
-            if p not in doc:
-                missing.append(f"{name}: parameter {p} undocumented")
+        undocumented = [p for p in params if p not in _documented_names(doc)]
+        if undocumented:
+            missing.append(f"{name}: parameters {undocumented} not in its Parameters section")
     assert not missing, "\n".join(missing)
 
 
 def test_verification_figures_are_made_by_the_script(tmp_path):
+    """The script makes every committed figure and the numbers the page quotes; the
+    committed numbers are the ones a fresh run measures (to rounding across machines)."""
     pytest.importorskip("matplotlib")
     proc = subprocess.run([sys.executable, str(ROOT / "docs" / "scripts" / "verification.py"),
                            str(tmp_path)], capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, proc.stderr[-3000:]
+    committed = ROOT / "docs" / "figures"
     made = sorted(p.name for p in tmp_path.glob("*.png"))
-    assert made == sorted(p.name for p in (ROOT / "docs" / "figures").glob("*.png"))
+    assert made == sorted(p.name for p in committed.glob("*.png"))
     page = (ROOT / "docs" / "verification.md").read_text()
     for name in made:
         assert (tmp_path / name).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
         assert f"figures/{name}" in page
+    fresh = json.loads((tmp_path / "verification.json").read_text())
+    stored = json.loads((committed / "verification.json").read_text())
+    assert sorted(fresh) == sorted(stored) and len(fresh) >= 4
+    for name, entry in fresh.items():
+        assert f"<!-- rodjit:measured {name} -->" in page, name
+        assert sorted(entry["numbers"]) == sorted(stored[name]["numbers"]), name
+        for key, value in entry["numbers"].items():
+            assert math.isfinite(value), (name, key)
+            assert value == pytest.approx(stored[name]["numbers"][key], rel=1e-3, abs=1e-12), \
+                f"{name} {key}: rerun docs/scripts/verification.py docs/figures"
+    assert set(generate.MEASURED_MARKER.findall(page)) == set(fresh)
+
+
+def test_measured_markers_become_the_captions_of_the_committed_numbers():
+    stored = json.loads((ROOT / "docs" / "figures" / "verification.json").read_text())
+    page = (ROOT / "docs" / "verification.md").read_text()
+    out = generate.on_page_markdown(page, None, None, None)
+    assert "rodjit:measured" not in out
+    for entry in stored.values():
+        assert entry["caption"] in out
+    with pytest.raises(KeyError, match="no numbers for nothing.png"):
+        generate.measured_caption("nothing.png")

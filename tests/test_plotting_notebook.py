@@ -202,6 +202,18 @@ def test_animation_reads_one_snapshot_at_a_time(run_file, tmp_path, monkeypatch)
     assert sizes and max(sizes) == CFG.rod.N + 1
 
 
+def test_animation_leaves_no_pyplot_figure_to_redraw_from_the_closed_file(run_file, tmp_path):
+    """Under pyplot (a notebook) an open figure would be drawn after the cell, running the
+    animation's frame function on a file source already closed."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    before = plt.get_fignums()
+    rodjit.animate(run_file, tmp_path / "rod.gif", fps=2, duration=1)
+    assert plt.get_fignums() == before
+
+
 def test_cli_plot_and_animate(run_file, sweep_file, tmp_path):
     runner = CliRunner()
     for suffix in ("png", "pdf", "svg"):

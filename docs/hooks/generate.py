@@ -8,7 +8,9 @@ Generated (never written into ``docs/``, so they cannot go stale in the reposito
 - ``reference/api/<module>.md``: one mkdocstrings page per public module (``PUBLIC_MODULES``
   plus every module named in ``rodjit.__all__``);
 - in any page, the marker ``<!-- rodjit:integrators -->`` becomes the table of the
-  integrators registered in ``rodjit.stepping.registry``.
+  integrators registered in ``rodjit.stepping.registry``, and ``<!-- rodjit:measured
+  NAME.png -->`` the caption ``docs/scripts/verification.py`` wrote for figure NAME.png
+  into ``docs/figures/verification.json`` (the numbers that figure measures).
 
 The command-line reference is ``reference/cli.md``: mkdocs-click renders every verb of
 ``rodjit.cli:main`` from the click commands.
@@ -18,6 +20,8 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import inspect
+import json
+import re
 import sys
 from pathlib import Path
 
@@ -29,6 +33,8 @@ PUBLIC_MODULES = ["rodjit", "rodjit.config", "rodjit.laws", "rodjit.analysis",
                   "rodjit.sweeps", "rodjit.plotting", "rodjit.presets"]
 
 INTEGRATOR_MARKER = "<!-- rodjit:integrators -->"
+MEASURED_MARKER = re.compile(r"<!-- rodjit:measured (\S+) -->")
+MEASURED_FILE = ROOT / "docs" / "figures" / "verification.json"
 
 
 def public_modules() -> list[str]:
@@ -176,7 +182,16 @@ def on_config(config):
     return config
 
 
+def measured_caption(figure: str) -> str:
+    """The caption of a verification figure, with the numbers it measured."""
+    measured = json.loads(MEASURED_FILE.read_text())
+    if figure not in measured:
+        raise KeyError(f"{MEASURED_FILE.name} has no numbers for {figure}: run "
+                       f"docs/scripts/verification.py docs/figures")
+    return measured[figure]["caption"]
+
+
 def on_page_markdown(markdown, page, config, files):
     if INTEGRATOR_MARKER in markdown:
         markdown = markdown.replace(INTEGRATOR_MARKER, integrator_table())
-    return markdown
+    return MEASURED_MARKER.sub(lambda m: measured_caption(m.group(1)), markdown)

@@ -77,8 +77,35 @@ class ObservableConvergence:
 @dataclass
 class Convergence:
     """Result of ``converge``: per observable the values along the ladder, observed orders,
-    the extrapolated continuum value and its error; ``warnings`` for ladders outside the
-    asymptotic range or values that do not settle."""
+    the extrapolated continuum value and its error.
+
+    ``conv["restitution_first"]`` is one observable's study (``.value``, ``.error``,
+    ``.space.orders``, ``.space.status``); ``repr`` prints the table ``rodjit converge``
+    prints.
+
+    Attributes
+    ----------
+    base : Config
+        The configuration every level starts from.
+    key : str
+        The ladder's key (e.g. ``"rod.N"``).
+    levels : list
+        The ladder's values, coarse to fine.
+    time_key : str or None
+        The tolerance ladder's key (``"time.rtol"``, ``"time.cfl"``, ``"time.dt"``), None
+        without one.
+    time_levels : list
+        The tolerance ladder's values (empty without one).
+    time_at : object
+        The ``key`` value the tolerance ladder ran at (None without one).
+    observables : dict
+        Observable name -> its study (``ObservableConvergence``).
+    warnings : list of str
+        Failed runs, the model's own limits, ladders outside the asymptotic range and
+        values that do not settle.
+    runs, time_runs : list of dict
+        Each level's observables and status (space ladder, tolerance ladder).
+    """
 
     base: object
     key: str
@@ -108,6 +135,15 @@ class Convergence:
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
+        """The study as plain values (what ``save`` writes, ``load_convergence`` reads).
+
+        Returns
+        -------
+        dict
+            ``key``, ``levels``, ``time_key``, ``time_levels``, ``time_at``, ``config``
+            (nested, as ``Config.to_dict``), ``observables`` (name -> value, error and the
+            space and time studies) and ``warnings``.
+        """
         return {"key": self.key, "levels": list(self.levels), "time_key": self.time_key,
                 "time_levels": list(self.time_levels), "time_at": self.time_at,
                 "config": self.base.to_dict(),
@@ -118,7 +154,20 @@ class Convergence:
         """Write an HDF5 file (root attribute ``rodjit_kind = "convergence"``): root
         attributes key, levels, time key/levels, config (TOML), warnings; one group per
         observable with datasets ``h``, ``values``, ``orders`` (and ``time_h``,
-        ``time_values``) and attributes value, error, order, status, message, time_error."""
+        ``time_values``) and attributes value, error, order, status, message, time_error.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The file to write (written to ``path.part``, then renamed).
+        overwrite : bool
+            Replace an existing file.
+
+        Raises
+        ------
+        ValueError
+            ``path`` exists and ``overwrite`` is false.
+        """
         import os
 
         from importlib.metadata import PackageNotFoundError, version
@@ -166,7 +215,18 @@ def load_convergence(path) -> dict:
     Parameters
     ----------
     path : str or os.PathLike
-        A file written by ``Convergence.save`` or ``rodjit converge``."""
+        A file written by ``Convergence.save`` or ``rodjit converge``.
+
+    Returns
+    -------
+    dict
+        The root attributes, and ``observables``: name -> its datasets and attributes.
+
+    Raises
+    ------
+    ValueError
+        The file is not a rodjit convergence file.
+    """
     import h5py
 
     with h5py.File(path, "r") as f:
@@ -189,15 +249,51 @@ def _values_of(runs, name):
 def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVABLES,
              extra=None, time_at=None, jobs=None, scheduler=None,
              merge_time=None) -> Convergence:
-    """Run ``config`` at every level of ``ladder`` (default ``{"rod.N": [25, 50, 100,
-    200, 400]}``) and, with ``also`` (e.g. ``{"time.rtol": [1e-5, 1e-6, 1e-7]}``), at every
-    level of that tolerance ladder at ``time_at`` (default: the second finest level of
-    ``ladder``); study each of ``observables`` (names of
-    ``rodjit.analysis.OBSERVABLES``, or of ``extra``: name -> function(Result) -> float).
+    """Observables of ``config`` along a resolution ladder: observed orders, the
+    Richardson-extrapolated continuum value and an error estimate for each.
 
-    All runs go to the sweep engine's executors at once (``jobs``, ``scheduler`` as for
-    ``rodjit.sweep``).  The time contribution is |value at the base tolerance − the
-    tolerance ladder's converged value| at ``time_at``, added to the error."""
+    All runs go to the sweep engine's executors at once.  With a tolerance ladder
+    (``also``), the time contribution |value at the base tolerance − the tolerance ladder's
+    converged value| at ``time_at`` is added to each error.
+
+    Parameters
+    ----------
+    config : Config or None
+        The base configuration; None is ``Config()``.
+    ladder : dict, optional
+        One key and its levels, coarse to fine (lists, or ``"linspace(...)"`` text as on
+        the command line); default ``{"rod.N": [25, 50, 100, 200, 400]}``.
+    also : dict, optional
+        A tolerance ladder, e.g. ``{"time.rtol": [1e-5, 1e-6, 1e-7]}``; its key must be
+        what chooses the integrator's steps (``time.rtol``/``time.atol`` under tolerance
+        control, ``time.cfl`` under ``time.control = "cfl"``, ``time.dt``).
+    observables : sequence of str
+        Names of ``rodjit.analysis.OBSERVABLES`` or of ``extra`` to study.
+    extra : dict, optional
+        Further observables: name -> function(Result) -> float.
+    time_at : optional
+        The ``ladder`` level the tolerance ladder runs at (default: the second finest).
+    jobs : int, optional
+        Worker processes, as for ``rodjit.sweep`` (default: every core).
+    scheduler : str, optional
+        Executor, as for ``rodjit.sweep`` (``"processes"``, ``"local"``,
+        ``"tcp://HOST:PORT"``, ``"inline"``).
+    merge_time : float, optional
+        Contact episodes closer than this [s] are one macroscopic contact (default: a few
+        periods of the rod's highest mode).
+
+    Returns
+    -------
+    Convergence
+
+    Raises
+    ------
+    TypeError
+        ``config`` is not a ``rodjit.Config``.
+    ValueError
+        A ladder that is not one key with at least two monotonically refining levels, an
+        unknown observable, or a tolerance key that does not choose the steps.
+    """
     from ..config import Config
     from .observables import OBSERVABLES
 

@@ -16,8 +16,18 @@ SCAN_POINTS = 8
 
 
 class FitError(ValueError):
-    """The target cannot be fitted in the bracket (unreachable, or crossed more than once);
-    ``samples`` holds the scanned ``(value, observable)`` pairs."""
+    """The target cannot be fitted in the bracket (unreachable, crossed more than once, or
+    the observable undefined at a scanned value).
+
+    A ``ValueError``, so the command line reports it as bad input.
+
+    Parameters
+    ----------
+    message : str
+        Why, naming the range the bracket reaches or where the target is crossed.
+    samples : sequence of (float, float)
+        The scanned ``(value, observable)`` pairs, kept as the ``samples`` attribute.
+    """
 
     def __init__(self, message: str, samples=()):
         super().__init__(message)
@@ -26,11 +36,40 @@ class FitError(ValueError):
 
 @dataclass
 class FitResult:
-    """``value`` of ``key`` where ``observable`` = ``target`` (reached: ``achieved``);
-    ``sensitivity`` d(observable)/d(key) there; ``resolution_shift`` how far the answer
-    moves from the coarser resolution (``coarse``: its resolution) to the one fitted
-    (estimated by linearisation at the answer); ``evaluations`` runs (ladders count as
-    one), ``samples`` every (value, observable) evaluated."""
+    """The answer of ``fit``: the ``value`` of ``key`` where ``observable`` = ``target``.
+
+    Attributes
+    ----------
+    key : str
+        The fitted configuration key.
+    observable : str
+        The observable matched (a name of ``rodjit.analysis.OBSERVABLES``).
+    target : float
+        Its target value.
+    value : float
+        The fitted value of ``key``.
+    achieved : float
+        The observable at ``value``.
+    sensitivity : float
+        d(observable)/d(key) at the answer (from the final bracket).
+    bracket : tuple of float
+        The ``(lo, hi)`` searched.
+    resolution_shift : float
+        How far the answer moves from the coarser resolution ``coarse`` to the one fitted,
+        estimated by linearisation at the answer (NaN when not measured).
+    coarse : str
+        That coarser resolution, e.g. ``"rod.N = 2"``.
+    converged : bool
+        Whether the Richardson-extrapolated continuum value was fitted.
+    evaluations : int
+        Runs made (a ladder counts as one).
+    iterations : int
+        Root-finder iterations after the scan.
+    samples : list of (float, float)
+        Every ``(value, observable)`` evaluated, sorted by value.
+    notes : list of str
+        What the caller should know (a non-monotone observable, an iteration limit).
+    """
 
     key: str
     observable: str
@@ -55,6 +94,12 @@ class FitResult:
                 f" = {self.sensitivity:.3g}{shift}; {self.evaluations} evaluations)")
 
     def to_dict(self) -> dict:
+        """Every attribute as plain values (``dataclasses.asdict``; JSON-ready).
+
+        Returns
+        -------
+        dict
+        """
         return asdict(self)
 
 
@@ -138,15 +183,59 @@ def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=No
     """The value of ``key`` in ``bracket`` at which ``target``'s observable (e.g.
     ``{"restitution_first": 0.8}``) takes its value, at the resolution of ``config``.
 
-    ``points`` values (default 8) scan the bracket in parallel (``jobs``, ``scheduler`` as
-    for ``rodjit.sweep``); exactly one crossing of the target must be found, then Illinois
-    false position, safeguarded by bisection, narrows it until the observable is within
-    ``ftol`` of the target or the bracket narrower than ``xtol`` (default 1e-9 of it).
-    ``converged=True`` fits the Richardson-extrapolated continuum value along ``ladder``
-    (default rod.N = N/2, N, 2N of ``config``).  ``coarse``: the resolution
-    (``{"rod.N": n}``) the answer is compared with (default N/2, or the ladder without its
-    finest level).  Raises FitError when the target is outside the range the bracket
-    reaches (naming that range) or is crossed more than once (naming where)."""
+    ``points`` values scan the bracket in parallel; exactly one crossing of the target must
+    be found, then Illinois false position, safeguarded by bisection, narrows it until the
+    observable is within ``ftol`` of the target or the bracket is narrower than ``xtol``.
+
+    Parameters
+    ----------
+    key : str
+        A real-valued configuration key, e.g. ``"rod.mu"``.
+    target : dict
+        One observable and its value, e.g. ``{"restitution_first": 0.8}``.
+    config : Config or None
+        The base configuration; None is ``Config()``.
+    bracket : tuple of float
+        ``(lo, hi)``, finite, lo < hi, both valid values of ``key``.
+    points : int, optional
+        Values scanning the bracket, >= 2 (default 8; geometric when the bracket spans two
+        decades or more).
+    ftol : float
+        Stop when the observable is this close to the target.
+    xtol : float, optional
+        Stop when the bracket is this narrow (default 1e-9 of the bracket).
+    max_iter : int
+        Most root-finder iterations after the scan.
+    converged : bool
+        Fit the Richardson-extrapolated continuum value along ``ladder`` instead of the
+        value at ``config``'s resolution.
+    ladder : dict, optional
+        The resolution ladder for ``converged`` (default ``rod.N`` = N/2, N, 2N).
+    coarse : dict, optional
+        The resolution (``{"rod.N": n}``) the answer is compared with for
+        ``resolution_shift`` (default N/2, or the ladder's finest level alone).
+    jobs : int, optional
+        Worker processes, as for ``rodjit.sweep``.
+    scheduler : str, optional
+        Executor, as for ``rodjit.sweep``.
+    merge_time : float, optional
+        Contact episodes closer than this [s] are one macroscopic contact.
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    FitError
+        The target is outside the range the bracket reaches (naming that range), is
+        crossed more than once (naming where), or the observable is undefined at a scanned
+        value.
+    ValueError
+        An unknown observable, a bad bracket, or a key that is not real-valued.
+    TypeError
+        ``config`` is not a ``rodjit.Config``.
+    """
     from ..config import Config
 
     base = Config() if config is None else config

@@ -22,7 +22,25 @@ __all__ = ["fit_table", "TableFit", "read_measurements"]
 
 
 def read_measurements(path) -> list[dict]:
-    """Rows of a CSV file: configuration keys and observables as floats."""
+    """Rows of a CSV file: configuration keys and observables as floats.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A CSV file whose header names configuration keys, observables and
+        ``sigma_<observable>`` columns; empty cells are left out of their row.
+
+    Returns
+    -------
+    list of dict
+        One dict per row, column name -> float.
+
+    Raises
+    ------
+    ValueError
+        The file is missing or empty, a column is unknown, or a cell is not a number
+        (naming the line and column).
+    """
     from ..config import valid_keys
     from .observables import OBSERVABLES
 
@@ -59,9 +77,33 @@ def read_measurements(path) -> list[dict]:
 
 @dataclass
 class TableFit:
-    """Fitted ``values`` of ``keys`` with standard ``errors`` and ``covariance``;
-    ``residuals`` (model − measured, per row and observable), ``chi2``, iterations,
-    runs."""
+    """The answer of ``fit_table``: fitted ``values`` of ``keys`` with standard ``errors``.
+
+    Attributes
+    ----------
+    keys : list of str
+        The fitted configuration keys.
+    values : list of float
+        Their fitted values, in the order of ``keys``.
+    errors : list of float
+        Standard errors, the square roots of the covariance's diagonal.
+    covariance : list of list of float
+        (JᵀJ)⁻¹, scaled by χ²/(m − p) when the table gives no σ.
+    residuals : list of dict
+        Per row and observable: ``row`` (from 1), ``observable``, ``measured``, ``model``
+        and ``residual`` (model − measured).
+    chi2 : float
+        Sum of the squared weighted residuals at the answer.
+    iterations : int
+        Levenberg–Marquardt iterations.
+    evaluations : int
+        Runs made (every row at every parameter vector tried, Jacobians included).
+    converged : bool
+        Whether the relative change of χ² or of the parameters fell below ``rtol`` (or no
+        step reduced χ² further).
+    notes : list of str
+        What the caller should know (a singular Jacobian, no residual variance).
+    """
 
     keys: list
     values: list
@@ -80,16 +122,61 @@ class TableFit:
         return f"TableFit({parts}; chi2 = {self.chi2:.3g}, {self.evaluations} runs)"
 
     def to_dict(self) -> dict:
+        """Every attribute as plain values (``dataclasses.asdict``; JSON-ready).
+
+        Returns
+        -------
+        dict
+        """
         return asdict(self)
 
 
 def fit_table(keys, table, config=None, *, start=None, bounds=None, jobs=None,
               scheduler=None, max_iter: int = 20, rtol: float = 1e-6, step: float = 1e-3,
               merge_time=None) -> TableFit:
-    """Fit ``keys`` (e.g. ``["rod.mu", "floor.kappa_b"]``) to ``table`` (a CSV path or a
-    list of row dicts, see the module docstring), from ``start`` (default: the values in
-    ``config``), within ``bounds`` (key -> (lo, hi), default the key's valid range).
-    ``step``: relative forward-difference step of the Jacobian."""
+    """Least-squares values of ``keys`` that reproduce a table of measurements.
+
+    Levenberg–Marquardt on the weighted residuals (model − measured)/σ; each iteration's
+    runs (every row, at the trial point and its Jacobian's steps) go to the executors as
+    one parallel batch.
+
+    Parameters
+    ----------
+    keys : sequence of str
+        Real-valued configuration keys to fit, e.g. ``["rod.mu", "floor.kappa_b"]``.
+    table : str, os.PathLike or list of dict
+        A CSV path (read by ``read_measurements``) or rows already read: per row the drop
+        condition (configuration keys), measured observables and optional
+        ``sigma_<observable>`` uncertainties.
+    config : Config or None
+        The base configuration; None is ``Config()``.
+    start : dict, optional
+        Key -> starting value (default: the values in ``config``).
+    bounds : dict, optional
+        Key -> ``(lo, hi)`` (default ``(0, inf)``).
+    jobs : int, optional
+        Worker processes, as for ``rodjit.sweep``.
+    scheduler : str, optional
+        Executor, as for ``rodjit.sweep``.
+    max_iter : int
+        Most Levenberg–Marquardt iterations.
+    rtol : float
+        Converged when χ² or the parameters change by less than this, relatively.
+    step : float
+        Relative forward-difference step of the Jacobian.
+    merge_time : float, optional
+        Contact episodes closer than this [s] are one macroscopic contact.
+
+    Returns
+    -------
+    TableFit
+
+    Raises
+    ------
+    ValueError
+        No keys, a key that is not real-valued, fewer measurements than keys, a σ <= 0,
+        a bad table, or an observable undefined for a row (naming the row).
+    """
     from ..config import Config
     from .observables import OBSERVABLES
 

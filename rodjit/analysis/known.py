@@ -19,7 +19,22 @@ __all__ = ["free_free_frequencies", "spring_wall_impact"]
 def free_free_frequencies(n: int, E: float, k: int | np.ndarray) -> np.ndarray:
     """Angular frequencies of modes ``k`` (1..N) of the semi-discrete free-free rod,
     m_i u_i'' = E((u_{i+1} − u_i) − (u_i − u_{i−1}))/h with end masses h/2: the
-    eigenvalues of M⁻¹K are (4E/h²) sin²(kπh/2)."""
+    eigenvalues of M⁻¹K are (4E/h²) sin²(kπh/2).
+
+    Parameters
+    ----------
+    n : int
+        Number of segments N (h = 1/N).
+    E : float
+        The linearised modulus f'(0) = c² [N].
+    k : int or numpy.ndarray
+        Mode numbers, 1..N (0 is the rigid-body mode).
+
+    Returns
+    -------
+    numpy.ndarray
+        ω_k [rad s⁻¹], the shape of ``k``.
+    """
     h = 1.0 / n
     return 2.0 / h * math.sqrt(E) * np.sin(np.asarray(k) * math.pi * h / 2.0)
 
@@ -36,7 +51,27 @@ def spring_wall_impact(alpha: float, steps_per_transit: int = 20000) -> tuple[fl
     compressed (W < 0).  Contact ends at the first s > 0 with W = 0; the momentum the
     spring gave, α∫(−W) ds, makes the restitution e = α∫(−W) ds − 1.  Integrated with
     the trapezoidal rule on a grid that holds the delay exactly (second order;
-    ``steps_per_transit`` = 20000 leaves errors below 1e-8)."""
+    ``steps_per_transit`` = 20000 leaves errors below 1e-8).
+
+    Parameters
+    ----------
+    alpha : float
+        The stiffness ratio k/E, > 0.
+    steps_per_transit : int
+        Trapezoidal steps per transit time 1/c.
+
+    Returns
+    -------
+    tuple of float
+        ``(c·T_contact, restitution)``.
+
+    Raises
+    ------
+    ValueError
+        ``alpha`` <= 0.
+    RuntimeError
+        The contact does not end within 1000 delays (not reached for alpha > 0).
+    """
     if not alpha > 0:
         raise ValueError(f"alpha = {alpha!r} is out of range (> 0)")
     m = 2 * int(steps_per_transit)          # steps per delay 2

@@ -43,7 +43,19 @@ _LEFT_OPEN = []        # handles of files the disk failed: closing them would wr
 
 
 class RunInterrupted(RuntimeError):
-    """A run stopped by SIGINT/SIGTERM; its file holds a checkpoint (``summary``)."""
+    """A run stopped by SIGINT/SIGTERM; its file holds a checkpoint (``summary``).
+
+    ``resume_file`` continues the run from that checkpoint.
+
+    Parameters
+    ----------
+    message : str
+        Which signal stopped the run, at which simulated time, and how to resume it.
+    signum : int
+        The signal number (``signal.SIGINT``, ``signal.SIGTERM``).
+    summary : RunSummary
+        The summary of the file as checkpointed.
+    """
 
     def __init__(self, message: str, signum: int, summary: RunSummary):
         super().__init__(message)

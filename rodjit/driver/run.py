@@ -38,7 +38,17 @@ NODE_STEPS_PER_CALL = 20_000_000
 
 
 class SimulationError(RuntimeError):
-    """The run could not continue; ``result`` holds everything up to the failure."""
+    """The run could not continue (a step below ``time.dt_min``, a barrier crossed, a
+    non-finite state); ``result`` holds everything up to the failure.
+
+    Parameters
+    ----------
+    message : str
+        What failed and where (simulated time, the step), one line.
+    result : Result or None
+        The run up to the failure, with ``status == "failed"`` (None where no result is
+        kept, e.g. a run streamed to a file, which holds it instead).
+    """
 
     def __init__(self, message: str, result=None):
         super().__init__(message)

@@ -40,9 +40,38 @@ def _title(config) -> str:
 
 def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
            t_range=None, figsize=None):
-    """The matplotlib Figure of kind ``kind`` for a run (a ``Result`` or a run file path);
-    with ``ax``, drawn into that axes (and its figure returned).  ``quantity`` (strain, u,
-    v) is what ``spacetime`` colours; ``t_range=(t0, t1)`` limits the time axis."""
+    """The matplotlib Figure of kind ``kind`` for a run.
+
+    Parameters
+    ----------
+    source : Result or str or os.PathLike
+        A run in memory, or a run file (read lazily, strided to ``MAX_POINTS`` rows).
+    kind : str
+        One of ``KINDS``: ``"heights"`` (node heights, the paper's figures),
+        ``"energy"``, ``"bounces"`` (restitution per bounce), ``"spacetime"``,
+        ``"contact"``.
+    ax : matplotlib.axes.Axes, optional
+        Draw into this axes (its figure is returned) instead of a new figure.
+    quantity : str
+        What ``spacetime`` colours, one of ``QUANTITIES`` (``"strain"``, ``"u"``, ``"v"``).
+    t_range : tuple of float, optional
+        ``(t0, t1)`` [s]: the part of the time axis drawn.
+    figsize : tuple of float, optional
+        Size of a new figure in inches (default 7.5 × 4.5).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Raises
+    ------
+    ValueError
+        An unknown ``kind`` or ``quantity``.
+    NothingToDraw
+        The run has no data for ``kind`` (e.g. snapshots switched off).
+    MissingMatplotlib
+        matplotlib is not installed (the ``[plot]`` extra).
+    """
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     if kind == "spacetime" and quantity not in QUANTITIES:
@@ -62,8 +91,33 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
 
 def plot_file(path, output, kind: str = "heights", *, dpi: int = 150, figsize=None,
               **options) -> Path:
-    """Draw figure ``kind`` of the run file ``path`` into the image file ``output`` (PNG,
-    PDF or SVG by its suffix)."""
+    """Draw figure ``kind`` of the run file ``path`` into the image file ``output``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A run file.
+    output : str or os.PathLike
+        The image to write: PNG, PDF or SVG by its suffix.
+    kind : str
+        One of ``KINDS``, as for ``figure``.
+    dpi : int
+        Resolution of raster images, 10 to 2400.
+    figsize : tuple of float, optional
+        Figure size in inches.
+    **options
+        ``quantity`` and ``t_range``, as for ``figure``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``output``.
+
+    Raises
+    ------
+    ValueError
+        An unknown suffix, ``kind`` or ``quantity``, or ``dpi`` out of range.
+    """
     return save(figure(path, kind, figsize=figsize, **options), output, dpi)
 
 

@@ -55,7 +55,25 @@ OBSERVABLES: dict[str, str] = {
 
 
 class Physics(NamedTuple):
-    """Numbers of the configuration the observables need (``physics_of``)."""
+    """Numbers of the configuration the observables need (``physics_of``).
+
+    Attributes
+    ----------
+    g : float
+        Signed gravity along +u [m s⁻²].
+    wave_speed : float
+        c = sqrt(f'(0)) [m s⁻¹].
+    lift_energy : float
+        Least energy of a state with u_0 >= 0 [J] (−inf: no bound).
+    t_final : float
+        End of the run [s].
+    merge_time : float
+        Contact episodes closer than this [s] are one macroscopic contact.
+    in_contact : bool
+        u_0 < 0 at ``t_final``.
+    contact_start : float
+        Start of the episode still running at ``t_final`` [s] (NaN: none).
+    """
 
     g: float              # signed gravity along +u
     wave_speed: float     # c = sqrt(f'(0))
@@ -67,7 +85,18 @@ class Physics(NamedTuple):
 
 
 def wave_speed(config) -> float:
-    """Elastic wave speed c = sqrt(f'(0)) of the rod law (sqrt(5κ/4) for Aiki–Kosugi)."""
+    """Elastic wave speed c = sqrt(f'(0)) of the rod law (sqrt(5κ/4) for Aiki–Kosugi).
+
+    Parameters
+    ----------
+    config : Config
+        The configuration (its ``rod`` section).
+
+    Returns
+    -------
+    float
+        c [m s⁻¹] in the reference length of the rod (length 1, mass 1).
+    """
     from ..model.laws import get_law
 
     law = get_law("rod", config.rod.law)
@@ -79,7 +108,18 @@ def lift_energy(config) -> float:
     standing on the floor at u_0 = 0 under its weight, each segment compressed by the
     weight above it, f(ε_{j+½}) = g Σ_{i>j} m_i.  The energy never increases, so a run
     whose energy falls below this can never have its bottom leave the floor again.
-    ``-inf`` for g > 0 (no such bound), 0 for g = 0."""
+    ``-inf`` for g > 0 (no such bound), 0 for g = 0.
+
+    Parameters
+    ----------
+    config : Config
+        The configuration (its ``rod`` and ``gravity`` sections).
+
+    Returns
+    -------
+    float
+        The energy [J].
+    """
     from ..model.laws import get_law, lower
     from ..model.system import masses
 
@@ -116,8 +156,26 @@ def lift_energy(config) -> float:
 
 
 def physics_of(result, merge_time: float | None = None) -> Physics:
-    """The Physics of a Result (``merge_time`` default: MERGE_PERIODS · π h/c, the period
-    of the highest mode of the semi-discrete rod, ω_max = 2c/h)."""
+    """The Physics of a Result.
+
+    Parameters
+    ----------
+    result : Result
+        A run, from ``simulate`` or ``load_file``.
+    merge_time : float, optional
+        Contact episodes closer than this [s] are one macroscopic contact; default
+        MERGE_PERIODS · π h/c, the period of the highest mode of the semi-discrete rod
+        (ω_max = 2c/h).
+
+    Returns
+    -------
+    Physics
+
+    Raises
+    ------
+    ValueError
+        ``merge_time`` <= 0.
+    """
     return physics_for(result.config, float(result.t_final), result.u_final,
                        result.diagnostics, result.episodes, result.bounces, merge_time)
 
@@ -162,7 +220,19 @@ def _open_episode_start(diag, episodes, bounces) -> float:
 def energy_vibration(diag) -> np.ndarray:
     """Kinetic + stretch + bending energy about the centre of mass:
     ``energy_kinetic - w²/2 + energy_stretch + energy_bend`` (total mass 1).  It is >= 0,
-    and constant in free flight at μ = 0 (uniform gravity does no work on it)."""
+    and constant in free flight at μ = 0 (uniform gravity does no work on it).
+
+    Parameters
+    ----------
+    diag : dict of str to numpy.ndarray
+        Diagnostics columns with ``cm_velocity``, ``energy_kinetic``, ``energy_stretch``
+        and ``energy_bend``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The vibration energy [J] per sample.
+    """
     w = np.asarray(diag["cm_velocity"])
     return (np.asarray(diag["energy_kinetic"]) - 0.5 * w * w
             + np.asarray(diag["energy_stretch"]) + np.asarray(diag["energy_bend"]))
@@ -170,7 +240,20 @@ def energy_vibration(diag) -> np.ndarray:
 
 def merge_episodes(t_start, t_end, merge_time: float) -> list[tuple[int, int]]:
     """Groups ``(first, last)`` of episode indices whose gaps ``t_start[k+1] - t_end[k]``
-    are all shorter than ``merge_time`` (the micro-contacts of one impact)."""
+    are all shorter than ``merge_time`` (the micro-contacts of one impact).
+
+    Parameters
+    ----------
+    t_start, t_end : array_like
+        Start and end times of the contact episodes [s], in order.
+    merge_time : float
+        Gaps shorter than this [s] merge.
+
+    Returns
+    -------
+    list of (int, int)
+        The first and last episode index of each group.
+    """
     t_start, t_end = np.asarray(t_start), np.asarray(t_end)
     if t_start.size == 0:
         return []
@@ -247,7 +330,29 @@ def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np
     the impact to the release, or to the end), ``min_u0``, ``max_floor_force``,
     ``vibration_ratio`` (energy_vibration over the rigid-body kinetic energy w²/2 at the
     impact: above 1 the bounce is driven by the vibration more than by the fall) and
-    ``open``."""
+    ``open``.
+
+    Parameters
+    ----------
+    diag : dict of str to numpy.ndarray
+        The run's diagnostics columns (``Result.diagnostics``).
+    episodes : dict of str to numpy.ndarray
+        Its contact episodes, ``t_start`` and ``t_end`` (``Result.episodes``).
+    bounces : dict of str to numpy.ndarray
+        Its bounce table (``Result.bounces``).
+    phys : Physics
+        The configuration's numbers, from ``physics_of``.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        The columns above, one entry per macroscopic contact.
+
+    Raises
+    ------
+    ValueError
+        Fewer than two diagnostics samples.
+    """
     # a gap holding no sample cannot be evaluated: gaps up to the sample spacing merge too
     tau = max(phys.merge_time, _check_sampling(diag) * (1 + 1e-9))
     t_s = np.asarray(episodes["t_start"], float)
@@ -339,8 +444,35 @@ def _apex_restitution(g: float, w_i: float, z_i: float, w_r: float, z_r: float) 
 
 @dataclass
 class FirstImpact:
-    """The first macroscopic contact: ``status`` is one of STATUSES, ``reason`` says why a
-    value is missing or zero."""
+    """The first macroscopic contact (``first_impact``; MODEL.md §3).
+
+    Attributes
+    ----------
+    status : str
+        One of STATUSES: ``"lift-off"``, ``"no lift-off"``, ``"open"``, ``"no impact"``.
+    reason : str
+        Why a value is missing or zero (empty after a lift-off).
+    restitution : float
+        −w_release/w_impact of the centre-of-mass velocity (0 without lift-off).
+    restitution_apex : float
+        sqrt of the rebound over the drop apex height of the centre of mass above 1/2.
+    contact_time : float
+        t_release − t_impact [s] (inf without lift-off).
+    t_impact, t_release : float
+        Start and end of the contact [s].
+    n_episodes : int
+        Contact episodes merged into it.
+    w_impact, w_release : float
+        Centre-of-mass velocity at its start and end [m s⁻¹].
+    rebound_speed : float
+        Largest centre-of-mass velocity from the impact to the release [m s⁻¹].
+    min_u0 : float
+        Deepest penetration, the lowest u_0 during the contact [m].
+    max_floor_force : float
+        Largest floor force during the contact [N].
+    energy_vibration_impact, energy_vibration_release : float
+        ``energy_vibration`` at its start and end [J].
+    """
 
     status: str
     reason: str
@@ -359,6 +491,12 @@ class FirstImpact:
     energy_vibration_release: float
 
     def to_dict(self) -> dict:
+        """Every attribute as plain values (``dataclasses.asdict``).
+
+        Returns
+        -------
+        dict
+        """
         return asdict(self)
 
 
@@ -369,7 +507,23 @@ def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
     energy left is below ``phys.lift_energy``, so it can never end (restitution 0, apex
     restitution 0, contact time inf, the rebound speed of the centre of mass reported);
     ``open``: still running but the rod has energy enough to leave (NaN: run longer);
-    ``no impact``: the rod never touched the floor."""
+    ``no impact``: the rod never touched the floor.
+
+    Parameters
+    ----------
+    diag : dict of str to numpy.ndarray
+        The run's diagnostics columns (``Result.diagnostics``).
+    episodes : dict of str to numpy.ndarray
+        Its contact episodes, ``t_start`` and ``t_end`` (``Result.episodes``).
+    bounces : dict of str to numpy.ndarray
+        Its bounce table (``Result.bounces``).
+    phys : Physics
+        The configuration's numbers, from ``physics_of``.
+
+    Returns
+    -------
+    FirstImpact
+    """
     nan = math.nan
     rows = macroscopic_contacts(diag, episodes, bounces, phys)
     if rows["t_impact"].size == 0:

@@ -20,14 +20,44 @@ __all__ = ["Result", "MemorySink"]
 
 @dataclass(repr=False)
 class Result:
-    """Everything a run produced.
+    """Everything a run produced: what ``simulate`` returns and ``load_file`` reads.
 
-    ``t``/``u``/``v``: snapshots (rows are times, columns the nodes at ``x``);
-    ``diagnostics``: column name -> array, the columns of ``records.columns.DIAG_COLUMNS``
-    (``t``, ``dt``, energies, ``dissipated``, the floor and strain extremes, the centre of
-    mass); ``episodes``: ``t_start``, ``t_end``; ``bounces``: ``records.bounces.bounce_table``
-    (MODEL.md §3 columns plus ``open``);
-    ``stats``: steps, rejected steps, wall/compile/run time, node-steps per second.
+    Attributes
+    ----------
+    config : Config
+        The resolved configuration of the run.
+    x : numpy.ndarray
+        Reference positions of the N + 1 nodes [m], shape ``(N + 1,)``.
+    t : numpy.ndarray
+        Snapshot times [s], shape ``(n_snapshots,)``.
+    u : numpy.ndarray
+        Node heights at the snapshots [m], shape ``(n_snapshots, N + 1)``.
+    v : numpy.ndarray
+        Node velocities at the snapshots [m s⁻¹], same shape as ``u``.
+    diagnostics : dict
+        Column name -> array, the columns of ``records.columns.DIAG_COLUMNS`` (``t``,
+        ``dt``, energies, ``dissipated``, the floor and strain extremes, the centre of
+        mass), one row per diagnostics sample.
+    episodes : dict
+        ``t_start``, ``t_end`` arrays: the intervals with the bottom in contact.
+    bounces : dict
+        ``records.bounces.bounce_table``: the MODEL.md §3 columns plus ``open``, one entry
+        per bounce.
+    stats : dict
+        Steps, rejected steps, wall/compile/run time, node-steps per second.
+    status : str
+        ``"completed"``, or the state the run stopped in (``"failed"``; a file read by
+        ``load_file`` keeps the status it records).
+    message : str
+        The reason for a status other than ``"completed"``.
+    t_final : float
+        Simulated time reached [s].
+    u_final, v_final : numpy.ndarray
+        Heights and velocities at ``t_final``, shape ``(N + 1,)``.
+    energy0 : float
+        Total energy at t = 0 [J].
+    dissipated : float
+        Energy dissipated by the viscosity up to ``t_final`` [J].
     """
 
     config: object
@@ -49,6 +79,7 @@ class Result:
 
     @property
     def n_bounces(self) -> int:
+        """Number of rows of ``bounces`` (an open last bounce included)."""
         return int(self.bounces["t_impact"].size)
 
     def energy_error(self) -> float:
@@ -94,7 +125,18 @@ class Result:
 
     def report(self, max_bounces: int | None = 20) -> str:
         """The plain-text report ``rodjit run`` prints: bounces (at most ``max_bounces``
-        rows, None: all), energy, extremes, steps and timings."""
+        rows, None: all), energy, extremes, steps and timings.
+
+        Parameters
+        ----------
+        max_bounces : int or None
+            Most bounce rows shown (the first ones); None shows every bounce.
+
+        Returns
+        -------
+        str
+            The report, several lines.
+        """
         return self.facts().report(max_bounces)
 
     def __repr__(self) -> str:

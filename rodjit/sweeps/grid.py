@@ -122,16 +122,46 @@ def format_value(value: Any) -> str:
 
 @dataclass(frozen=True)
 class Grid:
-    """The swept keys (in order) and their values; points are their Cartesian product."""
+    """The swept keys (in order) and their values; points are their Cartesian product.
+
+    ``len(grid)`` is the number of points; point ``i`` is the ``i``-th of the product in
+    row-major order (the last key varies fastest).
+
+    Attributes
+    ----------
+    keys : tuple of str
+        The swept configuration keys.
+    values : tuple of tuple
+        Each key's values, checked against its type and range.
+    """
 
     keys: tuple[str, ...]
     values: tuple[tuple[Any, ...], ...]
 
     @classmethod
     def from_spec(cls, spec: Mapping[str, Any], max_points: float = MAX_POINTS) -> "Grid":
-        """From ``{"rod.mu": [0, 1, 10], "floor.beta": "linspace(0.01, 0.05, 3)"}``: lists,
-        arrays, or text as on the command line.  A grid of more than ``max_points`` points
-        is refused (ValueError naming the count) before any value is made."""
+        """A grid from key -> values.
+
+        Parameters
+        ----------
+        spec : Mapping or Grid
+            ``{"rod.mu": [0, 1, 10], "floor.beta": "linspace(0.01, 0.05, 3)"}``: lists,
+            arrays, scalars, or text as on the command line (``"0,1,10"``,
+            ``"linspace(a, b, n)"``, ``"logspace(a, b, n)"``); a Grid is returned as is.
+        max_points : float, optional
+            The most points the grid may have; its size is counted from the lengths and the
+            ``linspace``/``logspace`` counts before any value is made.
+
+        Returns
+        -------
+        Grid
+
+        Raises
+        ------
+        ValueError
+            An empty spec, an unknown key, a value outside its key's range, or more than
+            ``max_points`` points (naming the count).
+        """
         if isinstance(spec, Grid):
             _check_size(dict(zip(spec.keys, spec.shape)), max_points)
             return spec
@@ -154,7 +184,17 @@ class Grid:
 
     @classmethod
     def from_json(cls, text: str) -> "Grid":
-        """The grid a sweep file stored (``to_json``); its size was allowed when written."""
+        """The grid a sweep file stores (``to_json``); its size was allowed when written.
+
+        Parameters
+        ----------
+        text : str
+            JSON ``{"key": [values...], ...}``.
+
+        Returns
+        -------
+        Grid
+        """
         return cls.from_spec(json.loads(text), max_points=math.inf)
 
     def to_json(self) -> str:
@@ -163,30 +203,75 @@ class Grid:
 
     @property
     def shape(self) -> tuple[int, ...]:
+        """Number of values per key, in key order."""
         return tuple(len(v) for v in self.values)
 
     def __len__(self) -> int:
         return math.prod(self.shape)
 
     def point(self, index: int) -> dict[str, Any]:
-        """The overrides of point ``index`` (``{"rod.mu": 10.0, ...}``)."""
+        """The overrides of point ``index`` (``{"rod.mu": 10.0, ...}``).
+
+        Parameters
+        ----------
+        index : int
+            The point number, from 0 (row-major: the last key varies fastest).
+
+        Returns
+        -------
+        dict
+            Swept key -> value.
+
+        Raises
+        ------
+        IndexError
+            ``index`` is outside the grid.
+        """
         if not 0 <= index < len(self):
             raise IndexError(f"point {index} is outside the grid of {len(self)} points")
         idx = np.unravel_index(index, self.shape)
         return {k: v[i] for k, v, i in zip(self.keys, self.values, idx)}
 
     def points(self) -> Iterator[dict[str, Any]]:
+        """Every point's overrides, in grid order.
+
+        Yields
+        ------
+        dict
+            Swept key -> value.
+        """
         for combo in itertools.product(*self.values):
             yield dict(zip(self.keys, combo))
 
     def describe(self, index: int) -> str:
-        """``rod.mu=10 floor.beta=0.05``: point ``index`` in a line."""
+        """``rod.mu=10 floor.beta=0.05``: point ``index`` in a line.
+
+        Parameters
+        ----------
+        index : int
+            The point number, from 0 (row-major: the last key varies fastest).
+
+        Returns
+        -------
+        str
+        """
         return " ".join(f"{k}={format_value(v)}" for k, v in self.point(index).items())
 
     def run_name(self, index: int) -> str:
         """File name of the point's run for ``--save-runs``: the index (zero-padded, so the
         names sort in grid order) then each swept key and value; the same grid always gives
-        the same names."""
+        the same names.
+
+        Parameters
+        ----------
+        index : int
+            The point number, from 0 (row-major: the last key varies fastest).
+
+        Returns
+        -------
+        str
+            A portable file name ending in ``.h5``.
+        """
         width = len(str(max(len(self) - 1, 0)))
         parts = [f"{index:0{width}d}"]
         for k, v in self.point(index).items():
@@ -195,7 +280,24 @@ class Grid:
         return re.sub(r"[^A-Za-z0-9._=+-]", "-", name) + ".h5"
 
     def config(self, base: Config, index: int) -> Config:
-        """Point ``index``'s configuration: ``base`` with the point's values."""
+        """Point ``index``'s configuration: ``base`` with the point's values.
+
+        Parameters
+        ----------
+        base : Config
+            The sweep's base configuration.
+        index : int
+            The point number, from 0.
+
+        Returns
+        -------
+        Config
+
+        Raises
+        ------
+        ValueError
+            The point's configuration is invalid, naming the point and the field.
+        """
         try:
             return base.override(self.point(index))
         except ValueError as exc:
@@ -224,8 +326,18 @@ class Grid:
         """Check every point's configuration before anything runs or is written, in time
         that grows with the values, not the points: each key's values were checked on
         their own when the grid was made; the checks that relate keys (``CROSS_CHECKS``)
-        run over the combinations of the swept keys they name.  A bad point raises
-        ValueError naming the point, the field and its range."""
+        run over the combinations of the swept keys they name.
+
+        Parameters
+        ----------
+        base : Config
+            The sweep's base configuration.
+
+        Raises
+        ------
+        ValueError
+            The first invalid point, naming it, the field and its range.
+        """
         flat = base.flat()
         for keys, check in CROSS_CHECKS:
             if not set(keys) & set(self.keys):

@@ -39,7 +39,20 @@ BATCH_ROWS = 256       # results held before a write at most (unless a reader ho
 
 
 class SweepInterrupted(RuntimeError):
-    """A sweep stopped by SIGINT/SIGTERM; its file holds every finished point (``table``)."""
+    """A sweep stopped by SIGINT/SIGTERM; its file holds every finished point (``table``).
+
+    Running the same sweep again with ``resume=True`` runs only the points not finished.
+
+    Parameters
+    ----------
+    message : str
+        Which signal stopped the sweep, how many points finished, and how to resume.
+    signum : int or None
+        The signal number; None when a second interrupt arrived while stopping.
+    table : SweepTable
+        The table at the stop: finished points ``"completed"`` or ``"failed"``, the rest
+        ``"pending"``.
+    """
 
     def __init__(self, message: str, signum: int | None, table: SweepTable):
         super().__init__(message)
@@ -65,7 +78,23 @@ class SweepFailed(RuntimeError):
 
 @dataclass
 class SweepProgress:
-    """Where a sweep stands, passed to ``progress`` after every result and heartbeat."""
+    """Where a sweep stands, passed to ``progress`` after every result and heartbeat.
+
+    Attributes
+    ----------
+    done : int
+        Points finished, earlier sessions of a resumed sweep included.
+    total : int
+        Points in the grid.
+    failed : int
+        Points failed so far.
+    run : int
+        Points finished in this call.
+    todo : int
+        Points this call set out to run.
+    elapsed : float
+        Seconds since this call started.
+    """
 
     done: int          # points finished, earlier sessions included
     total: int

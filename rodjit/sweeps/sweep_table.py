@@ -33,9 +33,32 @@ SUMMARY_UNITS = {"n_bounces": "1", "n_complete_bounces": "1", "restitution_first
 class SweepTable:
     """One row per grid point, in grid order: the swept keys, then ``SUMMARY_COLUMNS``.
 
-    ``table["restitution_first"]`` is a column; ``to_pandas()`` a DataFrame indexed by point;
-    ``to_xarray()`` a Dataset with one dimension per swept key; ``bounces(i)`` point i's
-    bounce table (read from the file, or kept in memory for a sweep without one).
+    What ``rodjit.sweep`` returns and ``load_sweep`` reads.  ``table["restitution_first"]``
+    is a column; ``len(table)`` the number of points; ``to_pandas()`` a DataFrame indexed by
+    point; ``to_xarray()`` a Dataset with one dimension per swept key; ``bounces(i)`` point
+    i's bounce table (read from the file, or kept in memory for a sweep without one).
+
+    Attributes
+    ----------
+    grid : Grid
+        The swept keys and their values (the points are their Cartesian product).
+    base : Config
+        The configuration every point starts from.
+    columns : dict of str to numpy.ndarray
+        Column name -> one value per point: the swept keys, then the summary columns
+        (``status``, ``message``, ``restitution_first``, ...; see *Output formats*).
+    path : str or None
+        The sweep file, None for a sweep kept in memory.
+    status : str
+        The sweep's state: ``"completed"``, ``"running"``, ``"interrupted"`` or
+        ``"failed"``.
+    message : str
+        Why the sweep stopped, for a status other than ``"completed"``.
+    stats : dict
+        Wall time, points run here, points per second and the executor backend of the
+        call that ran it (empty for a table read from a file).
+    attrs : dict
+        The sweep file's root attributes (format version, configuration, command).
     """
 
     grid: Grid
@@ -56,20 +79,50 @@ class SweepTable:
 
     @property
     def counts(self) -> dict[str, int]:
+        """Number of points per status: ``{"completed": .., "failed": .., "pending": ..}``."""
         status = self.columns["status"]
         return {s: int(np.sum(status == s)) for s in ("completed", "failed", "pending")}
 
     def config(self, index: int):
-        """The configuration point ``index`` ran."""
+        """The configuration point ``index`` ran.
+
+        Parameters
+        ----------
+        index : int
+            The point number (row), from 0.
+
+        Returns
+        -------
+        Config
+            ``base`` with the point's swept values.
+        """
         return self.grid.config(self.base, index)
 
     def keep_bounces(self, index: int, bounces: dict[str, np.ndarray]) -> None:
-        """Hold point ``index``'s bounce table in memory (a sweep without a file)."""
+        """Hold point ``index``'s bounce table in memory (a sweep without a file).
+
+        Parameters
+        ----------
+        index : int
+            The point number, from 0.
+        bounces : dict of str to numpy.ndarray
+            Its bounce table (``records.bounces.bounce_table`` columns).
+        """
         self._bounces[index] = bounces
 
     def bounces(self, index: int) -> dict[str, np.ndarray]:
-        """Point ``index``'s bounce table: kept in memory, else read from the file (empty
-        columns for a point that has not run)."""
+        """Point ``index``'s bounce table: kept in memory, else read from the file.
+
+        Parameters
+        ----------
+        index : int
+            The point number, from 0.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            The bounce table's columns (empty for a point that has not run).
+        """
         if index in self._bounces:
             return self._bounces[index]
         if self.path is None:
@@ -147,7 +200,18 @@ class SweepTable:
         return html_table(*self._overview())
 
     def report(self, max_rows: int | None = None) -> str:
-        """The table as text: one line per point, then the failures' messages."""
+        """The table as text: one line per point, then the failures' messages.
+
+        Parameters
+        ----------
+        max_rows : int or None
+            Most points shown (the first and last halves, ``...`` between) and failures
+            listed; None shows all.
+
+        Returns
+        -------
+        str
+        """
         keys = list(self.grid.keys)
         head = ["#"] + keys + list(TABLE_COLUMNS)
         n = len(self)
@@ -175,6 +239,8 @@ class SweepTable:
         return "\n".join(lines)
 
     def headline(self) -> str:
+        """One line: where the sweep is, its status, the points per status and, for a sweep
+        run by this call, its wall time and throughput (what ``rodjit sweep`` prints)."""
         c = self.counts
         where = self.path or "in memory"
         text = (f"{where}: sweep {self.status}, {len(self)} points ({c['completed']} completed, "

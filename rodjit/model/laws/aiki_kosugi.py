@@ -14,13 +14,27 @@ from ..._jit import step_kernel
 
 
 class AikiKosugiRod(NamedTuple):
-    """Parameters of f(ε) = κ/2 (ε + 1/2 − 1/(2(1+ε)³)), ε > −1."""
+    """Parameters of f(ε) = κ/2 (ε + 1/2 − 1/(2(1+ε)³)), ε > −1.
+
+    Parameters
+    ----------
+    kappa : float
+        Elastic modulus κ of the rod [N] (``rod.kappa``).
+    """
 
     kappa: float
 
 
 class AikiKosugiFloor(NamedTuple):
-    """Parameters of σ_b(h) = κ_b (β³/(h+β)³ − 1) for h ≤ 0, 0 above; h > −β."""
+    """Parameters of σ_b(h) = κ_b (β³/(h+β)³ − 1) for h ≤ 0, 0 above; h > −β.
+
+    Parameters
+    ----------
+    kappa_b : float
+        Stiffness κ_b of the floor [N] (``floor.kappa_b``).
+    beta : float
+        Bending limit β of the floor [m] (``floor.beta``).
+    """
 
     kappa_b: float
     beta: float

@@ -22,13 +22,7 @@ __all__ = ["Law", "register", "law_of", "law_for_numba_type", "get_law", "law_na
 
 @dataclass(frozen=True)
 class Law:
-    """A registered stress law.
-
-    ``kind`` is ``"rod"`` (stress f of the strain, tension positive) or ``"floor"``
-    (upward floor stress σ_b of the bottom height).  ``params`` is the NamedTuple class of
-    its parameters and ``from_config`` builds one from the matching config section.
-    ``value``, ``deriv``, ``primitive`` take ``(x, params)``, ``lower`` takes ``(params)``;
-    all four are ``numba.njit`` functions.
+    """A stress law, made selectable by ``register``.
 
     ``deriv_max(lo, hi, params)`` (optional, compiled like the others) returns the largest
     derivative on [lo, hi]; the kernels call it with the smallest and largest segment
@@ -43,6 +37,33 @@ class Law:
     it twice per segment and step.  Without it ``kernels.discrete_gradient`` evaluates q by
     Gauss–Legendre quadrature or the exact quotient, a few evaluations of ``value`` and
     ``deriv`` each (see there for the accuracy a closed form must match).
+
+    Parameters
+    ----------
+    name : str
+        The name ``rod.law`` / ``floor.law`` selects it by.
+    kind : str
+        ``"rod"`` (stress f of the strain, tension positive) or ``"floor"`` (upward floor
+        stress σ_b of the bottom height).
+    params : type
+        The NamedTuple class of its parameters (one class per law: the kernels dispatch on
+        it).
+    from_config : callable
+        Builds a ``params`` instance from the matching config section (``RodConfig`` or
+        ``FloorConfig``).
+    value, deriv, primitive : callable
+        Compiled (``law_kernel``) functions of ``(x, params)``: the stress, its derivative
+        and its primitive (zero at x = 0).
+    lower : callable
+        Compiled function of ``(params)``: the lower end of the domain (admissible states
+        have x > lower).
+    description : str
+        The formula, one line, for listings.
+    deriv_max : callable, optional
+        Compiled ``(lo, hi, params)`` -> the largest derivative on [lo, hi].
+    difference : callable, optional
+        Compiled ``(a, b, params)`` -> (divided difference of the primitive, its slope in
+        b, the stress at b).
     """
 
     name: str
@@ -63,7 +84,26 @@ _BY_NAME: dict[tuple[str, str], Law] = {}
 
 
 def register(law: Law) -> Law:
-    """Make a law available to the kernels and to ``rod.law`` / ``floor.law``."""
+    """Make a law available to the kernels and to ``rod.law`` / ``floor.law``.
+
+    Registering the same ``Law`` again is a no-op.
+
+    Parameters
+    ----------
+    law : Law
+        The law to register.
+
+    Returns
+    -------
+    Law
+        ``law`` itself.
+
+    Raises
+    ------
+    ValueError
+        ``law.kind`` is neither ``"rod"`` nor ``"floor"``, or its parameter class belongs
+        to another registered law.
+    """
     if law.kind not in ("rod", "floor"):
         raise ValueError(f"law kind must be 'rod' or 'floor', not {law.kind!r}")
     if law.params in _BY_TYPE:
@@ -103,6 +143,24 @@ def _fingerprint(law: Law) -> str:
 
 
 def get_law(kind: str, name: str) -> Law:
+    """The registered law ``name`` of ``kind``.
+
+    Parameters
+    ----------
+    kind : str
+        ``"rod"`` or ``"floor"``.
+    name : str
+        The law's name, e.g. ``"aiki-kosugi"``.
+
+    Returns
+    -------
+    Law
+
+    Raises
+    ------
+    ValueError
+        No such law, naming the registered ones.
+    """
     try:
         return _BY_NAME[(kind, name)]
     except KeyError:
@@ -112,11 +170,38 @@ def get_law(kind: str, name: str) -> Law:
 
 
 def law_names(kind: str) -> list[str]:
+    """The names of the registered laws of ``kind``.
+
+    Parameters
+    ----------
+    kind : str
+        ``"rod"`` or ``"floor"``.
+
+    Returns
+    -------
+    list of str
+        Sorted names, each valid for ``rod.law`` / ``floor.law``.
+    """
     return sorted(n for k, n in _BY_NAME if k == kind)
 
 
 def law_of(params) -> Law:
-    """The law whose parameters ``params`` are (plain Python side)."""
+    """The law whose parameters ``params`` are (plain Python side).
+
+    Parameters
+    ----------
+    params : NamedTuple
+        An instance of a registered law's parameter class.
+
+    Returns
+    -------
+    Law
+
+    Raises
+    ------
+    KeyError
+        ``params`` is not the parameters of a registered law.
+    """
     return _BY_TYPE[type(params)]
 
 
@@ -132,22 +217,70 @@ def law_for_numba_type(numba_type) -> Law:
 # Generic entry points.  Called from Python (or with NUMBA_DISABLE_JIT=1) they dispatch on
 # the Python type; inside compiled code the overloads below resolve at typing time.
 def value(x, p):
-    """Stress at x."""
+    """Stress at x, for the law ``p`` belongs to (callable from Python and compiled code).
+
+    Parameters
+    ----------
+    x : float
+        Strain (rod laws) or bottom height [m] (floor laws), > ``lower(p)``.
+    p : NamedTuple
+        The law's parameters.
+
+    Returns
+    -------
+    float
+        The stress [N].
+    """
     return _BY_TYPE[type(p)].value(x, p)
 
 
 def deriv(x, p):
-    """Derivative of the stress at x."""
+    """Derivative of the stress at x.
+
+    Parameters
+    ----------
+    x : float
+        Strain or bottom height, > ``lower(p)``.
+    p : NamedTuple
+        The law's parameters.
+
+    Returns
+    -------
+    float
+    """
     return _BY_TYPE[type(p)].deriv(x, p)
 
 
 def primitive(x, p):
-    """Primitive of the stress, zero at x = 0."""
+    """Primitive of the stress, zero at x = 0 (the stored energy density).
+
+    Parameters
+    ----------
+    x : float
+        Strain or bottom height, > ``lower(p)``.
+    p : NamedTuple
+        The law's parameters.
+
+    Returns
+    -------
+    float
+    """
     return _BY_TYPE[type(p)].primitive(x, p)
 
 
 def lower(p):
-    """Lower end of the law's domain: admissible states have x > lower(p)."""
+    """Lower end of the law's domain: admissible states have x > lower(p).
+
+    Parameters
+    ----------
+    p : NamedTuple
+        The law's parameters.
+
+    Returns
+    -------
+    float
+        −1 for the Aiki–Kosugi rod, −β for the floor.
+    """
     return _BY_TYPE[type(p)].lower(p)
 
 
