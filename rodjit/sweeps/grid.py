@@ -304,9 +304,22 @@ class Grid:
             raise ValueError(f"grid point {index} ({self.describe(index)}): {exc}") from None
 
     def combinations(self, keys) -> Iterator[tuple[int, dict[str, Any]]]:
-        """The distinct combinations of the swept keys among ``keys``: (the first point
-        that has it, its overrides).  Whatever depends only on ``keys`` is the same at every
-        point of a combination, so it needs checking or computing once per combination."""
+        """The distinct combinations of the swept keys among ``keys``.
+
+        Whatever depends only on ``keys`` is the same at every point of a combination, so it
+        needs checking or computing once per combination.
+
+        Parameters
+        ----------
+        keys : Iterable of str
+            Dotted configuration keys; those not swept are ignored.
+
+        Yields
+        ------
+        tuple of (int, dict)
+            The flat index of the first point with the combination, and its overrides
+            ``{key: value}``.
+        """
         axes = [j for j, k in enumerate(self.keys) if k in keys]
         if not axes:
             yield 0, {}
@@ -319,7 +332,18 @@ class Grid:
             yield index, {self.keys[j]: self.values[j][i] for j, i in zip(axes, combo)}
 
     def multiplicity(self, keys) -> int:
-        """How many points share each combination of ``combinations(keys)``."""
+        """How many points share each combination of ``combinations(keys)``.
+
+        Parameters
+        ----------
+        keys : Iterable of str
+            Dotted configuration keys.
+
+        Returns
+        -------
+        int
+            The product of the lengths of the swept axes not among ``keys``.
+        """
         return math.prod(len(v) for k, v in zip(self.keys, self.values) if k not in keys)
 
     def validate(self, base: Config) -> None:
