@@ -13,7 +13,7 @@ import rodjit
 from rodjit.driver.run import Run, SimulationError
 from rodjit.kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE, OK
 from rodjit.records.result import MemorySink
-from rodjit.stepping import erk, layout as L, registry
+from rodjit.stepping import control, erk, layout as L, registry
 
 QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
 PAIRS = {"dp54": 5, "dop853": 8}
@@ -199,3 +199,90 @@ def test_step_is_ok_and_fsal():
     a = np.zeros_like(trial[2])
     erk.full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1], False)
     np.testing.assert_array_equal(a, trial[2])
+
+
+# ---- the pairs' step-size rules (control.RULES) ---------------------------------------
+
+def _ctrl(integrator):
+    cfg = _cfg(integrator, {})
+    return control.build(cfg.time, registry.make_scheme(cfg.time))
+
+
+def test_rules_are_per_scheme():
+    """The pairs take Hairer's growth limits and land by stretching; the second-order
+    schemes keep the gentle growth and the split remainder."""
+    for name in ("verlet", "semi-implicit", "energy"):
+        c = _ctrl(name)
+        assert (c.growth, c.growth_reject, c.land, c.split) == (
+            control.GROWTH, control.GROWTH, control.LAND_ADAPTIVE, control.SPLIT_BELOW)
+    for name in PAIRS:
+        c = _ctrl(name)
+        assert c.growth == control.PAIR_GROWTH[name] and c.growth_reject == 1.0
+        assert c.land == control.PAIR_STRETCH
+
+
+def test_pair_lands_by_stretching_and_second_order_splits():
+    pair, low = _ctrl("dop853"), _ctrl("energy")
+    rem = 1.0 + 0.5 * control.PAIR_STRETCH          # a little more than one proposal
+    assert control.step_to(pair, False, rem, 1.0) == (rem, True)
+    assert control.step_to(low, False, rem, 1.0) == (0.5 * rem, False)
+    # beyond the stretch both split, and a long remainder takes the proposal
+    assert control.step_to(pair, False, 1.5, 1.0) == (0.75, False)
+    assert control.step_to(pair, False, 3.0, 1.0) == (1.0, False)
+
+
+def test_pair_growth_is_over_the_proposal_and_none_after_a_rejection():
+    c = _ctrl("dp54")
+    # a step cut short to land (error tiny): its suggestion is not clamped by the pair...
+    assert erk._factor(1e-30, 4) > 1e5
+    # ... the loop caps the growth over the previous proposal
+    assert control.propose(c, np.inf, 2e-3) == 2e-3 * control.PAIR_GROWTH["dp54"]
+    assert control.propose(c, np.inf, 2e-3, True) == 2e-3
+    assert control.propose(c, 1e-3, 2e-3, True) == 1e-3
+    low = _ctrl("energy")
+    assert control.propose(low, np.inf, 2e-3, True) == 2e-3 * control.GROWTH
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_bouncing_run_lands_on_every_output_time(integrator):
+    """The paper's run through its first bounces with snapshots every 5 ms: every row at
+    exactly t0 + kΔ (the loop's landing, stretched steps included), diagnostics with them."""
+    dt_out = 0.005
+    res = rodjit.simulate(_paper(integrator, **{"time.t_end": 0.6, "time.rtol": 1e-6,
+                                                "time.atol": 1e-6,
+                                                "output.snapshot_interval": dt_out,
+                                                "output.diagnostics_interval": dt_out}))
+    k = np.arange(res.t.size)
+    np.testing.assert_array_equal(res.t, k * dt_out)
+    np.testing.assert_array_equal(res.diagnostics["t"], res.t)
+    assert res.n_bounces >= 1
+    # the pair's rules take fewer steps than the second-order schemes' on the same run
+    run = Run(res.config)
+    run.ctrl = run.ctrl._replace(growth=control.GROWTH, growth_reject=control.GROWTH,
+                                 land=control.LAND_ADAPTIVE)
+    run.start(MemorySink())
+    while run.advance(MemorySink()) != L.DONE:
+        pass
+    assert res.stats["steps"] + res.stats["rejected_steps"] < 0.9 * (run.steps + run.rejected)
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_resume_through_bounces_and_outputs_is_bit_identical(integrator):
+    """Cut into calls after rejections, landings and floor crossings: the same steps."""
+    cfg = _paper(integrator, **{"time.t_end": 0.6, "time.rtol": 1e-6, "time.atol": 1e-6,
+                                "output.snapshot_interval": 0.005,
+                                "output.diagnostics_interval": 0.005})
+    one = Run(cfg)
+    one.start(MemorySink())
+    while one.advance(MemorySink()) != L.DONE:
+        pass
+    assert one.rejected > 0
+    run = Run(cfg)
+    run.start(MemorySink())
+    for n in (37, 61, 53):
+        run.advance(MemorySink(), max_steps=n)
+        run = Run.from_checkpoint(cfg, run.checkpoint())
+    while run.advance(MemorySink()) != L.DONE:
+        pass
+    np.testing.assert_array_equal(run.state, one.state)
+    assert run.steps == one.steps and run.rejected == one.rejected

@@ -5,6 +5,12 @@ the step its error ratio allows); the rules here cap it (``dt_max``, growth per 
 approach to the barriers), cut it to land on the output times, shrink it after a rejected
 trial, and end it on a floor crossing.  ``build`` makes the loop's ``Control`` from a
 ``TimeConfig``; the compiled loop (``loop.advance``) calls the kernels below.
+
+The rules are per scheme (``registry.Scheme.step_rules`` names a set in ``RULES``): the
+second-order schemes grow their steps gently and split a short remainder before an output
+time in two; the embedded pairs follow Hairer's controller for explicit Runge–Kutta codes
+(growth up to ``PAIR_GROWTH`` per step, none right after a rejection) and stretch a step by
+up to ``PAIR_STRETCH`` to land on an output time in one step.
 """
 from __future__ import annotations
 
@@ -16,10 +22,10 @@ import numpy as np
 from . import registry
 from .._jit import step_kernel
 
-__all__ = ["Control", "build", "output_tolerance", "propose", "gap_limit", "step_to",
+__all__ = ["Control", "Rules", "RULES", "build", "output_tolerance", "propose", "gap_limit", "step_to",
            "gap_keep", "GROWTH", "GAP_MAX", "REJECT_SHRINK", "EVENT_MIN", "OUTPUT_TOL",
            "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry",
-           "STABILITY_CFL"]
+           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH"]
 
 # A proposal grows at most by this factor per step: after a rejection the step recovers
 # over a few steps instead of jumping back to the size that just failed.
@@ -50,19 +56,56 @@ SPLIT_BELOW = 2.0
 GAP_REJECT = 2.0
 GAP_CLOSE_MAX = 0.9
 
+# The embedded pairs: their error estimate follows the step to a high power (err ∝ dt^(q+1),
+# q = 4 or 7), so a proposal may grow by up to this factor per step, the limits of Hairer's
+# codes DOPRI5 (10) and DOP853 (6) (a gentle 1.5 costs such a scheme many steps after every
+# step cut short by a floor crossing or an output time; DOP853 at 10 loses accuracy at
+# tight tolerances through the bounces).  The limit is on the growth over the previous
+# proposal, not over the step taken: a step cut short to land says nothing against the
+# proposal it was cut from.
+PAIR_GROWTH = {"dp54": 10.0, "dop853": 6.0}
+# A pair's step is stretched by up to this fraction to land on an output time in one step
+# instead of two.  Its proposal aims at an error 0.9^(q+1) ≈ 0.43–0.59 of the tolerance, so
+# a 10 % longer step (error × 1.1^(q+1) ≈ 1.6–2.1) still passes.
+PAIR_STRETCH = 0.1
+
 # Under tolerance control (time.control = "tolerance") an explicit scheme's step is the one
 # its error estimate allows, capped at this fraction of its stability limit 2/ω (a bound
 # from Gershgorin, itself above the true ω): accuracy decides, stability only caps.
 STABILITY_CFL = 0.5
 
 
+class Rules(NamedTuple):
+    """A scheme's step-size rules (``RULES``)."""
+
+    growth: float         # a proposal grows at most by this factor per step
+    growth_reject: float  # ... and by this factor in the step after a rejected trial
+    land: float           # a step within this relative distance of an output time ends on it
+    split: float          # a remainder shorter than this many proposals is taken in two
+                          # equal steps (after ``land`` did not apply)
+
+
+RULES = {
+    # verlet, semi-implicit, energy: second order, growth-limited after every cut
+    "second-order": Rules(growth=GROWTH, growth_reject=GROWTH, land=LAND_ADAPTIVE,
+                          split=SPLIT_BELOW),
+    # dp54, dop853: Hairer's limits (no growth in the step after a rejection)
+    **{f"pair-{name}": Rules(growth=g, growth_reject=1.0, land=PAIR_STRETCH, split=SPLIT_BELOW)
+       for name, g in PAIR_GROWTH.items()},
+}
+
+
 class Control(NamedTuple):
-    """Step-size control: caps, fixed step (0: adaptive), growth and barrier-gap limits."""
+    """Step-size control: caps, fixed step (0: adaptive), the scheme's ``Rules`` and the
+    barrier-gap limit."""
 
     dt_max: float     # inf when unset
     dt_min: float
     dt_fixed: float   # > 0: fixed steps
     growth: float     # a proposal grows at most by this factor per step
+    growth_reject: float   # ... and by this factor right after a rejected trial
+    land: float       # adaptive steps: land on an output time within this relative distance
+    split: float      # adaptive steps: a remainder below split × proposal: two equal steps
     gap: float        # a step closes at most this fraction of the distance to a barrier
                       # (ε = −1, u_0 = −β); 0: off (schemes admissible by construction)
 
@@ -70,13 +113,17 @@ class Control(NamedTuple):
 def build(time_config, scheme) -> Control:
     """The loop's ``Control`` for a ``TimeConfig`` and the scheme built from it."""
     tc = time_config
-    gap = registry.entry_of(type(scheme)).gap_control
+    entry = registry.entry_of(type(scheme))
+    rules = RULES[entry.step_rules]
     return Control(
         dt_max=float(tc.dt_max) if tc.dt_max is not None else math.inf,
         dt_min=float(tc.dt_min),
         dt_fixed=float(tc.dt) if tc.dt is not None else 0.0,
-        growth=GROWTH,
-        gap=min(float(tc.cfl), GAP_MAX) if gap else 0.0,
+        growth=rules.growth,
+        growth_reject=rules.growth_reject,
+        land=rules.land,
+        split=rules.split,
+        gap=min(float(tc.cfl), GAP_MAX) if entry.gap_control else 0.0,
     )
 
 
@@ -87,12 +134,13 @@ def output_tolerance(spans) -> float:
 
 
 @step_kernel
-def propose(ctrl, dt_suggest, dt_prev):
+def propose(ctrl, dt_suggest, dt_prev, after_reject=False):
     """Next step: the scheme's suggestion, capped by dt_max and by growth over the
     previous proposal (so a step that just recovered from a rejection grows gently)."""
     if ctrl.dt_fixed > 0.0:
         return ctrl.dt_fixed
-    return min(dt_suggest, ctrl.dt_max, ctrl.growth * dt_prev)
+    growth = ctrl.growth_reject if after_reject else ctrl.growth
+    return min(dt_suggest, ctrl.dt_max, growth * dt_prev)
 
 
 @step_kernel
@@ -111,16 +159,16 @@ def gap_keep(ctrl):
 
 
 @step_kernel
-def step_to(fixed, rem, dtp):
+def step_to(ctrl, fixed, rem, dtp):
     """The step toward an output time ``rem`` ahead with proposal ``dtp``: ``(dt, land)``,
     land when the step ends on the output time."""
     if fixed:
         if rem <= dtp * (1.0 + LAND_FIXED):
             return rem, True
         return dtp, False
-    if rem <= dtp * (1.0 + LAND_ADAPTIVE):
+    if rem <= dtp * (1.0 + ctrl.land):
         return rem, True
-    if rem < SPLIT_BELOW * dtp:
+    if rem < ctrl.split * dtp:
         return 0.5 * rem, False
     return dtp, False
 

@@ -15,8 +15,9 @@ next step reuses it; a resumed run reads it from the checkpointed state (``a`` r
 Error norm (Hairer's): the root mean square over all 2(N+1) components of u and v of the
 error divided by atol + rtol·max(|yⁿ|, |yⁿ⁺¹|); for dop853 the combined 5th/3rd-order
 estimate err₅²/√(err₅² + 0.01 err₃²).  ≤ 1 accepts; > 1 returns INACCURATE and the loop
-retries at ``dt_suggest``.  The next step is dt·0.9·err^(−1/(q+1)) in [0.2, 10]× (q = 4 for
-dp54, 7 for dop853).  Under fixed steps (``time.dt``) the loop accepts every valid step.
+retries at ``dt_suggest``.  The next step is dt·0.9·err^(−1/(q+1)), at least 0.2 dt (q = 4
+for dp54, 7 for dop853); how much it may exceed the previous proposal is the loop's rule
+(``control.PAIR_GROWTH``: 10× for dp54, 6× for dop853, none right after a rejection).  Under fixed steps (``time.dt``) the loop accepts every valid step.
 
 Admissibility: every stage state is checked (ε > −1, u_0 > −β, finite); a stage outside
 returns its failure code and the loop retries a quarter of the step.  The floor force has
@@ -67,7 +68,6 @@ class DOP853(NamedTuple):
 
 SAFETY = 0.9
 FAC_MIN = 0.2
-FAC_MAX = 10.0
 
 # rows of the scratch array ``work``: the stresses and curvatures of ``accel``, then for each
 # stage j ≥ 1 its velocity (the u-derivative) and acceleration (the v-derivative); stage 0
@@ -171,10 +171,12 @@ def _power(x, p):
 
 @step_kernel
 def _factor(err, q):
-    """SAFETY·err^(−1/(q+1)) clamped to [FAC_MIN, FAC_MAX]."""
+    """SAFETY·err^(−1/(q+1)), at least FAC_MIN.  No upper clamp here: the loop caps the
+    growth over the previous *proposal* (``control.propose``), so a step cut short to land
+    on an output time or a floor crossing (whose error is tiny) does not shrink the next."""
     if not err > 0.0:
-        return FAC_MAX
-    return min(FAC_MAX, max(FAC_MIN, SAFETY * _power(err, -1.0 / (q + 1.0))))
+        return np.inf
+    return max(FAC_MIN, SAFETY * _power(err, -1.0 / (q + 1.0)))
 
 
 @step_kernel

@@ -121,6 +121,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
     diss = clock[L.DISSIPATED]
     w = clock[L.W]
     refined = False
+    after_reject = False   # no break can come between a rejection and the next acceptance
     fixed = ctrl.dt_fixed > 0.0
     emin_cur = clock[L.EMIN]
     rod_lo = lower(rod)
@@ -143,7 +144,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             code = L.FULL
             break
         target = _next_target(clock, count)
-        dt, land = C.step_to(fixed, target - t, dtp)
+        dt, land = C.step_to(ctrl, fixed, target - t, dtp)
         u = cur[0]
         v = cur[1]
         u2 = nxt[0]
@@ -188,6 +189,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
                 code = L.FAILED
                 break
             dtp = retry
+            after_reject = True
             continue
         t_new = target if land else t + dt
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
@@ -199,7 +201,8 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         swapped = not swapped
         count[L.STEP] += 1
         taken += 1
-        dtp = C.propose(ctrl, r.dt_suggest, dtp)
+        dtp = C.propose(ctrl, r.dt_suggest, dtp, after_reject)
+        after_reject = False
         if ctrl.gap > 0.0 and not fixed:
             dtp = min(dtp, C.gap_limit(ctrl, dt, emin_cur - rod_lo, emin - rod_lo),
                       C.gap_limit(ctrl, dt, u[0] - floor_lo, u2[0] - floor_lo))

@@ -29,6 +29,7 @@ class Scheme:
     ``counters`` name the entries of ``sstats`` the step increments (see ``SCHEME_STATS``).
     ``gap_control``: explicit schemes need the loop's barrier-gap limit; a scheme that is
     admissible by construction turns it off.
+    ``step_rules`` names the loop's step-size rules for the scheme (``control.RULES``).
     """
 
     name: str
@@ -38,6 +39,7 @@ class Scheme:
     work_rows: int
     counters: tuple[str, ...] = ()
     gap_control: bool = True
+    step_rules: str = "second-order"
 
 
 def _kdk(tc, P):
@@ -54,9 +56,11 @@ SCHEMES: tuple[Scheme, ...] = (
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), _ENERGY_WORK_ROWS,
            counters=("newton_iterations", "newton_failures"), gap_control=False),
     Scheme("dp54", "rodjit.stepping.erk", "DP54",
-           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 12, gap_control=False),
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 12, gap_control=False,
+           step_rules="pair-dp54"),
     Scheme("dop853", "rodjit.stepping.erk", "DOP853",
-           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 24, gap_control=False),
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 24, gap_control=False,
+           step_rules="pair-dop853"),
 )
 
 NAMES: tuple[str, ...] = tuple(s.name for s in SCHEMES)
