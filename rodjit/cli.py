@@ -290,9 +290,12 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
+    import signal
+
+    from .driver.files import OutputExists
+    from .driver.signals import hold_on_exit, pending_signal
     from .sweeps import SweepFailed, SweepInterrupted, sweep
     from .sweeps.grid import parse_grid_option
-    from .driver.files import OutputExists
 
     command = _command_line(
         "sweep", config, [("--grid", grids), ("--set", sets), ("-o", output), ("--jobs", jobs),
@@ -333,9 +336,10 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                 output = ("sweep.h5" if default_name == DEFAULT_OUTPUT
                           else default_name[:-3] + "_sweep.h5")
         jobs = _cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
-        table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
-                      save_runs=save_runs, resume=resume, overwrite=overwrite,
-                      progress=progress, command=command)
+        with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
+            table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
+                          save_runs=save_runs, resume=resume, overwrite=overwrite,
+                          progress=progress, command=command)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite (or "
                                           "--resume)")) from None
@@ -343,6 +347,8 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         _close(progress)
         if not quiet:
             click.echo(exc.table.headline())
+            if exc.table.status == "completed":
+                click.echo(exc.table.report(max_rows=40))
         click.echo(str(exc), err=True)
         sys.exit(128 + (exc.signum or 2))
     except SweepFailed as exc:
@@ -354,10 +360,18 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         sys.exit(1)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    except OSError as exc:          # the disk refused a write (the sweep file, a run file)
+        _close(progress)
+        _disk_failed(exc)
     _close(progress)
     if not quiet:
         click.echo(table.headline())
         click.echo(table.report(max_rows=40))
+    late = pending_signal()   # came after the file was closed, while the table was printed
+    if late is not None:
+        click.echo(f"interrupted by {signal.Signals(late).name} after the last point; "
+                   f"{output!r} is complete", err=True)
+        sys.exit(128 + late)
     if table.counts["failed"]:
         sys.exit(1)
 
