@@ -37,7 +37,7 @@ def test_the_console_script_reports_a_bad_option_as_python_m_rodjit_does(tmp_pat
     m = rodjit_cli(*args, cwd=tmp_path)
     assert r.returncode == m.returncode == 2
     assert one_line(r.stderr) == one_line(m.stderr)
-    assert "No such option: --no-such-option" in r.stderr
+    assert "No such option '--no-such-option'" in r.stderr
 
 
 def test_the_console_script_exits_130_on_sigint_with_one_line(tmp_path):

@@ -33,8 +33,8 @@ class StopFlag:
     """While active (main thread only), SIGINT and SIGTERM record the signal instead of
     killing the process; the run stops cleanly at the next return from compiled code.
     A second signal aborts at once (KeyboardInterrupt), unless ``abort`` was set False
-    (a teardown that must not be cut).  Inside ``hold_on_exit`` the signals are blocked
-    when it ends, before the previous handlers come back."""
+    (a teardown that must not be cut).  Inside ``hold_on_exit`` the signals stay recorded
+    when it ends."""
 
     def __init__(self, install: bool):
         self.install = install and threading.current_thread() is threading.main_thread()
@@ -55,21 +55,25 @@ class StopFlag:
         return self
 
     def __exit__(self, *exc):
-        if self._old and _HOLD[0]:
-            signal.pthread_sigmask(signal.SIG_BLOCK, _SIGNALS)
+        held = bool(self._old) and _HOLD[0]
         for s, old in self._old.items():
-            signal.signal(s, old)
+            signal.signal(s, _record if held else old)
         self._old = {}
 
 
-_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+_LATE: list[int] = []     # signals recorded after a StopFlag ended inside hold_on_exit
+
+
+def _record(signum, frame):
+    _LATE.append(signum)
 
 
 @contextmanager
 def hold_on_exit():
-    """``with hold_on_exit():`` a StopFlag ending inside blocks SIGINT and SIGTERM: the
-    command line, once a sweep or run has closed its file, prints its table without a
-    signal cutting it, then reports a signal that came meanwhile (``pending_signal``)."""
+    """``with hold_on_exit():`` a StopFlag ending inside leaves SIGINT and SIGTERM recorded
+    (``pending_signal``) instead of putting the previous handlers back: the command line,
+    once a sweep has closed its file, prints its table without a signal cutting it, then
+    reports a signal that came meanwhile.  For a process that ends after its command."""
     _HOLD[0] = True
     try:
         yield
@@ -78,9 +82,8 @@ def hold_on_exit():
 
 
 def pending_signal() -> int | None:
-    """SIGINT or SIGTERM if one is blocked and waiting (``hold_on_exit``), else None."""
-    waiting = signal.sigpending() & _SIGNALS
-    return min(waiting) if waiting else None
+    """The first SIGINT or SIGTERM recorded since a StopFlag ended (``hold_on_exit``)."""
+    return _LATE[0] if _LATE else None
 
 
 def _exit_at_once(signum, frame):
