@@ -10,7 +10,6 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
-import re
 import shlex
 import sys
 from pathlib import Path
@@ -21,24 +20,15 @@ EXIT_USAGE = 2
 DEFAULT_OUTPUT = "default.h5"
 
 
-_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
+def _quiet_disk_errors() -> None:
+    """h5py's reports of releasing files the disk refused say nothing the one-line error
+    does not (``output.h5files.quiet_disk_errors``)."""
+    from .output.h5files import quiet_disk_errors
+
+    quiet_disk_errors()
 
 
-def _quiet_disk_errors(unraisable) -> None:
-    """Errors h5py raises while releasing the handles of a file the disk refused (full, a
-    size limit) cannot be acted on, and the one-line error already says what happened."""
-    if not _DISK_ERRNO.search(str(unraisable.exc_value)):
-        sys.__unraisablehook__(unraisable)
-
-
-def _quiet_disk_tracebacks(kind, value, tb) -> None:
-    """The same errors, as h5py's compiled deallocators print them (through excepthook)."""
-    if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
-        sys.__excepthook__(kind, value, tb)
-
-
-sys.unraisablehook = _quiet_disk_errors
-sys.excepthook = _quiet_disk_tracebacks
+_quiet_disk_errors()
 
 
 class UsageError(click.ClickException):

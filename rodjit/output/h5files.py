@@ -22,7 +22,8 @@ from .lock import FileBusy, is_locked
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "writer_alive", "is_live", "check_output", "WriteFailed", "disk_cause",
-           "truncation", "repair_truncated", "abandon", "abandoned", "reserve_space"]
+           "truncation", "repair_truncated", "abandon", "abandoned", "reserve_space",
+           "quiet_disk_errors"]
 
 
 class NotARunFile(ValueError):
@@ -239,6 +240,28 @@ def disk_cause(exc: BaseException) -> str | None:
             return _CAUSES[int(m.group(1))]
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None
+
+
+_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
+
+
+def quiet_disk_errors() -> None:
+    """Silence the errors h5py reports while releasing the handles of a file the disk
+    refused (full, a size limit): they cannot be acted on, and the one-line error of the
+    write that failed says what happened (through ``sys.unraisablehook``, and
+    ``sys.excepthook`` for the tracebacks its compiled deallocators print)."""
+    import sys
+
+    def unraisable(u):
+        if not _DISK_ERRNO.search(str(u.exc_value)):
+            sys.__unraisablehook__(u)
+
+    def excepthook(kind, value, tb):
+        if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
+            sys.__excepthook__(kind, value, tb)
+
+    sys.unraisablehook = unraisable
+    sys.excepthook = excepthook
 
 
 # h5py objects of files the disk failed.  HDF5 cannot close a file it can no longer

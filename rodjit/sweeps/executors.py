@@ -20,7 +20,7 @@ from contextlib import contextmanager
 from itertools import count, islice
 from multiprocessing.connection import wait
 
-from ..output.h5files import abandoned
+from ..output.h5files import abandoned, quiet_disk_errors
 from .point import PointTask, died, run_point, run_points, start_worker
 
 __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
@@ -121,6 +121,7 @@ def _worker_main(conn, warm) -> None:
     sends until it sends None or goes away."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
     _die_with_parent()
+    quiet_disk_errors()       # a run file the disk refuses: the parent reports it
     try:
         conn.send(("ready", start_worker(warm)))
         while True:
