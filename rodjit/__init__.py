@@ -5,10 +5,14 @@
 >>> summary = rodjit.run_to_file(rodjit.Config(), "run.h5", overwrite=True)  # streamed to HDF5
 >>> table = rodjit.sweep(rodjit.Config(), {"rod.mu": [0, 1, 10]}, output="sweep.h5")
 """
+import os as _os
 import sys as _sys
 
-if _sys.argv[:1] == ["-m"]:   # being located by ``python -m rodjit``: handle SIGINT/SIGTERM
-    from .driver.signals import install_early_handlers   # before the heavy imports below
+# being located by ``python -m rodjit``, or imported by the installed ``rodjit`` command:
+# handle SIGINT/SIGTERM before the heavy imports below
+if _sys.argv[:1] == ["-m"] or _os.path.basename(_sys.argv[0] if _sys.argv else "") in (
+        "rodjit", "rodjit.exe"):
+    from .driver.signals import install_early_handlers
     install_early_handlers(exit_now=True)
 
 from . import laws

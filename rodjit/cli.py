@@ -10,7 +10,6 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
-import re
 import shlex
 import sys
 from pathlib import Path
@@ -21,24 +20,15 @@ EXIT_USAGE = 2
 DEFAULT_OUTPUT = "default.h5"
 
 
-_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
+def _quiet_disk_errors() -> None:
+    """h5py's reports of releasing files the disk refused say nothing the one-line error
+    does not (``output.h5files.quiet_disk_errors``)."""
+    from .output.h5files import quiet_disk_errors
+
+    quiet_disk_errors()
 
 
-def _quiet_disk_errors(unraisable) -> None:
-    """Errors h5py raises while releasing the handles of a file the disk refused (full, a
-    size limit) cannot be acted on, and the one-line error already says what happened."""
-    if not _DISK_ERRNO.search(str(unraisable.exc_value)):
-        sys.__unraisablehook__(unraisable)
-
-
-def _quiet_disk_tracebacks(kind, value, tb) -> None:
-    """The same errors, as h5py's compiled deallocators print them (through excepthook)."""
-    if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
-        sys.__excepthook__(kind, value, tb)
-
-
-sys.unraisablehook = _quiet_disk_errors
-sys.excepthook = _quiet_disk_tracebacks
+_quiet_disk_errors()
 
 
 class UsageError(click.ClickException):
@@ -324,8 +314,11 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
-    from .sweeps import SweepFailed, SweepInterrupted, plan_sweep, sweep
+    import signal
+
     from .driver.files import OutputExists
+    from .driver.signals import hold_on_exit, pending_signal
+    from .sweeps import SweepFailed, SweepInterrupted, plan_sweep, sweep
 
     if dry_run and resume:
         raise UsageError("--dry-run checks a new sweep; it cannot be used with --resume")
@@ -382,9 +375,10 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             click.echo(plan.report())
             return
         jobs = _cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
-        table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
-                      save_runs=save_runs, resume=resume, overwrite=overwrite,
-                      progress=progress, command=command, **limits)
+        with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
+            table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
+                          save_runs=save_runs, resume=resume, overwrite=overwrite,
+                          progress=progress, command=command, **limits)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite (or "
                                           "--resume)")) from None
@@ -392,6 +386,8 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         _close(progress)
         if not quiet:
             click.echo(exc.table.headline())
+            if exc.table.status == "completed":
+                click.echo(exc.table.report(max_rows=40))
         click.echo(str(exc), err=True)
         sys.exit(128 + (exc.signum or 2))
     except SweepFailed as exc:
@@ -403,10 +399,18 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         sys.exit(1)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    except OSError as exc:          # the disk refused a write (the sweep file, a run file)
+        _close(progress)
+        _disk_failed(exc)
     _close(progress)
     if not quiet:
         click.echo(table.headline())
         click.echo(table.report(max_rows=40))
+    late = pending_signal()   # came after the file was closed, while the table was printed
+    if late is not None:
+        click.echo(f"interrupted by {signal.Signals(late).name} after the last point; "
+                   f"{output!r} is complete", err=True)
+        sys.exit(128 + late)
     if table.counts["failed"]:
         sys.exit(1)
 

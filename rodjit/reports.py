@@ -59,9 +59,13 @@ def _about_sweep(path: str) -> About:
     if status == "running":
         with sweep_file.open_sweep(path) as f:
             alive = writer_alive(f)
-        status += (" (the sweep is running)" if alive else
-                   f" (its process is gone; 'rodjit sweep --resume -o {path}' continues)"
-                   if alive is False else "")
+        if alive is False and failure_note(path):
+            status = (f"failed ({failure_note(path)}; 'rodjit sweep --resume -o {path}' "
+                      f"runs the points not written once there is space)")
+        else:
+            status += (" (the sweep is running)" if alive else
+                       f" (its process is gone; 'rodjit sweep --resume -o {path}' continues)"
+                       if alive is False else "")
     c = table.counts
     details = [f"points    {len(table)} ({c['completed']} completed, {c['failed']} failed, "
                f"{c['pending']} not run) on {a.get('scheduler', '?')}", "grid:"]

@@ -40,10 +40,26 @@ def many_calls(monkeypatch):
     monkeypatch.setattr(run_module, "NODE_STEPS_PER_CALL", 600)
 
 
-def rodjit_cli(*args, cwd=None, timeout=300) -> subprocess.CompletedProcess:
-    """Run ``rodjit ARGS`` in a fresh interpreter (as a user would)."""
-    return subprocess.run([sys.executable, "-m", "rodjit", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=timeout)
+def rodjit_cli(*args, cwd=None, timeout=300, limit: int | None = None,
+               code: str | None = None) -> subprocess.CompletedProcess:
+    """Run ``rodjit ARGS`` in a fresh interpreter (as a user would).  ``limit``: its files
+    may not grow past that many bytes (RLIMIT_FSIZE, SIGXFSZ ignored: a write past it
+    fails with EFBIG).  ``code``: Python run first in that interpreter (a test's fault
+    injection), then the command line."""
+    head = [sys.executable, "-m", "rodjit"] if code is None else [
+        sys.executable, "-c", f"{code}\nimport sys\nsys.argv[0] = 'rodjit'\n"
+                              f"from rodjit.entry import main\nmain()"]
+    return subprocess.run([*head, *map(str, args)], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, preexec_fn=None if limit is None else
+                          lambda: _limit_files(limit))
+
+
+def _limit_files(limit: int) -> None:
+    import resource
+    import signal
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
 
 
 def datasets(path) -> dict[str, np.ndarray]:
@@ -75,3 +91,10 @@ def assert_same_files(a, b) -> None:
     sa, sb = final_state(a), final_state(b)
     for name in sb:
         assert np.array_equal(sa[name], sb[name], equal_nan=True), name
+
+
+def one_line(err: str) -> str:
+    """The one line of a command's stderr (asserting there is one, and no Traceback)."""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in err and "Exception ignored" not in err, err
+    return lines[0]

@@ -17,7 +17,7 @@ Floors, lowest first (a module's floor is its first name under ``rodjit``):
 - ``sweeps``: grids of runs, their executors and the sweep file;
 - ``plotting``: figures of run and sweep files;
 - ``reports``: what ``rodjit info`` prints of either kind of file;
-- ``cli``, ``__main__``: the ``rodjit`` command;
+- ``cli``, ``__main__``, ``entry``: the ``rodjit`` command;
 - the package itself (``rodjit/__init__.py``): the public API, importing from every floor.
 """
 from __future__ import annotations
@@ -45,7 +45,7 @@ FLOORS = (
     ("analysis",),
     ("plotting",),
     ("reports",),
-    ("cli", "__main__"),
+    ("cli", "__main__", "entry"),
     ("",),                     # rodjit/__init__.py
 )
 FLOOR_OF = {name: level for level, names in enumerate(FLOORS) for name in names}

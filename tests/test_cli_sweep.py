@@ -148,12 +148,15 @@ def test_ctrl_c_stops_a_real_sweep_and_resume_finishes_it(tmp_path):
     finally:
         proc.kill()
     assert proc.returncode == 130, err
-    assert "interrupted by SIGINT after" in err and "rodjit sweep --resume -o s.h5" in err
     assert _wait_for(lambda: not any(w.is_running() and w.status() != psutil.STATUS_ZOMBIE
-                                     for w in workers), timeout=10)
+                                     for w in workers), timeout=60)
     cut = rodjit.load_sweep(tmp_path / "s.h5")
-    assert cut.status == "interrupted" and 2 <= cut.counts["completed"] < 16
     assert cut.counts["failed"] == 0
+    if cut.counts["completed"] == 16:   # a loaded machine: the signal came after the last point
+        assert cut.status == "completed" and "SIGINT after the last point" in err
+        return
+    assert "interrupted by SIGINT after" in err and "rodjit sweep --resume -o s.h5" in err
+    assert cut.status == "interrupted" and 2 <= cut.counts["completed"] < 16
     r = subprocess.run([sys.executable, "-m", "rodjit", "sweep", "--resume", "-o", "s.h5", "-q"],
                        cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr

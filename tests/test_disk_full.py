@@ -5,31 +5,12 @@ SIGXFSZ ignored so that write() returns EFBIG): at every fill level the run stop
 bit for bit."""
 from __future__ import annotations
 
-import resource
-import signal
-import subprocess
-import sys
-
 import pytest
 
-from conftest import assert_same_files, rodjit_cli
+from conftest import assert_same_files, one_line, rodjit_cli
 
 ARGS = ["--set", "time.t_end=0.6", "--set", "output.snapshot_interval=0.01", "-q",
         "--flush-interval", "0.01"]
-
-
-def _limited(limit: int, *args, cwd):
-    def pre():
-        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
-        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
-    return subprocess.run([sys.executable, "-m", "rodjit", *map(str, args)], cwd=cwd,
-                          preexec_fn=pre, capture_output=True, text=True, timeout=300)
-
-
-def _one_line(err: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and "Traceback" not in err and "Exception ignored" not in err, err
-    return lines[0]
 
 
 @pytest.fixture(scope="module")
@@ -45,9 +26,9 @@ def test_a_run_that_hits_the_size_limit_stops_cleanly_and_resumes_bit_for_bit(
         tmp_path, reference, fraction):
     limit = int(reference.stat().st_size * fraction)
     out = tmp_path / "cut.h5"
-    r = _limited(limit, "run", "-o", out, *ARGS, cwd=tmp_path)
+    r = rodjit_cli("run", "-o", out, *ARGS, cwd=tmp_path, limit=limit)
     assert r.returncode == 1, r.stderr
-    line = _one_line(r.stderr)
+    line = one_line(r.stderr)
     assert "file size limit" in line
     if not out.exists():                          # during layout creation: nothing left
         assert "nothing was written" in line

@@ -123,3 +123,23 @@ def test_same_results_with_jit_disabled():
     assert steps == res.stats["steps"]
     assert np.allclose(u, res.u_final, rtol=0, atol=1e-13)
     assert np.allclose(t_impact, res.bounces["t_impact"], rtol=0, atol=1e-13)
+
+
+def test_a_step_loop_that_stops_advancing_time_fails_in_one_line():
+    """Steps far below the resolution of t (here: t moved to 1e20, where one ulp is 16384,
+    with adaptive steps of ~1e-5) leave t unchanged: the call that took them fails with a
+    SimulationError naming t and the step, instead of being called again for ever."""
+    from conftest import quiet
+    from rodjit.driver.run import SimulationError
+
+    run = Run(quiet(**{"time.t_end": 1.0}))
+    sink = MemorySink()
+    run.start(sink)
+    run.clock[L.T], run.clock[L.T_END] = 1e20, 2e20
+    with pytest.raises(SimulationError) as caught:
+        for _ in range(3):
+            run.advance(sink, max_steps=50)
+    message = str(caught.value)
+    assert message.startswith("time stopped advancing at t = 1e+20: 50 steps of dt = ")
+    assert "resolution of t there is 1.64e+04" in message and "\n" not in message
+    assert run.t == 1e20 and run.steps == 50

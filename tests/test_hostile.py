@@ -247,3 +247,24 @@ def test_fault_signal_during_start_up(tmp_path, delay):
         assert p.returncode in (0, 128 + sig), err      # 0: it finished first
         assert "Traceback" not in err and len(err.strip().splitlines()) <= 1, err
         _check_new_files(tmp_path, ())
+
+
+# ---- sweeps on a disk that refuses writes ---------------------------------------------------
+# (tests/test_disk_full_sweep.py and tests/test_disk_full_tmpfs.py hold the fill levels and
+# the resumes; here, each fault once through the catalogue's checks)
+SWEEP_CUT = ["--grid", "rod.mu=5,10", "--set", "time.t_end=0.02", "-q"]
+
+
+@pytest.mark.parametrize("limit,args,text", [
+    (2000, ["--scheduler", "inline"], "nothing was written"),            # creating the file
+    (60000, ["--scheduler", "inline"], "keeps the points written (0 of 2)"),  # its first rows
+    (300000, ["-j", "1", "--save-runs", "runs"], "the run file"),        # a run file
+], ids=["sweep file created", "sweep file rows", "save-runs run file"])
+def test_fault_file_size_limit_on_a_sweep(tmp_path, limit, args, text):
+    r = _limited(limit, ["sweep", *SWEEP_CUT, *args, "-o", "s.h5"], tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "file size limit" in lines[0] and text in lines[0], lines[0]
+    _check_new_files(tmp_path, ())
+    if (tmp_path / "runs").exists():       # no run file left cut short
+        assert not [p for p in (tmp_path / "runs").iterdir() if p.name.startswith(".")]

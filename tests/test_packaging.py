@@ -24,7 +24,7 @@ def test_presets_are_package_data():
 
 def test_console_script_and_dependencies():
     project = PYPROJECT["project"]
-    assert project["scripts"] == {"rodjit": "rodjit.cli:main"}
+    assert project["scripts"] == {"rodjit": "rodjit.entry:main"}
     runtime = {d.split(">")[0].split("=")[0].strip() for d in project["dependencies"]}
     assert runtime == {"numpy", "numba", "h5py", "click", "tqdm"}
     extras = project["optional-dependencies"]

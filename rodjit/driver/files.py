@@ -19,8 +19,8 @@ from ..config import Config
 from ..output import run_writer
 from ..output.estimate import (MAX_OUTPUT, MAX_STEPS, Estimate, check_run, format_size,
                                free_space)
-from ..output.h5files import (FileBusy, OutputExists, WriteFailed, check_output, disk_cause,
-                              open_file, repair_truncated, writer_alive,
+from ..output.h5files import (FileBusy, OutputExists, WriteFailed, abandon, check_output,
+                              disk_cause, open_file, repair_truncated, writer_alive,
                               writer_pid)
 from ..output.lock import WriterLock, note_failure
 from ..output.run_reader import check_run_file, read_checkpoint, read_config
@@ -38,8 +38,6 @@ __all__ = ["run_to_file", "plan_run", "RunPlan", "resume_file", "RunInterrupted"
 FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
 OVERLAP = True         # compute the next block in a worker thread while writing the last
 
-
-_LEFT_OPEN = []        # handles of files the disk failed: closing them would write again
 
 
 class RunInterrupted(RuntimeError):
@@ -309,14 +307,14 @@ def _write_failed(path: Path, writer, cause: str) -> WriteFailed:
     cannot close a file it can no longer extend, and any further write could only make it
     worse; its last checkpoint is intact, and a resume repairs the end of the file."""
     if writer is None:
-        return WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was written")
-    _LEFT_OPEN.append(writer.file)  # never closed nor flushed again by this process
+        return WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was written", cause)
+    abandon(writer, writer.file)    # never closed nor flushed again by this process
     writer.file = None
     t = float(writer.checkpoint["clock"][L.T])
     note_failure(path, f"a write failed: {cause}")
     return WriteFailed(f"writing {str(path)!r} failed: {cause}; the file keeps its last "
                        f"checkpoint (t = {t:.9g}); free space, then continue with: rodjit "
-                       f"run --resume {path}")
+                       f"run --resume {path}", cause)
 
 
 def _check_interval(flush_interval) -> None:
@@ -345,6 +343,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
         cause = disk_cause(exc)
         if cause is None:
             raise
+        abandon(exc.__traceback__)  # the h5py objects its frames hold: never freed
         raise _write_failed(path, opened[-1] if opened else None, cause) from None
 
 

@@ -35,6 +35,7 @@ __all__ = ["Block", "Run", "SimulationError", "Sink"]
 # node-steps per compiled call: long enough that returning to Python costs nothing, short
 # enough that signals, progress and checkpoints are seen promptly
 NODE_STEPS_PER_CALL = 20_000_000
+NO_PROGRESS = 100    # the driver's own failure code: steps were taken, t did not move
 
 
 class SimulationError(RuntimeError):
@@ -261,8 +262,16 @@ class Run:
         if not self._warm:
             self.warm_up()
         t0 = time.perf_counter()
+        t, steps = self.clock[L.T], self.count[L.STEP]
         code = self._call(self.max_steps if max_steps is None else max_steps)
         self.run_time += time.perf_counter() - t0
+        if code in (L.PAUSED, L.FULL) and self.count[L.STEP] > steps and self.clock[L.T] <= t:
+            # every step of the call left t where it was (a step below the resolution of
+            # t): calling again would loop for ever
+            f = self.fail
+            f[L.F_CODE], f[L.F_T], f[L.F_DT] = NO_PROGRESS, t, self.clock[L.DT]
+            f[L.F_VALUE] = self.count[L.STEP] - steps
+            code = L.FAILED
         return code
 
     def take(self, code: int = L.PAUSED) -> Block:
@@ -319,6 +328,11 @@ class Run:
         f = self.fail
         code = int(f[L.F_CODE])
         t = f[L.F_T]
+        if code == NO_PROGRESS:
+            return (f"time stopped advancing at t = {float(t)!r}: {int(f[L.F_VALUE])} steps of "
+                    f"dt = {f[L.F_DT]:.3g} each left t unchanged (the resolution of t there "
+                    f"is {math.ulp(t):.3g}): time.t_end = {self.clock[L.T_END]:g} cannot be "
+                    f"reached with steps this short")
         if code == BAD_STRAIN:
             why = (f"the strain of segment {int(f[L.F_INDEX])} reached {f[L.F_VALUE]:.6g}, at or "
                    f"below the rod's compression limit {lower(self.rod):g} (rod.law = "

@@ -5,8 +5,10 @@ from __future__ import annotations
 import os
 import signal
 import threading
+from contextlib import contextmanager
 
-__all__ = ["StopFlag", "Interrupted", "raise_interrupted", "install_early_handlers"]
+__all__ = ["StopFlag", "Interrupted", "raise_interrupted", "install_early_handlers",
+           "hold_on_exit", "pending_signal"]
 
 
 class Interrupted(BaseException):
@@ -24,20 +26,27 @@ def raise_interrupted(signum, frame):
     raise Interrupted(signum)
 
 
+_HOLD = [False]        # set by ``hold_on_exit``
+
+
 class StopFlag:
     """While active (main thread only), SIGINT and SIGTERM record the signal instead of
     killing the process; the run stops cleanly at the next return from compiled code.
-    A second signal aborts at once (KeyboardInterrupt)."""
+    A second signal aborts at once (KeyboardInterrupt), unless ``abort`` was set False
+    (a teardown that must not be cut).  Inside ``hold_on_exit`` the signals stay recorded
+    when it ends."""
 
     def __init__(self, install: bool):
         self.install = install and threading.current_thread() is threading.main_thread()
         self.signum: int | None = None
+        self.abort = True
         self._old = {}
 
     def _handler(self, signum, frame):
-        if self.signum is not None:
+        if self.signum is not None and self.abort:
             raise KeyboardInterrupt
-        self.signum = signum
+        if self.signum is None:
+            self.signum = signum
 
     def __enter__(self):
         if self.install:
@@ -46,9 +55,35 @@ class StopFlag:
         return self
 
     def __exit__(self, *exc):
+        held = bool(self._old) and _HOLD[0]
         for s, old in self._old.items():
-            signal.signal(s, old)
+            signal.signal(s, _record if held else old)
         self._old = {}
+
+
+_LATE: list[int] = []     # signals recorded after a StopFlag ended inside hold_on_exit
+
+
+def _record(signum, frame):
+    _LATE.append(signum)
+
+
+@contextmanager
+def hold_on_exit():
+    """``with hold_on_exit():`` a StopFlag ending inside leaves SIGINT and SIGTERM recorded
+    (``pending_signal``) instead of putting the previous handlers back: the command line,
+    once a sweep has closed its file, prints its table without a signal cutting it, then
+    reports a signal that came meanwhile.  For a process that ends after its command."""
+    _HOLD[0] = True
+    try:
+        yield
+    finally:
+        _HOLD[0] = False
+
+
+def pending_signal() -> int | None:
+    """The first SIGINT or SIGTERM recorded since a StopFlag ended (``hold_on_exit``)."""
+    return _LATE[0] if _LATE else None
 
 
 def _exit_at_once(signum, frame):

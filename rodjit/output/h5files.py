@@ -22,7 +22,8 @@ from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
-           "WriteFailed", "disk_cause", "truncation", "repair_truncated"]
+           "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
+           "abandoned", "reserve_space", "quiet_disk_errors"]
 
 
 class NotARunFile(ValueError):
@@ -189,7 +190,14 @@ _CAUSES = {errno.ENOSPC: "no space left on the device",
 
 class WriteFailed(OSError):
     """The disk refused a write (full, a size limit or quota, an I/O error): the file keeps
-    its last checkpoint and ``rodjit run --resume`` continues it once there is space."""
+    its last checkpoint and ``rodjit run --resume`` continues it once there is space.
+    ``cause``: what the disk said, if the message says more."""
+
+    cause: str | None = None
+
+    def __init__(self, message: str, cause: str | None = None):
+        super().__init__(message)
+        self.cause = cause
 
 
 def disk_cause(exc: BaseException) -> str | None:
@@ -198,7 +206,7 @@ def disk_cause(exc: BaseException) -> str | None:
     seen = 0
     while exc is not None and seen < 5:
         if isinstance(exc, WriteFailed):
-            return str(exc)
+            return exc.cause or str(exc)
         code = getattr(exc, "errno", None)
         if code in _CAUSES:
             return _CAUSES[code]
@@ -207,6 +215,70 @@ def disk_cause(exc: BaseException) -> str | None:
             return _CAUSES[int(m.group(1))]
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None
+
+
+_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
+
+
+def quiet_disk_errors() -> None:
+    """Silence the errors h5py reports while releasing the handles of a file the disk
+    refused (full, a size limit): they cannot be acted on, and the one-line error of the
+    write that failed says what happened (through ``sys.unraisablehook``, and
+    ``sys.excepthook`` for the tracebacks its compiled deallocators print)."""
+    import sys
+
+    def unraisable(u):
+        if not _DISK_ERRNO.search(str(u.exc_value)):
+            sys.__unraisablehook__(u)
+
+    def excepthook(kind, value, tb):
+        if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
+            sys.__excepthook__(kind, value, tb)
+
+    sys.unraisablehook = unraisable
+    sys.excepthook = excepthook
+
+
+# h5py objects of files the disk failed.  HDF5 cannot close a file it can no longer
+# write, and trying (h5py's deallocators do, at any garbage collection or at exit) prints
+# tracebacks or crashes the process: they are kept here, never released, and a process
+# that holds any ends by os._exit (the command line, a sweep's workers).
+_ABANDONED: list = []
+
+
+def abandon(*objects) -> None:
+    """Keep ``objects`` (h5py files, datasets, writers, a traceback with the frames that
+    hold them) alive for the rest of the process: never closed, flushed or freed."""
+    _ABANDONED.extend(o for o in objects if o is not None)
+
+
+def abandoned() -> bool:
+    """Whether this process holds files the disk failed (``abandon``): it must end by
+    ``os._exit``, without the interpreter's shutdown."""
+    return bool(_ABANDONED)
+
+
+def reserve_space(path, nbytes: int) -> int:
+    """Allocate ``nbytes`` of disk space at the end of the closed HDF5 file ``path`` before
+    it is opened for a write, so that the write cannot run out of space (ENOSPC) or past a
+    file-size limit (EFBIG) half-way, which would leave the file inconsistent; HDF5 gives
+    back what it did not use when it closes the file.  Returns the file's size before; a
+    refused reservation raises WriteFailed with the file as it was."""
+    size = os.path.getsize(path)
+    fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
+    try:
+        os.posix_fallocate(fd, size, max(int(nbytes), 1))
+    except OSError as exc:
+        try:
+            os.ftruncate(fd, size)        # give back what was allocated of it
+        except OSError:
+            pass
+        if exc.errno in _CAUSES:
+            raise WriteFailed(_CAUSES[exc.errno], _CAUSES[exc.errno]) from None
+        # a file system that cannot reserve (EINVAL, ...): write without the reservation
+    finally:
+        os.close(fd)
+    return size
 
 
 def truncation(path) -> tuple[int, int] | None:

@@ -21,7 +21,7 @@ from ..records.observables import ImpactTrack
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .cf import LIBVER
-from .h5files import (WriteFailed, disk_cause, history_with, now, open_for_writing,
+from .h5files import (WriteFailed, abandon, disk_cause, history_with, now, open_for_writing,
                       stamp_writer)
 from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
                          overwrite)
@@ -174,9 +174,10 @@ def create_run_file(path, config, start, *, command: str) -> RunWriter:
             raise
         # the layout is incomplete and HDF5 cannot close a file it cannot extend: leave
         # the handle alone and remove the file, which holds no checkpoint yet
+        abandon(f, exc.__traceback__)
         Path(path).unlink(missing_ok=True)
         raise WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was "
-                          f"written") from None
+                          f"written", cause) from None
     return writer
 
 

@@ -20,6 +20,7 @@ from contextlib import contextmanager
 from itertools import count, islice
 from multiprocessing.connection import wait
 
+from ..output.h5files import abandoned, quiet_disk_errors
 from .point import PointTask, died, run_point, run_points, start_worker
 
 __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
@@ -120,18 +121,23 @@ def _worker_main(conn, warm) -> None:
     sends until it sends None or goes away."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
     _die_with_parent()
-    conn.send(("ready", start_worker(warm)))
-    while True:
-        try:
-            task = conn.recv()
-        except (EOFError, OSError):
-            return
-        if task is None:
-            return
-        try:
-            conn.send(run_point(task))
-        except (BrokenPipeError, OSError):
-            return
+    quiet_disk_errors()       # a run file the disk refuses: the parent reports it
+    try:
+        conn.send(("ready", start_worker(warm)))
+        while True:
+            try:
+                task = conn.recv()
+            except (EOFError, OSError):
+                return
+            if task is None:
+                return
+            try:
+                conn.send(run_point(task))
+            except (BrokenPipeError, OSError):
+                return
+    finally:
+        if abandoned():   # a run file the disk refused: its handles must not be closed
+            os._exit(0)
 
 
 class _Worker:

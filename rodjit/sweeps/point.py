@@ -21,6 +21,8 @@ import numpy as np
 from ..driver.files import run_to_file
 from ..driver.run import Run, SimulationError
 from ..model.laws import get_law
+from ..output.h5files import disk_cause, truncation
+from ..output.lock import lock_path
 from ..records.bounces import bounce_table, empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.extremes import Extremes
@@ -77,6 +79,7 @@ class PointResult:
     values: dict
     bounces: dict = field(default_factory=dict)
     worker: dict = field(default_factory=dict)
+    disk: str = ""      # the disk refused a write of the point's run file: what it said
 
     @property
     def status(self) -> str:
@@ -176,6 +179,8 @@ def _finite(x: float) -> float:
 
 
 def _run_to_file(config, path: str) -> tuple[dict, dict]:
+    if os.path.exists(path) and truncation(path):
+        os.unlink(path)     # this point's file, cut short by a full disk: nothing to keep
     try:
         # one thread: the sweep's workers already occupy every core
         s = run_to_file(config, path, overwrite=True, handle_signals=False, overlap=False,
@@ -198,6 +203,7 @@ def run_point(task: PointTask) -> PointResult:
     t0 = time.perf_counter()
     values = empty_values()
     bounces = empty_bounces()
+    disk = ""
     try:
         for mod in task.laws:
             importlib.import_module(mod)
@@ -208,9 +214,24 @@ def run_point(task: PointTask) -> PointResult:
         values.update(got)
         values.update(_bounce_values(bounces))
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
-        values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
+        disk = (disk_cause(exc) or "") if task.save_path is not None else ""
+        if disk:               # the run file: removed (the point runs again on --resume)
+            _remove_run_file(task.save_path)
+            values.update(status="failed", message=f"writing the run file failed: {disk}",
+                          run_file=os.path.basename(task.save_path))
+        else:
+            values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     values["wall_time"] = time.perf_counter() - t0
-    return PointResult(task.index, values, bounces, worker_info())
+    return PointResult(task.index, values, bounces, worker_info(), disk)
+
+
+def _remove_run_file(path: str) -> None:
+    """Remove a run file the disk refused, and the lock file noting why."""
+    for p in (path, lock_path(path)):
+        try:
+            os.unlink(p)
+        except OSError:
+            pass
 
 
 def run_points(points: tuple[PointTask, ...]) -> bytes:

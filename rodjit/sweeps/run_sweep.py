@@ -21,8 +21,9 @@ from ..driver.progress import close as close_progress
 from ..driver.progress import sweep_progress
 from ..driver.signals import StopFlag
 from ..output.estimate import MAX_OUTPUT, MAX_STEPS
-from ..output.h5files import FileBusy, check_output, open_file, writer_alive, writer_pid
-from ..output.lock import WriterLock
+from ..output.h5files import (FileBusy, WriteFailed, check_output, open_file, writer_alive,
+                              writer_pid)
+from ..output.lock import WriterLock, lock_path, note_failure
 from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import MAX_POINTS, Grid
@@ -278,17 +279,65 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
         run_attrs = {"save_runs": str(runs_dir) if runs_dir else "", "scheduler": executor.name,
                      "jobs": executor.jobs}
         if resume:
-            sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) by: "
-                                              f"{command}")
+            try:
+                sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) "
+                                                  f"by: {command}")
+            except WriteFailed as exc:
+                executor.close(cancel=True)
+                raise WriteFailed(f"cannot resume {str(output)!r}: {exc}; the file is as it "
+                                  f"was: free space, then run the same command again",
+                                  exc.cause) from None
         else:
             try:
                 sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
-            except BaseException:        # cut short (a signal, the disk): leave no part
+            except BaseException as exc:  # cut short (a signal, the disk): leave no part
                 Path(output).unlink(missing_ok=True)
                 executor.close(cancel=True)
+                if isinstance(exc, WriteFailed):
+                    raise WriteFailed(f"cannot create {str(output)!r}: {exc}; nothing was "
+                                      f"written", exc.cause) from None
                 raise
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start)
+
+
+def _remove_unreported(runs_dir: Path, grid: Grid, todo, cols) -> None:
+    """Remove the run files (and lock files) of the points that did not report before the
+    workers were stopped: cut short, they are neither complete nor part of the sweep, and
+    the points run again on ``--resume``."""
+    for i in todo:
+        if cols["status"][i] == "pending":
+            path = runs_dir / grid.run_name(i)
+            for p in (path, lock_path(path)):
+                p.unlink(missing_ok=True)
+
+
+def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
+    """Stop a sweep whose disk refused a write (``disk``: what was being written, the
+    cause, whether it was the sweep file): record what still can be, raise WriteFailed.
+    The sweep file keeps every point written before (``kept``); ``--resume`` runs the
+    others once there is space."""
+    what, cause, own = disk
+    n = len(table.grid)
+    if output is not None and not own:      # a run file failed: the sweep file may not
+        try:
+            sweep_file.write_results(output, batch)
+            kept += len(batch)
+            sweep_file.finish(output, "failed", f"writing {what} failed: {cause}")
+        except WriteFailed as exc:
+            own, cause = True, f"{cause} (and writing {str(output)!r}: {exc})"
+    if output is not None and own:
+        note_failure(output, f"a write failed: {cause}")
+    table.status = "failed"
+    table.message = (f"writing {what} failed: {cause}; the sweep stopped"
+                     + (f": {str(output)!r} keeps the points written ({kept} of {n}); free "
+                        f"space, then continue with: rodjit sweep --resume -o {output}"
+                        if output is not None
+                        else f" after {int(np.sum(table.columns['status'] != 'pending'))} of "
+                             f"{n} points"))
+    exc = WriteFailed(table.message, cause)
+    exc.table = table
+    raise exc
 
 
 def _stats(wall: float, ran: int, failed: int, executor, teardown: float = 0.0) -> dict:
@@ -320,12 +369,13 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
             path = str(runs_dir / grid.run_name(i)) if runs_dir is not None else None
             yield PointTask(i, cfg, path, law_modules(cfg))
 
-    ran = failed = 0
+    ran = failed = written = 0
     t_last = t0
     batch = []
     busy = False           # the last write found the file held by a reader
     last = time.monotonic()
     status, message, signum = "completed", "", None
+    disk = None            # the disk refused a write: (what, cause, the sweep file's own?)
     progress = sweep_progress(progress)
     results = executor.results(tasks(), total=len(todo))
     with StopFlag(handle_signals) as stop:
@@ -341,9 +391,15 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                     ran += 1
                     failed += result.status == "failed"
                     t_last = time.perf_counter()
+                    if result.disk:            # its run file: no point in going on
+                        status = "failed"
+                        disk = (f"the run file {result.values['run_file']!r} of point "
+                                f"{result.index}", result.disk, False)
                 if progress is not None:
                     progress(SweepProgress(done0 + ran, n, int(np.sum(cols["status"] == "failed")),
                                            ran, len(todo), time.perf_counter() - t0))
+                if disk is not None:
+                    break
                 if stop.signum is not None:
                     status, signum = "interrupted", stop.signum
                     break
@@ -351,35 +407,62 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
                               or (len(batch) >= BATCH_ROWS and not busy)):
                     try:
                         sweep_file.write_results(output, batch, wait=BUSY_WAIT)
+                        written += len(batch)
                         batch = []
                         busy = False
                     except FileBusy:   # a reader holds the file: keep them, retry later
                         busy = True
+                    except WriteFailed as exc:
+                        status, disk = "failed", (repr(str(output)), str(exc), True)
+                        break
                     last = time.monotonic()
         except KeyboardInterrupt:          # a second signal while stopping
             status = "interrupted"
         except BaseException as exc:
             results.close()
             if output is not None:
-                sweep_file.write_results(output, batch)
-                sweep_file.finish(output, "failed", f"{type(exc).__name__}: {exc}")
+                try:
+                    sweep_file.write_results(output, batch)
+                    sweep_file.finish(output, "failed", f"{type(exc).__name__}: {exc}")
+                except WriteFailed as failure:
+                    note_failure(output, f"a write failed: {failure}")
             raise
         finally:
+            stop.abort = False      # tearing down: a signal now is recorded, no more
             results.close()
             executor.close(cancel=status != "completed")
             close_progress(progress)
-    now = time.perf_counter()
-    table.stats = _stats(now - t0, ran, failed, executor, teardown=now - t_last)
-    if status == "interrupted":
-        name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
-        message = (f"interrupted by {name} after {done0 + ran} of {n} points"
-                   + (f"; continue with: rodjit sweep --resume -o {output}" if output else ""))
-    table.status, table.message = status, message
-    if output is not None:
-        sweep_file.write_results(output, batch)
-        sweep_file.finish(output, status, message)
+            if status != "completed" and runs_dir is not None:
+                _remove_unreported(runs_dir, grid, todo, cols)
+        # still under the StopFlag: a signal during the last write cannot cut it
+        if status == "interrupted" and not np.any(cols["status"] == "pending"):
+            status = "completed"    # the signal came with the last point: nothing is left
+        if disk is not None:
+            _disk_failed(table, output, batch, written + done0, disk)
+        now = time.perf_counter()
+        table.stats = _stats(now - t0, ran, failed, executor, teardown=now - t_last)
+        if status == "interrupted":
+            name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
+            message = (f"interrupted by {name} after {done0 + ran} of {n} points"
+                       + (f"; continue with: rodjit sweep --resume -o {output}" if output
+                          else ""))
+        table.status, table.message = status, message
+        if output is not None:
+            try:
+                sweep_file.write_results(output, batch)
+                written += len(batch)
+                batch = []
+                sweep_file.finish(output, status, message)
+            except WriteFailed as exc:
+                _disk_failed(table, output, batch, written + done0,
+                             (repr(str(output)), str(exc), True))
     if status == "interrupted":
         raise SweepInterrupted(message, signum, table)
+    if stop.signum is not None:     # after the last point: the sweep is complete
+        name = signal.Signals(stop.signum).name
+        raise SweepInterrupted(f"interrupted by {name} after the last point"
+                               + (f"; {str(output)!r} is complete" if output else ""),
+                               stop.signum, table)
     if table.counts["completed"] == 0 and table.counts["failed"] == n:
         raise SweepFailed(f"every point of the sweep failed ({n}); the first: "
                           f"{grid.describe(0)}: {cols['message'][0]}", table)

@@ -11,17 +11,27 @@ each point that ran, along its ``t_impact``.  Format 1, still read and continued
 Every row exists from the start, ``status = "pending"`` until its point reports.  The parent
 process is the only writer; it opens the file for each batch of results and closes it
 again, so between batches the file is complete on disk and other processes can read it.
+
+The disk refusing a write (full, a file-size limit) must not cut a batch half-way: HDF5
+would leave the file's structures inconsistent.  Each write therefore first reserves more
+disk space at the end of the file than it can use (``h5files.reserve_space``); if the disk
+refuses that, WriteFailed is raised with the file exactly as it was, every point written
+before kept.  A write that fails anyway (an I/O error) leaves its handles open
+(``h5files.abandon``): closing a file HDF5 cannot write only makes matters worse.
 """
 from __future__ import annotations
 
+import os
 import time
+from contextlib import contextmanager
 
 import h5py
 import numpy as np
 
 from ..config import Config, field_spec
 from ..output import cf
-from ..output.h5files import (FileBusy, NotARunFile, check_kind, history_with, now, open_file,
+from ..output.h5files import (FileBusy, NotARunFile, WriteFailed, abandon, check_kind,
+                              disk_cause, history_with, now, open_file, reserve_space,
                               stamp_writer, writer_attrs)
 from ..records.bounces import empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
@@ -39,6 +49,10 @@ READS = (1, 2)          # the formats this version reads and continues
 POINT = "point"         # the summary's dimension
 STATUSES = ("running", "completed", "interrupted", "failed")
 LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file before failing
+# disk space reserved before a write (bytes): the file grows by less, measured at ~11 KiB a
+# point with a short bounce table (its arrays are counted twice on top)
+RESERVE_BASE = 64 * 1024
+RESERVE_POINT = 32 * 1024
 
 _STR = h5py.string_dtype("utf-8")
 _DTYPES = {"str": _STR, "int": np.int64, "float": np.float64}
@@ -67,6 +81,8 @@ def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
         try:
             return h5py.File(path, mode, libver=cf.LIBVER)
         except OSError as exc:
+            if disk_cause(exc) is not None:
+                raise WriteFailed(disk_cause(exc), disk_cause(exc)) from None
             if "lock" not in str(exc) or time.monotonic() > deadline:
                 if "lock" in str(exc):
                     raise FileBusy(f"{str(path)!r} is held open by another process; "
@@ -75,10 +91,40 @@ def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
             time.sleep(0.05)
 
 
+@contextmanager
+def _writing(path, mode: str, wait: float = LOCK_WAIT, reserve: int = 0):
+    """``with _writing(path, mode) as f:`` the file open for writing, closed at the end;
+    ``reserve`` bytes of disk space are reserved first (not for a new file).  A write the
+    disk refuses raises WriteFailed (its message: the cause), and the file's handles are
+    abandoned rather than closed."""
+    size = reserve_space(path, reserve) if reserve else None
+    try:
+        f = _open(path, mode, wait)
+    except BaseException:
+        if size is not None:          # give the reservation back
+            try:
+                os.truncate(path, size)
+            except OSError:
+                pass
+        raise
+    try:
+        yield f
+        f.close()
+    except BaseException as exc:
+        cause = disk_cause(exc)
+        if cause is None:
+            if f.id.valid:
+                f.close()
+            raise
+        abandon(f, exc.__traceback__)      # every frame's h5py objects with it
+        raise WriteFailed(cause, cause) from None
+
+
 def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
-    """A new sweep file: attributes, every summary column with all rows pending."""
+    """A new sweep file: attributes, every summary column with all rows pending.
+    WriteFailed if the disk refuses (the caller removes the partial file)."""
     n = len(grid)
-    with _open(path, "w") as f:
+    with _writing(path, "w") as f:
         for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
                            "rodjit_version": __version__, "created": now(),
                            "command": command, "base_config_toml": base.to_toml(),
@@ -120,7 +166,7 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
 
 def reopen(path, *, history: str) -> None:
     """Mark a sweep file running again (resume), recording who continues it."""
-    with _open(path, "r+") as f:
+    with _writing(path, "r+", reserve=RESERVE_BASE) as f:
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         f.attrs["history"] = history_with(f, history)
@@ -134,7 +180,7 @@ def write_results(path, results, wait: float = LOCK_WAIT) -> None:
         return
     results = sorted(results, key=lambda r: r.index)
     idx = np.array([r.index for r in results])
-    with _open(path, "r+", wait) as f:
+    with _writing(path, "r+", wait, reserve=_batch_bytes(results)) as f:
         s = f["summary"]
         for name, (kind, _) in SUMMARY_COLUMNS.items():
             if name == "status":
@@ -153,6 +199,16 @@ def write_results(path, results, wait: float = LOCK_WAIT) -> None:
                 continue
             _bounce_table(b, r.bounces)
         s["status"][idx] = np.array([r.status for r in results], dtype=object)
+
+
+def _batch_bytes(results) -> int:
+    """Disk space to reserve for writing ``results``: more than they can take."""
+    total = RESERVE_BASE
+    for r in results:
+        total += RESERVE_POINT + 4 * sum(len(str(v)) for v in r.values.values()
+                                         if isinstance(v, str))
+        total += 2 * sum(np.asarray(col).nbytes for col in r.bounces.values())
+    return total
 
 
 def _bounce_table(g: h5py.Group, bounces: dict) -> None:
@@ -175,7 +231,7 @@ def _bounce_table(g: h5py.Group, bounces: dict) -> None:
 def finish(path, status: str, message: str = "", attrs: dict | None = None) -> None:
     if status not in STATUSES:
         raise ValueError(f"status {status!r} is not one of {STATUSES}")
-    with _open(path, "r+") as f:
+    with _writing(path, "r+", reserve=RESERVE_BASE + 4 * len(message)) as f:
         f.attrs["status"] = status
         f.attrs["message"] = message
         for key, value in (attrs or {}).items():

@@ -1,0 +1,65 @@
+"""The command line's entry point, ``main()``: both ``python -m rodjit`` and the installed
+``rodjit`` command run it.
+
+SIGINT and SIGTERM are handled from here on: until a run or a sweep takes them over (with
+a clean stop at its next checkpoint, ``driver.signals.StopFlag``), a signal ends the
+command with one line and exit code 128 + the signal number (130, 143), not a Traceback
+or click's "Aborted!".  Nothing is half-written then: no output file is open outside a
+StopFlag except while a sweep file is created, which is removed if that is cut short.
+Every error, click's usage errors included, is one line on stderr.  SIGXFSZ is ignored: a
+file-size limit (``ulimit -f``) then fails the write (EFBIG), which is reported in one line
+like a full disk, instead of killing the process.
+"""
+import os
+import signal
+import sys
+
+from .driver.signals import Interrupted, install_early_handlers
+
+__all__ = ["main"]
+
+
+def _finish(code: int):
+    """Exit with ``code``. The command's work is over (its files are closed), so SIGINT and
+    SIGTERM are blocked first: the interpreter's shutdown puts the default handlers back,
+    and a signal arriving then would kill the process (-15) after a successful run.  A
+    process holding files the disk failed (``output.h5files.abandon``) ends without the
+    interpreter's shutdown, which would try to close them."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    h5files = sys.modules.get("rodjit.output.h5files")
+    if h5files is not None and h5files.abandoned():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    sys.exit(code)
+
+
+def _exit_interrupted(signum: int):
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    print(f"Error: interrupted by {signal.Signals(signum).name}", file=sys.stderr)
+    _finish(128 + signum)
+
+
+def main() -> None:
+    """Run the ``rodjit`` command line on ``sys.argv`` and exit with its code."""
+    try:
+        install_early_handlers()     # (already while ``rodjit/__init__`` was imported)
+        if hasattr(signal, "SIGXFSZ"):
+            signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        import click
+
+        from .cli import main as command, one_line
+
+        try:
+            code = command.main(prog_name="rodjit", standalone_mode=False)
+            _finish(code if isinstance(code, int) else 0)
+        except click.exceptions.Abort:      # click's form of KeyboardInterrupt
+            _exit_interrupted(signal.SIGINT)
+        except click.exceptions.Exit as exc:
+            _finish(exc.exit_code)
+        except click.ClickException as exc:
+            print(f"Error: {one_line(exc.format_message())}", file=sys.stderr)
+            _finish(exc.exit_code)
+    except (Interrupted, KeyboardInterrupt) as exc:
+        _exit_interrupted(exc.signum if isinstance(exc, Interrupted) else signal.SIGINT)
