@@ -427,3 +427,37 @@ def test_a_reader_holding_the_file_delays_writes_but_loses_nothing(tmp_path, mon
     assert busy, "no write met the reader's lock"
     same_values(rodjit.load_sweep(path), inline_table)
     assert table.status == "completed"
+
+
+@pytest.mark.parametrize("resume", [False, True])
+def test_a_signal_while_the_sweep_file_layout_is_written_waits_for_the_layout(
+        tmp_path, monkeypatch, resume):
+    """SIGINT in the middle of writing the sweep file's layout (or its reopening) is held
+    until the layout is whole, then acts: KeyboardInterrupt, not an h5py TypeError from a
+    handler raising inside its callbacks; a new file is removed, a reopened one stays
+    resumable."""
+    path = tmp_path / "s.h5"
+    if resume:                                        # a sweep cut before its first point
+        sweep_file.create(path, BASE, Grid.from_spec({"rod.mu": [0.0]}), command="test",
+                          attrs={"save_runs": "", "scheduler": "inline", "jobs": 1})
+        sweep_file.finish(path, "interrupted")
+    name = "reopen" if resume else "create"
+    original = getattr(sweep_file, name)
+    written = []
+
+    def signalled(*args, **kwargs):
+        os.kill(os.getpid(), signal.SIGINT)          # lands while h5py writes attributes
+        written.append(original(*args, **kwargs))
+        return written[-1]
+
+    monkeypatch.setattr(sweep_file, name, signalled)
+    with pytest.raises(KeyboardInterrupt):
+        rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=resume, scheduler="inline")
+    assert len(written) == 1                          # the layout was written to its end
+    if resume:
+        monkeypatch.setattr(sweep_file, name, original)
+        table = rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=True,
+                             scheduler="inline")
+        assert table.status == "completed" and table.counts["completed"] == 1
+    else:
+        assert not path.exists()

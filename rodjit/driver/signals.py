@@ -8,7 +8,7 @@ import threading
 from contextlib import contextmanager
 
 __all__ = ["StopFlag", "Interrupted", "raise_interrupted", "install_early_handlers",
-           "hold_on_exit", "pending_signal"]
+           "hold_on_exit", "pending_signal", "deferred_signals"]
 
 
 class Interrupted(BaseException):
@@ -84,6 +84,30 @@ def hold_on_exit():
 def pending_signal() -> int | None:
     """The first SIGINT or SIGTERM recorded since a StopFlag ended (``hold_on_exit``)."""
     return _LATE[0] if _LATE else None
+
+
+@contextmanager
+def deferred_signals():
+    """``with deferred_signals():`` SIGINT and SIGTERM are recorded, not acted on, and the
+    first one is delivered again (to the handlers of before) when the block ends.
+
+    For writing a file's layout: a handler that raises inside h5py's C callbacks comes out
+    as an unrelated ``TypeError``, and would cut the layout at an arbitrary point.  The
+    caller removes the file when the re-delivered signal raises.  Main thread only
+    (elsewhere a no-op, as Python delivers signals to the main thread)."""
+    got: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield got
+        return
+    old = {s: signal.signal(s, lambda signum, frame: got.append(signum))
+           for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield got
+    finally:
+        for s, handler in old.items():
+            signal.signal(s, handler)
+        if got:
+            signal.raise_signal(got[0])
 
 
 def _exit_at_once(signum, frame):

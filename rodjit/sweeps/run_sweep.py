@@ -19,7 +19,7 @@ import numpy as np
 from ..config import Config
 from ..driver.progress import close as close_progress
 from ..driver.progress import sweep_progress
-from ..driver.signals import StopFlag
+from ..driver.signals import StopFlag, deferred_signals
 from ..output.estimate import MAX_OUTPUT, MAX_STEPS
 from ..output.h5files import (FileBusy, WriteFailed, check_output, open_file, writer_alive,
                               writer_pid)
@@ -280,8 +280,9 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                      "jobs": executor.jobs}
         if resume:
             try:
-                sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) "
-                                                  f"by: {command}")
+                with deferred_signals():
+                    sweep_file.reopen(output, history=f"resumed ({len(todo)} points to run) "
+                                                      f"by: {command}")
             except WriteFailed as exc:
                 executor.close(cancel=True)
                 raise WriteFailed(f"cannot resume {str(output)!r}: {exc}; the file is as it "
@@ -289,7 +290,8 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                                   exc.cause) from None
         else:
             try:
-                sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
+                with deferred_signals():  # a signal raised inside h5py would garble the layout
+                    sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
             except BaseException as exc:  # cut short (a signal, the disk): leave no part
                 Path(output).unlink(missing_ok=True)
                 executor.close(cancel=True)
