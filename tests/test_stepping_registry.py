@@ -156,8 +156,10 @@ def test_step_result_is_named():
 def test_control_from_the_time_config():
     tc = rodjit.Config().override({"time.cfl": 0.9, "time.dt_max": 0.01}).time
     c = control.build(tc, kdk.Verlet(0.9))
+    rules = control.RULES["second-order"]
     assert c == control.Control(dt_max=0.01, dt_min=tc.dt_min, dt_fixed=0.0,
-                                growth=control.GROWTH, gap=control.GAP_MAX)
+                                growth=control.GROWTH, growth_reject=rules.growth_reject,
+                                land=rules.land, split=rules.split, gap=control.GAP_MAX)
     c = control.build(rodjit.Config().time, kdk.SemiImplicit(0.05))
     assert c.gap == 0.05 and c.dt_max == math.inf
     from rodjit.stepping.energy import Energy
@@ -168,17 +170,21 @@ def test_control_from_the_time_config():
 
 def test_steps_land_on_output_times_and_never_leave_a_sliver():
     dtp = 0.1
-    assert control.step_to(False, 0.1 * (1 + 1e-7), dtp) == (0.1 * (1 + 1e-7), True)
-    assert control.step_to(False, 0.15, dtp) == (0.075, False)     # two equal steps
-    assert control.step_to(False, 0.25, dtp) == (dtp, False)
-    assert control.step_to(True, 0.15, dtp) == (dtp, False)        # fixed: never halved
-    assert control.step_to(True, 0.1 * (1 + 1e-10), dtp) == (0.1 * (1 + 1e-10), True)
-    assert control.step_to(True, 0.1 * (1 + 1e-7), dtp) == (dtp, False)
+    c = control.build(rodjit.Config().time, kdk.Verlet(0.5))     # the second-order rules
+    assert control.step_to(c, False, 0.1 * (1 + 1e-7), dtp) == (0.1 * (1 + 1e-7), True)
+    assert control.step_to(c, False, 0.15, dtp) == (0.075, False)     # two equal steps
+    assert control.step_to(c, False, 0.25, dtp) == (dtp, False)
+    assert control.step_to(c, True, 0.15, dtp) == (dtp, False)        # fixed: never halved
+    assert control.step_to(c, True, 0.1 * (1 + 1e-10), dtp) == (0.1 * (1 + 1e-10), True)
+    assert control.step_to(c, True, 0.1 * (1 + 1e-7), dtp) == (dtp, False)
 
 
 def test_growth_rejection_and_gap_rules():
-    c = control.Control(dt_max=1.0, dt_min=1e-12, dt_fixed=0.0, growth=1.5, gap=0.05)
+    c = control.Control(dt_max=1.0, dt_min=1e-12, dt_fixed=0.0, growth=1.5,
+                        growth_reject=1.0, land=control.LAND_ADAPTIVE,
+                        split=control.SPLIT_BELOW, gap=0.05)
     assert control.propose(c, 10.0, 0.1) == pytest.approx(0.15)
+    assert control.propose(c, 10.0, 0.1, True) == pytest.approx(0.1)   # after a rejection
     assert control.propose(c, 0.01, 0.1) == 0.01
     assert control.propose(c._replace(dt_fixed=0.3), 0.01, 0.1) == 0.3
     assert control.retry(True, 0.02, 0.1) == 0.02
