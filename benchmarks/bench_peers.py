@@ -90,7 +90,7 @@ SETTINGS = {
     "floor-N1000": {"preset": "paper-mu0", "over": {"rod.N": 1000, **STIFF_FLOOR},
                     "peers": [("cyrk", "DOP853"), ("cvode", "BDF"), ("scipy", "LSODA")]},
 }
-RODJIT = ("verlet", "semi-implicit", "energy", "dp54", "dop853")
+RODJIT = ("verlet", "semi-implicit", "energy", "dp54", "dop853", "radau5")
 CFL_DRIVEN = ("verlet", "semi-implicit")   # the others take rtol = atol = the scanned value
 PEER_DISTRIBUTIONS = {"cyrk": "cyrk", "cvode": "scikit-sundae", "scipy": "scipy"}
 

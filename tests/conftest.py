@@ -98,3 +98,43 @@ def one_line(err: str) -> str:
     lines = err.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in err and "Exception ignored" not in err, err
     return lines[0]
+
+
+def assert_resume_is_bit_identical(cfg, max_steps) -> None:
+    """A run paused after ``max_steps`` steps and resumed from its checkpoint ends in the
+    uninterrupted run's state, step counts, dissipated energy and scheme counters, bit for
+    bit."""
+    from rodjit.driver.run import Run
+    from rodjit.records.result import MemorySink
+    from rodjit.stepping import layout as L
+    one = Run(cfg)
+    one.start(MemorySink())
+    while one.advance(MemorySink()) != L.DONE:
+        pass
+    first = Run(cfg)
+    first.start(MemorySink())
+    first.advance(MemorySink(), max_steps=max_steps)
+    assert first.t < cfg.time.t_end
+    second = Run.from_checkpoint(cfg, first.checkpoint())
+    while second.advance(MemorySink()) != L.DONE:
+        pass
+    np.testing.assert_array_equal(second.state, one.state)
+    np.testing.assert_array_equal(second.sstats, one.sstats)
+    assert second.steps == one.steps and second.rejected == one.rejected
+    assert second.dissipated == one.dissipated
+
+
+def trial_step(cfg, step, dt):
+    """One trial step of the scheme kernel ``step`` from a started run's initial state:
+    ``(run, trial, result)``; the run's state must be left untouched by it."""
+    from rodjit.driver.run import Run
+    from rodjit.records.result import MemorySink
+    run = Run(cfg)
+    run.start(MemorySink())
+    scheme, _, system, rod, floor = run._args()
+    before = run.state.copy()
+    trial = np.zeros_like(run.state)
+    r = step(scheme, system, rod, floor, run.state[0], run.state[1], run.state[2],
+             trial[0], trial[1], trial[2], run.work, run.sstats, dt)
+    np.testing.assert_array_equal(run.state, before)
+    return run, trial, r

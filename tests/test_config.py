@@ -57,7 +57,7 @@ def test_presets_ship_the_paper_settings():
     ("initial.height", -0.06, r"initial\.height = -0\.06 is out of range \(float > -floor\.beta = -0\.05"),
     ("time.cfl", 1.5, r"time\.cfl = 1\.5 is out of range \(float in \(0, 1\]\)"),
     ("time.t_end", 0.0, r"time\.t_end = 0\.0 is out of range"),
-    ("time.integrator", "rk4", r"time\.integrator = 'rk4' is not allowed \(one of 'verlet', 'semi-implicit', 'energy', 'dp54', 'dop853'\)"),
+    ("time.integrator", "rk4", r"time\.integrator = 'rk4' is not allowed \(one of 'verlet', 'semi-implicit', 'energy', 'dp54', 'dop853', 'radau5'\)"),
     ("time.dt", -1.0, r"time\.dt = -1\.0 is out of range"),
     ("time.dt_min", 1.0, r"time\.dt_min = 1\.0 is out of range \(float > 0 and < time\.dt_max"),
     ("output.snapshot_interval", -1.0, r"output\.snapshot_interval = -1\.0 is out of range"),

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import rodjit
+from conftest import assert_resume_is_bit_identical
 from rodjit.records.result import MemorySink
 from rodjit.driver.run import Run
 from rodjit.kernels.forces import INACCURATE, NO_CONVERGENCE, OK, energies
@@ -384,19 +385,7 @@ def test_step_factor_is_the_clamped_inverse_cube_root():
 
 def test_resume_is_bit_identical():
     cfg = energy_config(**{"rod.N": 10, "rod.mu": 0.2, "time.t_end": 0.9, "time.rtol": 1e-5})
-    one = Run(cfg)
-    one.start(MemorySink())
-    while one.advance(MemorySink()) != L.DONE:
-        pass
-    first = Run(cfg)
-    first.start(MemorySink())
-    first.advance(MemorySink(), max_steps=777)
-    second = Run.from_checkpoint(cfg, first.checkpoint())
-    while second.advance(MemorySink()) != L.DONE:
-        pass
-    np.testing.assert_array_equal(second.state, one.state)
-    np.testing.assert_array_equal(second.sstats, one.sstats)
-    assert second.steps == one.steps and second.dissipated == one.dissipated
+    assert_resume_is_bit_identical(cfg, max_steps=777)
 
 
 def test_newton_failure_is_reported_and_shrinks_the_step():

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.driver.run import Run, SimulationError
+from conftest import assert_resume_is_bit_identical, trial_step
+from rodjit.driver.run import SimulationError
 from rodjit.kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE, OK
 from rodjit.records.result import MemorySink
 from rodjit.stepping import control, erk, layout as L, registry
@@ -145,15 +146,8 @@ def test_a_stage_outside_the_admissible_set_is_rejected(integrator):
     """A step far too long for a hard impact: a stage (or the new point) leaves ε > −1 or
     u_0 > −β; the step reports which, and leaves its inputs untouched."""
     cfg = _cfg(integrator, {"initial.height": 0.001, "initial.velocity": -5.0})
-    run = Run(cfg)
-    run.start(MemorySink())
-    scheme, _, system, rod, floor = run._args()
-    before = run.state.copy()
-    trial = np.zeros_like(run.state)
-    r = erk.step(scheme, system, rod, floor, run.state[0], run.state[1], run.state[2],
-                 trial[0], trial[1], trial[2], run.work, run.sstats, 0.05)
+    _, _, r = trial_step(cfg, erk.step, 0.05)
     assert r.status in (BAD_FLOOR, BAD_STRAIN, NON_FINITE)
-    np.testing.assert_array_equal(run.state, before)
     # the loop retries shorter and the run stays admissible through the impact
     res = rodjit.simulate(_cfg(integrator, {"initial.height": 0.001, "initial.velocity": -5.0,
                                             "time.t_end": 0.3, "time.rtol": 1e-4,
@@ -169,33 +163,16 @@ def test_a_stage_outside_the_admissible_set_is_rejected(integrator):
 @pytest.mark.parametrize("integrator", sorted(PAIRS))
 def test_resume_is_bit_identical(integrator):
     cfg = _cfg(integrator, {"rod.N": 10, "rod.mu": 0.2, "time.t_end": 0.9, "time.rtol": 1e-7})
-    one = Run(cfg)
-    one.start(MemorySink())
-    while one.advance(MemorySink()) != L.DONE:
-        pass
-    first = Run(cfg)
-    first.start(MemorySink())
-    first.advance(MemorySink(), max_steps=333)
-    assert first.t < cfg.time.t_end
-    second = Run.from_checkpoint(cfg, first.checkpoint())
-    while second.advance(MemorySink()) != L.DONE:
-        pass
-    np.testing.assert_array_equal(second.state, one.state)
-    assert second.steps == one.steps and second.rejected == one.rejected
-    assert second.dissipated == one.dissipated
+    assert_resume_is_bit_identical(cfg, max_steps=333)
 
 
 def test_step_is_ok_and_fsal():
     """An accepted step leaves the new state's full acceleration in a2 (the next step's
     first stage), equal to a fresh evaluation at (u2, v2)."""
     cfg = _cfg("dp54", {"rod.mu": 0.3, "rod.gamma": 1e-3})
-    run = Run(cfg)
-    run.start(MemorySink())
-    scheme, _, system, rod, floor = run._args()
-    trial = np.zeros_like(run.state)
-    r = erk.step(scheme, system, rod, floor, run.state[0], run.state[1], run.state[2],
-                 trial[0], trial[1], trial[2], run.work, run.sstats, 1e-4)
+    run, trial, r = trial_step(cfg, erk.step, 1e-4)
     assert r.status == OK
+    _, _, system, rod, floor = run._args()
     a = np.zeros_like(trial[2])
     erk.full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1], False)
     np.testing.assert_array_equal(a, trial[2])

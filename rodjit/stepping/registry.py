@@ -61,6 +61,9 @@ SCHEMES: tuple[Scheme, ...] = (
     Scheme("dop853", "rodjit.stepping.erk", "DOP853",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 24, gap_control=False,
            step_rules="pair-dop853"),
+    Scheme("radau5", "rodjit.stepping.radau", "Radau5",
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
+           counters=("newton_iterations", "newton_failures"), gap_control=False),
 )
 
 NAMES: tuple[str, ...] = tuple(s.name for s in SCHEMES)

@@ -1,0 +1,565 @@
+"""Three-stage Radau IIA collocation (``time.integrator = "radau5"``): order 5, L-stable,
+stiffly accurate, for stiff viscosity and stiff floors at tight tolerances.
+
+It integrates the first-order form of MODEL.md §2, y = (u, v), y' = f(y) = (v, a(u, v)),
+a = M⁻¹(−∇V(u) − μKv) (``energy.full_accel``).  A step of length dt from yⁿ solves for the
+stage increments Z_i = Y_i − yⁿ (i = 1, 2, 3, at c = (4 − √6)/10, (4 + √6)/10, 1)
+
+    Z_i = dt Σ_j a_ij f(yⁿ + Z_j),      yⁿ⁺¹ = yⁿ + Z_3       (stiffly accurate)
+
+with the Radau IIA matrix (a_ij) (Hairer & Wanner, *Solving Ordinary Differential
+Equations II*, IV.8; the constants are those of their RADAU5 and of SciPy's ``Radau``).
+
+Newton: simplified, with the Jacobian J = ∂f/∂y at yⁿ, in Hairer and Wanner's transformed
+variables W = T⁻¹Z, which turn the 3 × 2(N+1) system into one real system with
+(μ_r/dt I − J) and one complex with ((α − iβ)/dt I − J) (T diagonalises a⁻¹).  J has the
+block form [[0, I], [−M⁻¹H, −μM⁻¹K]] (H: the Hessian of V at uⁿ, tridiagonal for γ = 0,
+pentadiagonal for γ > 0, σ_b' one-sided at u_0 = 0 like the force; K = DᵀD/h), so
+(λI − J)(x, y) = (r₁, r₂) reduces by y = λx − r₁ to one banded symmetric system in x,
+
+    (λM + μK + H/λ) x = M r₁ + (M r₂ + μK r₁)/λ,
+
+whose matrix has a positive definite real part for every Re λ > 0, Re 1/λ > 0 (M SPD,
+K, H positive semidefinite), so elimination without pivoting is safe for the complex λ too.
+The real system is solved with the banded solvers of ``kernels.banded``; the complex one
+with the complex LDLᵀ below.  Newton starts from Z = 0, so its first update needs no
+evaluation (every stage is f(yⁿ), the state's own (v, a)): it is the collocation solution
+of the problem linearised at yⁿ.  Convergence and divergence are judged by the
+contraction rate as in SciPy's ``Radau``: converged once rate/(1 − rate)·‖ΔW‖ < κ,
+κ = max(10 ε_mach/rtol, min(0.03, √rtol)); no convergence (or a rate ≥ 1, or no chance to
+converge within the iterations left) returns NO_CONVERGENCE and the loop retries shorter.
+Every stage state is checked (ε > −1, u_0 > −β, finite); one outside returns its failure
+code.  Nothing is carried from one step to the next (the Jacobian and its factors are made
+afresh each step), so a step depends on (yⁿ, dt) alone and a resumed run is bit for bit
+the uninterrupted one.
+
+Error estimate (Hairer's): err = (μ_r/dt I − J)⁻¹ (f(yⁿ) + Σ e_i Z_i / dt), an embedded
+third-order solution filtered by the real factor so stiff components do not inflate it; when
+it exceeds 1 it is refined once by err ← (μ_r/dt I − J)⁻¹ (f(yⁿ + err) + Σ e_i Z_i/dt).
+Norm: root mean square over the 2(N+1) components of err/(atol + rtol·max(|yⁿ|, |yⁿ⁺¹|)).
+≤ 1 accepts; > 1 returns INACCURATE.  The next step is dt·fac·err^(−1/4) in [0.2, 10]×,
+fac = 0.9·(2 n_max + 1)/(2 n_max + n_newton) (fewer Newton iterations, bolder steps).
+The tolerances are used as given (like SciPy's ``Radau``; RADAU5 itself rescales them).
+
+Dissipation: the Radau quadrature dt Σ b_i 2R(V_i) over the stage velocities (b_i = a_3i),
+exact for polynomials of degree 4, so E + dissipated = E₀ to the step's accuracy.
+Order: 5 where the motion is non-stiff; with stiff viscosity (μ dt/h² ≫ 1) the stiff
+components converge at the stage order 3 + 1 instead (tests/test_stepping_radau.py measures
+both).  The state's ``a`` row carries the full acceleration, as for ``energy``.
+"""
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from ..kernels.banded import (penta_factor, penta_solve, sym_tridiag_apply,
+                              sym_tridiag_solve)
+from ..kernels.forces import INACCURATE, NO_CONVERGENCE, NON_FINITE, OK, momentum
+from ..kernels.mass import node_mass as _mass
+from ..model.laws import deriv
+from . import energy
+from .beam import add_bending
+from .erk import _rate
+from .registry import counter_index
+from .step_result import StepResult
+from .._jit import exact_step_kernel, step_kernel
+
+__all__ = ["Radau5", "initial", "step", "WORK_ROWS", "C", "E", "T", "TI", "MU_REAL",
+           "ALPHA", "BETA", "B"]
+
+NEWTON_ITERATIONS = counter_index("newton_iterations")
+NEWTON_FAILURES = counter_index("newton_failures")
+
+S6 = math.sqrt(6.0)
+C = np.array([(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0])
+B = np.array([(16.0 - S6) / 36.0, (16.0 + S6) / 36.0, 1.0 / 9.0])   # the last row of a
+E = np.array([-13.0 - 7.0 * S6, -13.0 + 7.0 * S6, -1.0]) / 3.0
+# a⁻¹ = T diag(μ_r, [[α, −β], [β, α]]) T⁻¹ (Hairer & Wanner's RADAU5 constants)
+MU_REAL = 3.0 + 3.0 ** (2.0 / 3.0) - 3.0 ** (1.0 / 3.0)
+ALPHA = 3.0 + 0.5 * (3.0 ** (1.0 / 3.0) - 3.0 ** (2.0 / 3.0))
+BETA = 0.5 * (3.0 ** (5.0 / 6.0) + 3.0 ** (7.0 / 6.0))
+T = np.array([
+    [0.09443876248897524, -0.14125529502095421, 0.03002919410514742],
+    [0.25021312296533332, 0.20412935229379994, -0.38294211275726192],
+    [1.0, 1.0, 0.0]])
+TI = np.array([
+    [4.17871859155190428, 0.32768282076106237, 0.52337644549944951],
+    [-4.17871859155190428, -0.32768282076106237, 0.47662355450055044],
+    [0.50287263494578682, -2.57192694985560522, 0.59603920482822492]])
+_T00, _T01, _T02 = T[0]
+_T10, _T11, _T12 = T[1]
+_TI00, _TI01, _TI02 = TI[0]
+_TI10, _TI11, _TI12 = TI[1]
+_TI20, _TI21, _TI22 = TI[2]
+_C0, _C1 = C[0], C[1]
+_B0, _B1, _B2 = B
+_E0, _E1, _E2 = E
+
+MAX_NEWTON = 7        # the first (free) update and up to six with stage evaluations
+SAFETY = 0.9
+FAC_MIN = 0.2
+FAC_MAX = 10.0
+EPS = 2.220446049250313e-16
+
+# rows of the scratch array ``work`` (per-step scratch: nothing survives a step)
+S = 0          # segment stresses (full_accel)
+K = 1          # curvatures
+FP = 2         # f'(ε_i) of uⁿ, per segment (the Hessian)
+ZU = 3         # stage increments Z_i: u part rows ZU + 2i, v part ZU + 2i + 1 (i = 0, 1, 2)
+WU = 9         # transformed W = T⁻¹Z, same layout
+DU = 15        # Newton update ΔW, same layout (the right-hand sides are solved in place)
+FA = 21        # stage accelerations a(Y_i), rows FA + i
+YU = 24        # a stage state (u, v)
+YV = 25
+RJ0 = 26       # real matrix diagonals (i,i), (i,i+1), (i,i+2)
+RJ1 = 27
+RJ2 = 28
+RL1 = 29       # its factor (tridiagonal: RL1 eliminated couplings, RDI reciprocal pivots)
+RL2 = 30
+RDI = 31
+RB = 32        # banded right-hand side / solution
+CJ = 33        # complex matrix: rows CJ … CJ+5 = (re, im) of the diagonals (i,i+k), k = 0, 1, 2
+CL = 39        # its LDLᵀ factor: (re, im) of l1 (i,i−1), l2 (i,i−2), 1/d
+CB = 45        # complex right-hand side / solution (re, im)
+EU = 47        # error estimate (u, v)
+EV = 48
+EA = 49        # acceleration at yⁿ + err (the refined estimate)
+WORK_ROWS = 50
+
+
+class Radau5(NamedTuple):
+    """Parameters of the Radau IIA step: error tolerances."""
+
+    rtol: float
+    atol: float
+
+
+@step_kernel
+def _factor(err, n_newton):
+    """The next step over this one: 0.9 (2n_max+1)/(2n_max+n) err^(−1/4) in [0.2, 10]."""
+    if not err > 0.0:
+        return FAC_MAX
+    fac = SAFETY * (2.0 * MAX_NEWTON + 1.0) / (2.0 * MAX_NEWTON + n_newton)
+    return min(FAC_MAX, max(FAC_MIN, fac / math.sqrt(math.sqrt(err))))
+
+
+@step_kernel
+def _jacobian(system, rod, floor, u, fp):
+    """f'(ε_i) of the segments of u into ``fp``; returns −σ_b'(u_0) (≥ 0)."""
+    ih = 1.0 / system.h
+    for i in range(system.n):
+        fp[i] = deriv((u[i + 1] - u[i]) * ih - 1.0, rod)
+    return -deriv(u[0], floor)
+
+
+@step_kernel
+def _real_matrix(system, work, lam, qb):
+    """Rows RJ0–RJ2 = λM + μK + H/λ (real λ); factored into RL1, RL2, RDI if γ > 0
+    (the tridiagonal factor is made with the first solve)."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    il = 1.0 / lam
+    fp = work[FP]
+    j0 = work[RJ0]
+    j1 = work[RJ1]
+    prev = 0.0
+    for i in range(n + 1):
+        d = lam * _mass(i, n, h) + prev
+        if i < n:
+            c = (system.mu + fp[i] * il) * ih
+            d += c
+            j1[i] = -c
+            prev = c
+        j0[i] = d
+    j0[0] += qb * il
+    j1[n] = 0.0
+    if system.gamma > 0.0:
+        j2 = work[RJ2]
+        for i in range(n + 1):
+            j2[i] = 0.0
+        add_bending(j0, j1, j2, system.gamma * il * ih * ih * ih, n)
+        penta_factor(j0, j1, j2, work[RL1], work[RL2], work[RDI])
+
+
+@step_kernel
+def _complex_matrix(system, work, lr, li, qb):
+    """Rows CJ… = λM + μK + H/λ for λ = lr + i li, and its complex LDLᵀ into rows CL…"""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    den = lr * lr + li * li
+    ir = lr / den          # 1/λ
+    ii = -li / den
+    fp = work[FP]
+    a0r = work[CJ]
+    a0i = work[CJ + 1]
+    a1r = work[CJ + 2]
+    a1i = work[CJ + 3]
+    a2r = work[CJ + 4]
+    a2i = work[CJ + 5]
+    pr = 0.0
+    pi = 0.0
+    for i in range(n + 1):
+        m = _mass(i, n, h)
+        dr = lr * m + pr
+        di = li * m + pi
+        if i < n:
+            cr = (system.mu + fp[i] * ir) * ih
+            ci = fp[i] * ii * ih
+            dr += cr
+            di += ci
+            a1r[i] = -cr
+            a1i[i] = -ci
+            pr = cr
+            pi = ci
+        a0r[i] = dr
+        a0i[i] = di
+        a2r[i] = 0.0
+        a2i[i] = 0.0
+    a0r[0] += qb * ir
+    a0i[0] += qb * ii
+    a1r[n] = 0.0
+    a1i[n] = 0.0
+    if system.gamma > 0.0:
+        w = system.gamma * ih * ih * ih
+        add_bending(a0r, a1r, a2r, w * ir, n)
+        add_bending(a0i, a1i, a2i, w * ii, n)
+    _complex_factor(work)
+
+
+@exact_step_kernel
+def _complex_factor(work):
+    """LDLᵀ of the complex symmetric pentadiagonal matrix in rows CJ… (as
+    ``banded.penta_factor``, in complex arithmetic) into rows CL… (l1, l2, 1/d)."""
+    a0r = work[CJ]
+    a0i = work[CJ + 1]
+    a1r = work[CJ + 2]
+    a1i = work[CJ + 3]
+    a2r = work[CJ + 4]
+    a2i = work[CJ + 5]
+    l1r = work[CL]
+    l1i = work[CL + 1]
+    l2r = work[CL + 2]
+    l2i = work[CL + 3]
+    dir_ = work[CL + 4]
+    dii = work[CL + 5]
+    n1 = a0r.size
+    d_m2 = 0.0 + 0.0j
+    d_m1 = 0.0 + 0.0j
+    prev_l1 = 0.0 + 0.0j
+    for i in range(n1):
+        li2 = 0.0 + 0.0j
+        li1 = 0.0 + 0.0j
+        if i >= 2:
+            li2 = complex(a2r[i - 2], a2i[i - 2]) / d_m2
+        if i >= 1:
+            li1 = (complex(a1r[i - 1], a1i[i - 1]) - li2 * d_m2 * prev_l1) / d_m1
+        d = complex(a0r[i], a0i[i]) - li1 * li1 * d_m1 - li2 * li2 * d_m2
+        inv = 1.0 / d
+        l1r[i] = li1.real
+        l1i[i] = li1.imag
+        l2r[i] = li2.real
+        l2i[i] = li2.imag
+        dir_[i] = inv.real
+        dii[i] = inv.imag
+        prev_l1 = li1
+        d_m2 = d_m1
+        d_m1 = d
+
+
+@exact_step_kernel
+def _complex_solve(work, xr, xi):
+    """Solve in place with the factor of ``_complex_factor`` (x = re + i im)."""
+    l1r = work[CL]
+    l1i = work[CL + 1]
+    l2r = work[CL + 2]
+    l2i = work[CL + 3]
+    dir_ = work[CL + 4]
+    dii = work[CL + 5]
+    n1 = xr.size
+    for i in range(n1):
+        z = complex(xr[i], xi[i])
+        if i >= 1:
+            z -= complex(l1r[i], l1i[i]) * complex(xr[i - 1], xi[i - 1])
+        if i >= 2:
+            z -= complex(l2r[i], l2i[i]) * complex(xr[i - 2], xi[i - 2])
+        xr[i] = z.real
+        xi[i] = z.imag
+    for i in range(n1):
+        z = complex(xr[i], xi[i]) * complex(dir_[i], dii[i])
+        xr[i] = z.real
+        xi[i] = z.imag
+    for i in range(n1 - 1, -1, -1):
+        z = complex(xr[i], xi[i])
+        if i + 1 < n1:
+            z -= complex(l1r[i + 1], l1i[i + 1]) * complex(xr[i + 1], xi[i + 1])
+        if i + 2 < n1:
+            z -= complex(l2r[i + 2], l2i[i + 2]) * complex(xr[i + 2], xi[i + 2])
+        xr[i] = z.real
+        xi[i] = z.imag
+
+
+@step_kernel
+def _solve_real(system, work, lam, ru, rv, fresh):
+    """(λI − J)(x, y) = (ru, rv) in place for the real λ = μ_r/dt (module docstring):
+    x from the banded system, y = λx − r₁.  ``fresh``: the first solve of the step
+    (the tridiagonal factor is made with it)."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    il = 1.0 / lam
+    mu = system.mu
+    b = work[RB]
+    for i in range(n + 1):
+        kr = 0.0     # (K r₁)_i = Σ over the adjacent segments (r₁_i − r₁_j)/h
+        if i > 0:
+            kr += ru[i] - ru[i - 1]
+        if i < n:
+            kr += ru[i] - ru[i + 1]
+        m = _mass(i, n, h)
+        b[i] = m * ru[i] + (m * rv[i] + mu * kr * ih) * il
+    if system.gamma > 0.0:
+        penta_solve(work[RL1], work[RL2], work[RDI], b, b)
+    elif fresh:
+        sym_tridiag_solve(work[RJ0], work[RJ1], b, b, work[RL1], work[RDI])
+    else:
+        sym_tridiag_apply(work[RJ1], work[RL1], work[RDI], b, b)
+    for i in range(n + 1):
+        rv[i] = lam * b[i] - ru[i]
+        ru[i] = b[i]
+
+
+@step_kernel
+def _solve_complex(system, work, lr, li, rur, rui, rvr, rvi):
+    """(λI − J)(x, y) = (r₁, r₂) in place for the complex λ = lr + i li."""
+    n = system.n
+    h = system.h
+    ih = 1.0 / h
+    mu = system.mu
+    lam = complex(lr, li)
+    il = 1.0 / lam
+    br = work[CB]
+    bi = work[CB + 1]
+    for i in range(n + 1):
+        krr = 0.0
+        kri = 0.0
+        if i > 0:
+            krr += rur[i] - rur[i - 1]
+            kri += rui[i] - rui[i - 1]
+        if i < n:
+            krr += rur[i] - rur[i + 1]
+            kri += rui[i] - rui[i + 1]
+        m = _mass(i, n, h)
+        r1 = complex(rur[i], rui[i])
+        z = m * r1 + (m * complex(rvr[i], rvi[i]) + mu * ih * complex(krr, kri)) * il
+        br[i] = z.real
+        bi[i] = z.imag
+    _complex_solve(work, br, bi)
+    for i in range(n + 1):
+        x = complex(br[i], bi[i])
+        y = lam * x - complex(rur[i], rui[i])
+        rur[i] = x.real
+        rui[i] = x.imag
+        rvr[i] = y.real
+        rvi[i] = y.imag
+
+
+@step_kernel
+def _stage_state(u, v, work, j):
+    """Rows YU, YV = yⁿ + Z_j."""
+    zu = work[ZU + 2 * j]
+    zv = work[ZU + 2 * j + 1]
+    yu = work[YU]
+    yv = work[YV]
+    for i in range(u.size):
+        yu[i] = u[i] + zu[i]
+        yv[i] = v[i] + zv[i]
+
+
+@step_kernel
+def _newton(scheme, system, rod, floor, u, v, a, work, sstats, dt):
+    """Simplified Newton on the transformed stage equations (module docstring); leaves Z
+    in rows ZU….  Returns ``(status, value, iterations)``."""
+    n1 = u.size
+    lr = MU_REAL / dt
+    cr = ALPHA / dt
+    ci = -BETA / dt
+    tol = max(10.0 * EPS / scheme.rtol, min(0.03, math.sqrt(scheme.rtol)))
+    for r in range(ZU, DU):
+        for i in range(n1):
+            work[r, i] = 0.0
+    old = 0.0
+    for it in range(MAX_NEWTON):
+        # right-hand sides: F·TI_k − (Λ W)_k, F_j = f(yⁿ + Z_j) (all f(yⁿ) at Z = 0)
+        if it > 0:
+            for j in range(3):
+                _stage_state(u, v, work, j)
+                status, val, _, _, _ = energy.full_accel(system, rod, floor, work[YU],
+                                                         work[YV], work[FA + j], work[S],
+                                                         work[K], False)
+                if status != OK:
+                    return status, val, it
+        for i in range(n1):
+            if it > 0:
+                f0u = v[i] + work[ZU + 1, i]
+                f1u = v[i] + work[ZU + 3, i]
+                f2u = v[i] + work[ZU + 5, i]
+                f0v = work[FA, i]
+                f1v = work[FA + 1, i]
+                f2v = work[FA + 2, i]
+            else:
+                f0u = f1u = f2u = v[i]
+                f0v = f1v = f2v = a[i]
+            w0u = work[WU, i]
+            w0v = work[WU + 1, i]
+            w1u = work[WU + 2, i]
+            w1v = work[WU + 3, i]
+            w2u = work[WU + 4, i]
+            w2v = work[WU + 5, i]
+            work[DU, i] = _TI00 * f0u + _TI01 * f1u + _TI02 * f2u - lr * w0u
+            work[DU + 1, i] = _TI00 * f0v + _TI01 * f1v + _TI02 * f2v - lr * w0v
+            work[DU + 2, i] = (_TI10 * f0u + _TI11 * f1u + _TI12 * f2u
+                               - (cr * w1u - ci * w2u))
+            work[DU + 3, i] = (_TI10 * f0v + _TI11 * f1v + _TI12 * f2v
+                               - (cr * w1v - ci * w2v))
+            work[DU + 4, i] = (_TI20 * f0u + _TI21 * f1u + _TI22 * f2u
+                               - (cr * w2u + ci * w1u))
+            work[DU + 5, i] = (_TI20 * f0v + _TI21 * f1v + _TI22 * f2v
+                               - (cr * w2v + ci * w1v))
+        _solve_real(system, work, lr, work[DU], work[DU + 1], it == 0)
+        _solve_complex(system, work, cr, ci, work[DU + 2], work[DU + 4], work[DU + 3],
+                       work[DU + 5])
+        sstats[NEWTON_ITERATIONS] += 1
+        nrm = 0.0
+        for i in range(n1):
+            iu = 1.0 / (scheme.atol + scheme.rtol * abs(u[i]))
+            iv = 1.0 / (scheme.atol + scheme.rtol * abs(v[i]))
+            for k in range(3):
+                du = work[DU + 2 * k, i] * iu
+                dv = work[DU + 2 * k + 1, i] * iv
+                nrm += du * du + dv * dv
+        nrm = math.sqrt(nrm / (6.0 * n1))
+        if not math.isfinite(nrm):
+            return NON_FINITE, nrm, it + 1
+        rate = 0.0
+        if it > 0:
+            rate = nrm / old
+            if rate >= 1.0 or rate ** (MAX_NEWTON - it) / (1.0 - rate) * nrm > tol:
+                sstats[NEWTON_FAILURES] += 1
+                return NO_CONVERGENCE, nrm, it + 1
+        for r in range(6):
+            for i in range(n1):
+                work[WU + r, i] += work[DU + r, i]
+        for p in range(2):   # Z = T W, for the u and the v parts
+            w0 = work[WU + p]
+            w1 = work[WU + 2 + p]
+            w2 = work[WU + 4 + p]
+            z0 = work[ZU + p]
+            z1 = work[ZU + 2 + p]
+            z2 = work[ZU + 4 + p]
+            for i in range(n1):
+                z0[i] = _T00 * w0[i] + _T01 * w1[i] + _T02 * w2[i]
+                z1[i] = _T10 * w0[i] + _T11 * w1[i] + _T12 * w2[i]
+                z2[i] = w0[i] + w1[i]
+        if nrm == 0.0 or (it > 0 and rate / (1.0 - rate) * nrm < tol):
+            return OK, 0.0, it + 1
+        old = nrm
+    sstats[NEWTON_FAILURES] += 1
+    return NO_CONVERGENCE, old, MAX_NEWTON
+
+
+@step_kernel
+def _error(scheme, u, v, u2, v2, work):
+    """RMS of rows EU, EV over atol + rtol·max(|yⁿ|, |yⁿ⁺¹|)."""
+    e = 0.0
+    eu = work[EU]
+    ev = work[EV]
+    for i in range(u.size):
+        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
+        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
+        x = eu[i] / su
+        y = ev[i] / sv
+        e += x * x + y * y
+    return math.sqrt(e / (2.0 * u.size))
+
+
+@step_kernel
+def _error_rhs(v, a, work, fu, fv, idt):
+    """Rows EU, EV = (fu, fv) + Σ e_i Z_i / dt (fu, fv: f at yⁿ or at yⁿ + err)."""
+    eu = work[EU]
+    ev = work[EV]
+    for i in range(v.size):
+        zu = _E0 * work[ZU, i] + _E1 * work[ZU + 2, i] + _E2 * work[ZU + 4, i]
+        zv = _E0 * work[ZU + 1, i] + _E1 * work[ZU + 3, i] + _E2 * work[ZU + 5, i]
+        eu[i] = fu[i] + zu * idt
+        ev[i] = fv[i] + zv * idt
+
+
+@step_kernel
+def initial(scheme, system, rod, floor, u, v, a, work):
+    """Full acceleration of the initial state and the first step (``energy.initial``'s
+    estimate: the controller grows it from there)."""
+    return energy.initial(scheme, system, rod, floor, u, v, a, work)
+
+
+@step_kernel
+def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
+    """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
+
+    Returns OK, INACCURATE (valid state, error estimate > 1: retry with ``dt_suggest``),
+    NO_CONVERGENCE, or the failure code of a stage outside the admissible set."""
+    n1 = u.size
+    qb = _jacobian(system, rod, floor, u, work[FP])
+    lr = MU_REAL / dt
+    _real_matrix(system, work, lr, qb)
+    _complex_matrix(system, work, ALPHA / dt, -BETA / dt, qb)
+    status, val, nit = _newton(scheme, system, rod, floor, u, v, a, work, sstats, dt)
+    if status != OK:
+        return StepResult(status, val, 0.0, 0.0, 0.0, 0.0, 0.0)
+    zu = work[ZU + 4]
+    zv = work[ZU + 5]
+    for i in range(n1):
+        u2[i] = u[i] + zu[i]
+        v2[i] = v[i] + zv[i]
+    status, val, emin, fl, _ = energy.full_accel(system, rod, floor, u2, v2, a2, work[S],
+                                                 work[K], False)
+    if status != OK:
+        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
+    idt = 1.0 / dt
+    _error_rhs(v, a, work, v, a, idt)
+    _solve_real(system, work, lr, work[EU], work[EV], False)
+    err = _error(scheme, u, v, u2, v2, work)
+    if err > 1.0:
+        # refined once from f(yⁿ + err) (stiff components of the first estimate removed)
+        yu = work[YU]
+        yv = work[YV]
+        for i in range(n1):
+            yu[i] = u[i] + work[EU, i]
+            yv[i] = v[i] + work[EV, i]
+        st = energy.full_accel(system, rod, floor, yu, yv, work[EA], work[S], work[K],
+                               False)[0]
+        if st == OK:
+            _error_rhs(v, a, work, yv, work[EA], idt)
+            _solve_real(system, work, lr, work[EU], work[EV], False)
+            err = _error(scheme, u, v, u2, v2, work)
+    if not math.isfinite(err):
+        return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
+    diss = 0.0
+    if system.mu > 0.0:
+        # stage velocities V_j = vⁿ + Zv_j (V_3 = vⁿ⁺¹)
+        yv = work[YV]
+        for i in range(n1):
+            yv[i] = v[i] + work[ZU + 1, i]
+        d0 = _rate(system, yv)
+        for i in range(n1):
+            yv[i] = v[i] + work[ZU + 3, i]
+        d1 = _rate(system, yv)
+        diss = dt * (_B0 * d0 + _B1 * d1 + _B2 * _rate(system, v2))
+    w = momentum(v2, system.h)
+    fac = _factor(err, nit)
+    if err > 1.0:
+        return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
+    return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)
