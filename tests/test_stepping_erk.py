@@ -11,7 +11,7 @@ import pytest
 
 import rodjit
 from conftest import assert_resume_is_bit_identical, trial_step
-from rodjit.driver.run import SimulationError
+from rodjit.driver.run import Run, SimulationError
 from rodjit.kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE, OK
 from rodjit.records.result import MemorySink
 from rodjit.stepping import control, erk, layout as L, registry
