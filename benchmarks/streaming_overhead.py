@@ -103,8 +103,12 @@ def main():
     ap.add_argument("--N", type=int, default=200)
     ap.add_argument("--t-end", type=float, default=30.0)
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--integrator", default="verlet",
+                    help="the stepping of the measured run (default verlet: the cheapest "
+                         "steps, so the writer's share is the largest)")
     args = ap.parse_args()
     base = rodjit.Config().override({"rod.N": args.N, "time.t_end": args.t_end,
+                                     "time.integrator": args.integrator,
                                      "output.diagnostics_interval": 0.0})
     none = base.override({"output.snapshot_interval": 0.0})
     snaps = base.override({"output.snapshot_interval": 1e-3})

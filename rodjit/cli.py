@@ -500,9 +500,11 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
         check_output(out, overwrite=True)
     except ValueError as exc:
         raise UsageError(str(exc)) from None
+    from .output.h5files import WriteFailed
+
     try:
         written = plot(path, out, kind, **options)
-    except MissingMatplotlib as exc:
+    except (MissingMatplotlib, WriteFailed) as exc:
         raise RunFailed(str(exc)) from None
     except NothingToDraw as exc:
         raise RunFailed(str(exc)) from None
@@ -649,10 +651,12 @@ def animate_command(file, output, fps, duration, quantity, dpi):
     from .plotting import MissingMatplotlib, NothingToDraw
     from .plotting.animation import MissingWriter, animate
 
+    from .output.h5files import WriteFailed
+
     out = output or str(Path(file).with_suffix(".gif"))
     try:
         written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
-    except (MissingMatplotlib, MissingWriter, NothingToDraw) as exc:
+    except (MissingMatplotlib, MissingWriter, NothingToDraw, WriteFailed) as exc:
         raise RunFailed(str(exc)) from None
     except ValueError as exc:
         raise UsageError(str(exc)) from None

@@ -216,6 +216,28 @@ def test_fault_file_size_limit_on_a_run(tmp_path, limit):
         assert rodjit_cli("run", "--resume", tmp_path / "x.h5", "-q").returncode == 0
 
 
+@pytest.mark.parametrize("args", [["plot", "r.h5", "-o", "x.png"],
+                                  ["plot", "r.h5", "-o", "old.pdf"],
+                                  ["animate", "r.h5", "-o", "x.gif", "--fps", "4",
+                                   "--duration", "1"]], ids=["plot png", "plot over an old pdf",
+                                                             "animate gif"])
+def test_fault_file_size_limit_on_a_picture(tmp_path, args):
+    """A plot or a movie the disk refuses: exit 1, one line naming the cause, no partial
+    picture, and an older picture of the same name left as it was."""
+    pytest.importorskip("matplotlib")
+    import rodjit
+
+    rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.3, "rod.N": 10,
+                                                 "rod.mu": 1.0}), tmp_path / "r.h5")
+    (tmp_path / "old.pdf").write_bytes(b"%PDF-1.4 an older picture")
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    r = _limited(2000, args, tmp_path)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert "file size limit" in lines[0] and "nothing was written" in lines[0]
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
 def _importing_numpy(pid: int) -> bool:
     """Has process ``pid`` started loading NumPy (rodjit's own import is under way)?"""
     try:

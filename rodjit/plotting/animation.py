@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..records.datasets import strain_of
-from .mpl import NothingToDraw, discard, new_figure
+from .mpl import NothingToDraw, discard, new_figure, write_whole
 from .source import RunSource
 
 __all__ = ["animate", "FORMATS", "MissingWriter"]
@@ -128,7 +128,7 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
         movie = animation.FuncAnimation(fig, draw, frames=rows, blit=False,
                                         cache_frame_data=False)
         try:
-            movie.save(output, writer=writer, dpi=dpi)
+            write_whole(output, lambda path: movie.save(path, writer=writer, dpi=dpi))
         finally:
             discard(fig)
     return output

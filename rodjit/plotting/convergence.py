@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .mpl import new_figure
+from .mpl import new_figure, save
 
 __all__ = ["KINDS", "convergence_figure", "plot_convergence_file"]
 
@@ -69,7 +69,4 @@ def convergence_figure(path, kind: str = "convergence"):
 
 def plot_convergence_file(path, output, kind: str = "convergence", *, dpi: int = 150) -> Path:
     """Draw the convergence figure of ``path`` into the image file ``output``."""
-    fig = convergence_figure(path, kind)
-    output = Path(output)
-    fig.savefig(output, dpi=dpi)
-    return output
+    return save(convergence_figure(path, kind), output, dpi=dpi)

@@ -3,11 +3,15 @@ program uses it (so Jupyter shows them inline), and are plain Figures otherwise 
 command line: no display, no backend)."""
 from __future__ import annotations
 
+import os
 import sys
+import zlib
 from pathlib import Path
 
+from ..output.h5files import WriteFailed, disk_cause
+
 __all__ = ["MissingMatplotlib", "NothingToDraw", "new_figure", "discard", "save",
-           "IMAGE_SUFFIXES"]
+           "write_whole", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".pdf", ".svg")
 
@@ -42,6 +46,27 @@ def discard(fig) -> None:
         pyplot.close(fig)            # a no-op for a figure pyplot does not manage
 
 
+def write_whole(output, write) -> Path:
+    """``write(path)`` into a temporary file beside ``output``, then renamed onto it: a disk
+    that refuses the write (full, a file-size limit, an I/O error) leaves neither a partial
+    picture nor a changed old one, and ends in WriteFailed with one line.  The temporary
+    name keeps the suffix, from which matplotlib and Pillow take the format."""
+    output = Path(output)
+    part = output.with_name(f".{output.stem}.{os.getpid()}.part{output.suffix}")
+    try:
+        write(part)
+        os.replace(part, output)
+    except (OSError, zlib.error) as exc:       # zlib: a PDF stream cut by the failed write
+        part.unlink(missing_ok=True)
+        cause = disk_cause(exc) or str(exc)
+        raise WriteFailed(f"writing {str(output)!r} failed: {cause}; nothing was written",
+                          cause) from None
+    except BaseException:
+        part.unlink(missing_ok=True)
+        raise
+    return output
+
+
 def save(fig, output, dpi: int = 150) -> Path:
     """Write ``fig`` to ``output`` (PNG, PDF or SVG by its suffix)."""
     output = Path(output)
@@ -50,5 +75,4 @@ def save(fig, output, dpi: int = 150) -> Path:
                          f"one of {', '.join(IMAGE_SUFFIXES)}")
     if not (isinstance(dpi, int) and 10 <= dpi <= 2400):
         raise ValueError(f"dpi = {dpi!r} is out of range (whole number from 10 to 2400)")
-    fig.savefig(output, dpi=dpi)
-    return output
+    return write_whole(output, lambda path: fig.savefig(path, dpi=dpi))
