@@ -21,10 +21,14 @@ __all__ = ["main"]
 
 def _finish(code: int):
     """Exit with ``code``. The command's work is over (its files are closed), so SIGINT and
-    SIGTERM are blocked first: the interpreter's shutdown puts the default handlers back,
-    and a signal arriving then would kill the process (-15) after a successful run.  A
+    SIGTERM are ignored (process-wide, whichever thread the kernel picks) and blocked
+    first: the interpreter's shutdown puts the default handlers back where Python had set
+    one of its own (not where it was told to ignore), and a signal arriving then would kill
+    the process (-15) after a successful run.  A
     process holding files the disk failed (``output.h5files.abandon``) ends without the
     interpreter's shutdown, which would try to close them."""
+    for s in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(s, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
     h5files = sys.modules.get("rodjit.output.h5files")
     if h5files is not None and h5files.abandoned():
@@ -53,7 +57,10 @@ def main() -> None:
 
         try:
             code = command.main(prog_name="rodjit", standalone_mode=False)
-            _finish(code if isinstance(code, int) else 0)
+        except SystemExit as exc:           # a command's own sys.exit
+            if exc.code is not None and not isinstance(exc.code, int):
+                print(exc.code, file=sys.stderr)
+            _finish(exc.code if isinstance(exc.code, int) else int(exc.code is not None))
         except click.exceptions.Abort:      # click's form of KeyboardInterrupt
             _exit_interrupted(signal.SIGINT)
         except click.exceptions.Exit as exc:
@@ -61,5 +68,7 @@ def main() -> None:
         except click.ClickException as exc:
             print(f"Error: {one_line(exc.format_message())}", file=sys.stderr)
             _finish(exc.exit_code)
+        else:
+            _finish(code if isinstance(code, int) else 0)
     except (Interrupted, KeyboardInterrupt) as exc:
         _exit_interrupted(exc.signum if isinstance(exc, Interrupted) else signal.SIGINT)
