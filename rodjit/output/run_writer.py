@@ -160,7 +160,15 @@ def create_run_file(path, config, start, *, command: str) -> RunWriter:
     yet, or the ``checkpoint()`` of one (taken before it started, so the run may already
     be computing)."""
     ck = start if isinstance(start, dict) else start.checkpoint()
-    f = open_for_writing(path, "w")
+    try:
+        f = open_for_writing(path, "w")
+    except BaseException as exc:
+        cause = disk_cause(exc)
+        if cause is None:
+            raise
+        Path(path).unlink(missing_ok=True)   # the start of a file the disk cut short
+        raise WriteFailed(f"cannot create {str(path)!r}: {cause}; nothing was "
+                          f"written", cause) from None
     try:
         layout = build_layout(f, config, ck, {"command": command,
                                                "history": [f"{now()} created by: {command}"]})
