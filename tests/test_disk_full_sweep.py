@@ -76,7 +76,8 @@ def test_a_sweep_file_at_the_size_limit_keeps_its_points_and_resumes(tmp_path, r
         return
     assert table is not None and table.counts["completed"] < N
     kept = table.counts["completed"]
-    assert f"keeps the points written ({kept} of {N})" in r.stderr
+    assert f"keeps the points written ({kept} of {N})" in r.stderr, \
+        (r.stderr, list(table.columns["status"]))
     _resume_matches(out, ref)
 
 
