@@ -41,6 +41,7 @@ any source of the compiled layers differs from the last process that compiled th
 """
 from __future__ import annotations
 
+import errno
 import hashlib
 import os
 from pathlib import Path
@@ -146,3 +147,36 @@ def _guard_cache() -> None:
 
 
 _guard_cache()
+
+# What a disk says when it refuses a cache file: full, a file-size limit or quota, read-only,
+# not ours, an I/O error.
+_CACHE_REFUSALS = frozenset({errno.ENOSPC, errno.EFBIG, errno.EDQUOT, errno.EROFS,
+                             errno.EACCES, errno.EPERM, errno.EIO})
+
+
+def _tolerate_refused_cache_writes() -> None:
+    """A kernel whose machine code cannot be written to Numba's disk cache still runs.
+
+    Numba saves a compiled kernel inside the call that compiled it and lets an OSError of
+    that save escape, so a full disk or a file-size limit (``ulimit -f``) on the cache
+    directory would fail a run or a sweep point that has its machine code in hand.  The
+    save is skipped instead, silently (a line on stderr would break the one-line report of
+    the command that hit the full disk); the only cost is compiling again in the next
+    process.  Other errors of the save are Numba's to report."""
+    original = caching.Cache.save_overload
+    if getattr(original, "rodjit_tolerant", False):
+        return
+
+    def save_overload(self, sig, data):
+        try:
+            original(self, sig, data)
+        except OSError as exc:
+            if exc.errno not in _CACHE_REFUSALS:
+                raise
+
+    save_overload.rodjit_tolerant = True
+    save_overload.__doc__ = original.__doc__
+    caching.Cache.save_overload = save_overload
+
+
+_tolerate_refused_cache_writes()

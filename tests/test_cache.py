@@ -52,3 +52,40 @@ def test_a_second_process_loads_every_kernel_from_the_cache(tmp_path):
     found = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
                            text=True, check=True).stdout
     assert int(found) >= 10
+
+
+def _fresh_kernel(tmp_path, name):
+    """A cached njit function in a module of its own (so Numba has a cache to save to)."""
+    import importlib
+    import sys
+
+    (tmp_path / f"{name}.py").write_text(
+        "import numba\n\n\n@numba.njit(cache=True)\ndef twice(x):\n    return 2 * x\n")
+    sys.path.insert(0, str(tmp_path))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(str(tmp_path))
+
+
+def test_a_kernel_whose_cache_the_disk_refuses_still_runs(tmp_path, monkeypatch):
+    """A full disk or a file-size limit on Numba's cache does not fail the call that compiled
+    the kernel (Numba raises the save's OSError out of it); other errors still surface."""
+    import errno
+
+    from numba.core import caching
+
+    import rodjit._jit  # noqa: F401  (installs the tolerant save)
+
+    def refuse(self, sig, data):
+        raise OSError(errno.EFBIG, "File too large")
+
+    monkeypatch.setattr(caching.Cache, "_save_overload", refuse)
+    assert _fresh_kernel(tmp_path, "rodjit_refused_cache_kernel").twice(21) == 42
+
+    def broken(self, sig, data):
+        raise OSError(errno.EBADF, "Bad file descriptor")
+
+    monkeypatch.setattr(caching.Cache, "_save_overload", broken)
+    with pytest.raises(OSError, match="Bad file descriptor"):
+        _fresh_kernel(tmp_path, "rodjit_broken_cache_kernel").twice(21)
