@@ -40,6 +40,23 @@ def many_calls(monkeypatch):
     monkeypatch.setattr(run_module, "NODE_STEPS_PER_CALL", 600)
 
 
+def module_runs(cfg):
+    """Module-scoped fixtures ``result`` (``simulate(cfg)``) and ``run_file`` (the same
+    configuration streamed to a file), for a test module to bind:
+    ``result, run_file = module_runs(CFG)``."""
+    @pytest.fixture(scope="module")
+    def result():
+        return rodjit.simulate(cfg)
+
+    @pytest.fixture(scope="module")
+    def run_file(tmp_path_factory):
+        path = tmp_path_factory.mktemp("run") / "run.h5"
+        rodjit.run_to_file(cfg, path)
+        return path
+
+    return result, run_file
+
+
 def rodjit_cli(*args, cwd=None, timeout=300, limit: int | None = None,
                code: str | None = None) -> subprocess.CompletedProcess:
     """Run ``rodjit ARGS`` in a fresh interpreter (as a user would).  ``limit``: its files

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import rodjit
+from conftest import module_runs
 from rodjit._extras import MissingExtra, need
 from rodjit.output.summary import summarize
 from rodjit.records.metadata import COLUMN_MEANINGS
@@ -18,19 +19,10 @@ from rodjit.records.metadata import COLUMN_MEANINGS
 xr = pytest.importorskip("xarray")
 pd = pytest.importorskip("pandas")
 
+
 CFG = rodjit.Config().override({"time.t_end": 1.0})
 
-
-@pytest.fixture(scope="module")
-def result():
-    return rodjit.simulate(CFG)
-
-
-@pytest.fixture(scope="module")
-def run_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("run") / "run.h5"
-    rodjit.run_to_file(CFG, path)
-    return path
+result, run_file = module_runs(CFG)
 
 
 def test_result_repr_is_a_few_lines_with_the_headline_numbers(result):

@@ -13,6 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 import rodjit
+from conftest import module_runs
 from rodjit import plotting
 from rodjit.cli import main
 from rodjit.plotting import sweep as sweep_plots
@@ -20,19 +21,10 @@ from rodjit.plotting import sweep as sweep_plots
 pytest.importorskip("matplotlib")
 PIL = pytest.importorskip("PIL.Image")
 
+
 CFG = rodjit.Config().override({"time.t_end": 1.0, "rod.N": 60})
 
-
-@pytest.fixture(scope="module")
-def result():
-    return rodjit.simulate(CFG)
-
-
-@pytest.fixture(scope="module")
-def run_file(tmp_path_factory):
-    path = tmp_path_factory.mktemp("plots") / "run.h5"
-    rodjit.run_to_file(CFG, path)
-    return path
+result, run_file = module_runs(CFG)
 
 
 @pytest.fixture(scope="module")
