@@ -123,6 +123,20 @@ def _crosses(g0, g1, tol):
 
 
 @numba.njit(cache=True)
+def _illinois(ha, ga, hb, gb, side, hs, g):
+    """One Illinois update of the bracket [ha, hb] of a crossing (``g``: the crossing
+    function at the trial ``hs``): the end on g's side moves to hs, and the other end's
+    value is halved when the same end moved twice in a row."""
+    if (g > 0.0) == (ga > 0.0):
+        if side == -1:
+            gb *= 0.5
+        return hs, g, hb, gb, -1
+    if side == 1:
+        ga *= 0.5
+    return ha, ga, hs, g, 1
+
+
+@numba.njit(cache=True)
 def erk_run(y0, p, t_out, rtol, atol, A, B, C, E, E5, dop853, order, events, out):
     """Adaptive embedded RK over the output times ``t_out`` (steps land on them; with
     ``events`` also on every crossing of u_0 = 0, σ_b's kink, found by Illinois regula
@@ -182,18 +196,7 @@ def erk_run(y0, p, t_out, rtol, atol, A, B, C, E, E5, dop853, order, events, out
                         break
                     if abs(g) <= ktol:
                         break
-                    if (g > 0.0) == (ga > 0.0):
-                        ha = hs
-                        ga = g
-                        if side == -1:
-                            gb *= 0.5
-                        side = -1
-                    else:
-                        hb = hs
-                        gb = g
-                        if side == 1:
-                            ga *= 0.5
-                        side = 1
+                    ha, ga, hb, gb, side = _illinois(ha, ga, hb, gb, side, hs, g)
                 if not ok:
                     h = 0.25 * hh
                     rej += 1
@@ -296,18 +299,7 @@ def kdk_run(y0, p, cfl, t_out, w, events, out):
                     g = u2[0]
                     if abs(g) <= ktol:
                         break
-                    if (g > 0.0) == (ga > 0.0):
-                        ha = hs
-                        ga = g
-                        if side == -1:
-                            gb *= 0.5
-                        side = -1
-                    else:
-                        hb = hs
-                        gb = g
-                        if side == 1:
-                            ga *= 0.5
-                        side = 1
+                    ha, ga, hb, gb, side = _illinois(ha, ga, hb, gb, side, hs, g)
                 dt = hs
                 land = False
             u[:] = u2
