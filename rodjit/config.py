@@ -25,7 +25,7 @@ from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrat
 CONTROLS = ("tolerance", "cfl")
 # keys that a stored configuration may lack (written before they existed), with the value
 # that reproduces what such a run did
-STORED_DEFAULTS = {"time.control": "cfl"}
+STORED_DEFAULTS = {"time.control": "cfl", "output.interpolate": False}
 
 
 class ModelWarning(UserWarning):
@@ -62,7 +62,8 @@ class _Spec:
                  choices: tuple[str, ...] | None = None, *, meaning: str, unit: str = ""):
         self.kind, self.rng, self.check, self.optional, self.choices = kind, rng, check, optional, choices
         self.meaning = meaning   # what the key sets: for comments, listings and file attributes
-        self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text keys
+        self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text and
+                                 # boolean keys
 
     def coerce(self, key: str, value: Any) -> Any:
         """``value`` checked and converted to the field's Python type (NumPy integers and
@@ -74,7 +75,11 @@ class _Spec:
         if isinstance(value, str) and self.kind != "str":
             raise ValueError(_quoted_error(key, value, self))
         is_bool = isinstance(value, bool) or type(value).__name__ == "bool_"
-        if self.kind == "int":
+        if self.kind == "bool":
+            if not is_bool:
+                raise ValueError(f"{key} = {value!r} is not a boolean ({self.describe()})")
+            value = bool(value)
+        elif self.kind == "int":
             if is_bool or not isinstance(value, numbers.Real):
                 raise ValueError(f"{key} = {value!r} is not an integer ({self.describe()})")
             if isinstance(value, numbers.Integral):
@@ -108,6 +113,8 @@ class _Spec:
     def describe(self) -> str:
         if self.choices is not None:
             text = "one of " + ", ".join(repr(c) for c in self.choices)
+        elif self.kind == "bool":
+            text = "true or false"
         else:
             text = f"{self.kind} {self.rng}".strip()
         return text + (", or unset" if self.optional else "")
@@ -119,6 +126,11 @@ def _quoted_error(key: str, value: str, spec: "_Spec") -> str:
         number = tomllib.loads(f"v = {value.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         number = None
+    if spec.kind == "bool":
+        if isinstance(number, bool):
+            return (f"{key} = {value!r} is a quoted boolean; write {value.strip()} without "
+                    f"quotes ({spec.describe()})")
+        return f"{key} = {value!r} is not a boolean ({spec.describe()})"
     if isinstance(number, (int, float)) and not isinstance(number, bool):
         return (f"{key} = {value!r} is a quoted number; write {value.strip()} without quotes "
                 f"({spec.describe()})")
@@ -196,6 +208,10 @@ _FIELDS: dict[str, dict[str, _Spec]] = {
                                                         "rows"),
         "compression": _Spec("str", choices=COMPRESSIONS,
                              meaning="compression of the HDF5 tables"),
+        "interpolate": _Spec("bool",
+                             meaning="outputs of dp54 and dop853 from the pair's dense output "
+                                     "between steps (true) or from steps landing on each "
+                                     "output time (false)"),
     },
 }
 
@@ -443,6 +459,14 @@ class OutputConfig(_Section):
         Simulated time between diagnostics rows [s], >= 0 (0 disables diagnostics).
     compression : str
         Compression of the HDF5 tables, one of ``COMPRESSIONS``.
+    interpolate : bool
+        True (the default): the integrators with a dense output, ``dp54`` and ``dop853``,
+        step toward ``time.t_end`` only and give each output time inside a step by their
+        continuous extension (4th order for ``dp54``, 7th for ``dop853``), so the output
+        schedule costs them no steps; False: their steps land on every output time, so
+        each row is the state of a step (the second-order schemes, ``energy`` and
+        ``radau5`` always land, and so does any integrator under a fixed ``time.dt``).
+        Rows at ``time.t_end`` are always a step's own state.
 
     Raises
     ------
@@ -455,6 +479,7 @@ class OutputConfig(_Section):
     snapshot_interval: float = 0.005
     diagnostics_interval: float = 0.001
     compression: str = "none"
+    interpolate: bool = True
 
 
 def _check_dt_range(dt_min, dt_max) -> None:

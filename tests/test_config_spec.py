@@ -17,7 +17,7 @@ def test_every_key_has_a_meaning_and_a_unit_or_is_text():
     for key in valid_keys():
         spec = field_spec(key)
         assert spec.meaning, key
-        assert bool(spec.unit) == (spec.kind != "str"), key
+        assert bool(spec.unit) == (spec.kind not in ("str", "bool")), key
 
 
 @pytest.mark.parametrize("source", [None, *presets.preset_names()])

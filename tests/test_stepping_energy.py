@@ -37,8 +37,8 @@ def energy_config(**over):
 
 # ---- the real loop, one step at a time ------------------------------------------------------
 @numba.njit
-def _record(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock, count, ev,
-            snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail, out,
+def _record(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats, clock,
+            count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail, out,
             max_bounces):
     """Call the compiled loop for one step at a time; per step record dt, E before/after,
     the loop's dissipation increment, μ dt Σ h (Δv̄/h)² recomputed from the two states, the
@@ -55,9 +55,9 @@ def _record(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         t0 = clock[L.T]
         d0 = clock[L.DISSIPATED]
         v_old[:] = state[1]
-        code = advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
-                       count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces,
-                       fail, 1)
+        code = advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats,
+                       clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes,
+                       bounces, fail, 1)
         count[L.N_EP] = 0        # drain the event buffers (their rows are not needed)
         count[L.N_BOUNCE] = 0
         if code == L.FAILED:
@@ -88,9 +88,9 @@ def record_steps(cfg, max_steps, max_bounces=10**9, u0=None, v0=None):
     run = Run(cfg, u0=u0, v0=v0)
     run.start(MemorySink())
     out = np.zeros((max_steps, 9))
-    k = _record(*run._args(), run.state, run.trial, run.work, run.sstats, run.clock, run.count,
-                run.ev, run.snap_t, run.snap_step, run.snap_u, run.snap_v, run.diag,
-                run.episodes, run.bounces, run.fail, out, max_bounces)
+    k = _record(*run._args(), run.state, run.trial, run.work, run.interp, run.sstats,
+                run.clock, run.count, run.ev, run.snap_t, run.snap_step, run.snap_u,
+                run.snap_v, run.diag, run.episodes, run.bounces, run.fail, out, max_bounces)
     assert k > 0, run.failure_message()
     return run, out[:k]
 

@@ -103,7 +103,7 @@ class Run:
         self.system, self.rod, self.floor = build_system(config)
         self.scheme = make_scheme(config.time)
         tc = config.time
-        self.ctrl = control.build(tc, self.scheme)
+        self.ctrl = control.build(tc, self.scheme, config.output.interpolate)
         n1 = config.rod.N + 1
         u, v = initial_state(config, u0, v0)
         check_admissible(u, self.rod, self.floor, "u0" if u0 is not None else "initial state")
@@ -112,6 +112,7 @@ class Run:
         self.state[1] = v
         self.trial = np.zeros((3, n1))
         self.work = np.zeros((work_rows(self.scheme), n1))
+        self.interp = np.zeros((2, n1))   # a dense output's interpolated (u, v)
         self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
         self.clock = np.zeros(L.CLOCK_SIZE)
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
@@ -237,10 +238,10 @@ class Run:
         self._warm = True
 
     def _call(self, max_steps):
-        return advance(*self._args(), self.state, self.trial, self.work, self.sstats,
-                       self.clock, self.count, self.ev, self.snap_t, self.snap_step,
-                       self.snap_u, self.snap_v, self.diag, self.episodes, self.bounces,
-                       self.fail, max_steps)
+        return advance(*self._args(), self.state, self.trial, self.work, self.interp,
+                       self.sstats, self.clock, self.count, self.ev, self.snap_t,
+                       self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
+                       self.bounces, self.fail, max_steps)
 
     def advance(self, sink: Sink, max_steps: int | None = None) -> int:
         """One compiled call (up to ``max_steps`` steps), then drain into ``sink``.

@@ -11,6 +11,12 @@ second-order schemes grow their steps gently and split a short remainder before 
 time in two; the embedded pairs follow Hairer's controller for explicit Runge–Kutta codes
 (growth up to ``PAIR_GROWTH`` per step, none right after a rejection) and stretch a step by
 up to ``PAIR_STRETCH`` to land on an output time in one step.
+
+A scheme with a dense output (``registry.Scheme.dense``: ``dp54``, ``dop853``) does not land
+on the output times at all under adaptive steps with ``output.interpolate`` on
+(``Control.dense``): its steps aim at ``time.t_end`` only (the rules above then land on it)
+and the loop evaluates the scheme's continuous extension at the output times inside each
+step.  Fixed steps (``time.dt``, which divides every output interval) keep landing.
 """
 from __future__ import annotations
 
@@ -108,10 +114,13 @@ class Control(NamedTuple):
     split: float      # adaptive steps: a remainder below split × proposal: two equal steps
     gap: float        # a step closes at most this fraction of the distance to a barrier
                       # (ε = −1, u_0 = −β); 0: off (schemes admissible by construction)
+    dense: bool = False   # steps aim at t_end only; outputs inside a step are interpolated
 
 
-def build(time_config, scheme) -> Control:
-    """The loop's ``Control`` for a ``TimeConfig`` and the scheme built from it."""
+def build(time_config, scheme, interpolate: bool = True) -> Control:
+    """The loop's ``Control`` for a ``TimeConfig`` and the scheme built from it;
+    ``interpolate`` (``output.interpolate``): output by the scheme's dense output where it
+    has one and the steps are adaptive."""
     tc = time_config
     entry = registry.entry_of(type(scheme))
     rules = RULES[entry.step_rules]
@@ -124,6 +133,7 @@ def build(time_config, scheme) -> Control:
         land=rules.land,
         split=rules.split,
         gap=min(float(tc.cfl), GAP_MAX) if entry.gap_control else 0.0,
+        dense=bool(interpolate and entry.dense and tc.dt is None),
     )
 
 

@@ -35,6 +35,23 @@ that grow past it) and ``energy`` is the better choice.
 The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
 tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature
 of ∫2R(v) dt over the stages (weights b_j), consistent to the pair's order.
+
+Dense output (``dense_setup``, ``dense``): after an accepted step from yⁿ at t to yⁿ⁺¹ at
+t + dt, the pair's continuous extension gives y(t + θ dt), 0 ≤ θ ≤ 1, in Hairer's form
+
+    y(θ) = yⁿ + θ(Δ + θ'(B + θ(C + θ'(R₅ + θ(R₆ + θ'(R₇ + θ R₈))))))      θ' = 1 − θ
+
+with Δ = yⁿ⁺¹ − yⁿ, B = dt f(yⁿ) − Δ, C = Δ − dt f(yⁿ⁺¹) − B (a cubic Hermite part that
+takes both ends and both slopes exactly) and R_m = dt Σ_j d_mj k_j over the stages.
+``dp54``: the 4th-order extension of Shampine (1986) that Hairer's DOPRI5 uses (HNW I,
+§II.6, "Dense output"; R₅ only, coefficients d_j of dopri5.f, the last column of SciPy's
+RK45 interpolation matrix), free: it needs only the step's own stages.  ``dop853``: the
+7th-order extension of Hairer's DOP853 (dop853.f; SciPy's ``dop853_coefficients``), R₅ … R₈
+from the step's stages, its new point and three extra stages at c = 0.1, 0.2 and 7/9,
+which ``dense_setup`` evaluates once for a step with an output time inside it (every
+output of that step reuses them); an extra stage outside the admissible set returns its
+failure code, and the loop retries the step shorter.  θ = 0 gives yⁿ exactly, θ = 1 gives
+yⁿ⁺¹ to rounding (yⁿ + Δ).
 """
 from __future__ import annotations
 
@@ -49,7 +66,8 @@ from .energy import full_accel
 from .step_result import StepResult
 from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
 
-__all__ = ["DP54", "DOP853", "TABLEAUS", "tableau", "initial", "step", "work_rows"]
+__all__ = ["DP54", "DOP853", "TABLEAUS", "DENSE", "tableau", "dense_tableau", "initial",
+           "step", "dense_setup", "dense", "work_rows"]
 
 
 class DP54(NamedTuple):
@@ -71,7 +89,10 @@ FAC_MIN = 0.2
 
 # rows of the scratch array ``work``: the stresses and curvatures of ``accel``, then for each
 # stage j ≥ 1 its velocity (the u-derivative) and acceleration (the v-derivative); stage 0
-# is the state's own (v, a), the new point the trial's (v2, a2)
+# is the state's own (v, a), the new point (stage index s, s the number of stages) the
+# trial's (v2, a2), and its two rows are free: row 2s holds the height of a dense-output
+# extra stage (indices s + 1, …, rows as for the stages); after them, two rows (u and v
+# parts) for each dense-output term R_m (``dense_rows``)
 S = 0
 K = 1
 
@@ -147,9 +168,66 @@ TABLEAUS = {
 }
 
 
+# ---- dense output (module docstring): the extra stages' coefficients over every earlier
+# stage (stage index: the pair's stages, the new point, the extra stages) and the weights
+# d_mj of the terms R_m, as published in Hairer's dopri5.f and dop853.f
+_D54 = np.array([[-12715105075.0 / 11282082432.0, 0.0, 87487479700.0 / 32700410799.0,
+                  -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0,
+                  -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0]])
+_AX853 = np.array([
+    [0.056167502283047954, 0.0, 0.0, 0.0, 0.0, 0.0, 0.25350021021662483, -0.2462390374708025,
+     -0.12419142326381637, 0.15329179827876568, 0.00820105229563469, 0.007567897660545699,
+     -0.008298, 0.0, 0.0, 0.0],
+    [0.03183464816350214, 0.0, 0.0, 0.0, 0.0, 0.028300909672366776, 0.053541988307438566,
+     -0.05492374857139099, 0.0, 0.0, -0.00010834732869724932, 0.0003825710908356584,
+     -0.00034046500868740456, 0.1413124436746325, 0.0, 0.0],
+    [-0.42889630158379194, 0.0, 0.0, 0.0, 0.0, -4.697621415361164, 7.683421196062599,
+     4.06898981839711, 0.3567271874552811, 0.0, 0.0, 0.0, -0.0013990241651590145,
+     2.9475147891527724, -9.15095847217987, 0.0]])
+_D853 = np.array([
+    [-8.428938276109013, 0.0, 0.0, 0.0, 0.0, 0.5667149535193777, -3.0689499459498917,
+     2.38466765651207, 2.117034582445028, -0.871391583777973, 2.2404374302607883,
+     0.6315787787694688, -0.08899033645133331, 18.148505520854727, -9.194632392478356,
+     -4.436036387594894],
+    [10.427508642579134, 0.0, 0.0, 0.0, 0.0, 242.28349177525817, 165.20045171727028,
+     -374.5467547226902, -22.113666853125306, 7.733432668472264, -30.674084731089398,
+     -9.332130526430229, 15.697238121770845, -31.139403219565178, -9.35292435884448,
+     35.81684148639408],
+    [19.985053242002433, 0.0, 0.0, 0.0, 0.0, -387.0373087493518, -189.17813819516758,
+     527.8081592054236, -11.57390253995963, 6.8812326946963, -1.0006050966910838,
+     0.7777137798053443, -2.778205752353508, -60.19669523126412, 84.32040550667716,
+     11.99229113618279],
+    [-25.69393346270375, 0.0, 0.0, 0.0, 0.0, -154.18974869023643, -231.5293791760455,
+     357.6391179106141, 93.40532418362432, -37.45832313645163, 104.0996495089623,
+     29.8402934266605, -43.53345659001114, 96.32455395918828, -39.17726167561544,
+     -149.72683625798564]])
+
+
+class Dense(NamedTuple):
+    """A pair's continuous extension: ``ax`` (extra stages, stages in all) the extra
+    stages' coefficients over every earlier stage, ``d`` (terms, stages in all) the weights
+    of R₅, R₆, …; both indexed by stage index (the pair's stages, the new point, the extra
+    stages)."""
+
+    ax: np.ndarray
+    d: np.ndarray
+
+
+DENSE = {
+    DP54: Dense(np.zeros((0, 7)), _D54),
+    DOP853: Dense(_AX853, _D853),
+}
+
+
+def dense_rows(params_type) -> int:
+    """The first work row of the dense-output terms R_m (after every stage's rows)."""
+    return 2 * DENSE[params_type].d.shape[1]
+
+
 def work_rows(params_type) -> int:
-    """Scratch rows the pair needs: S, K and two per stage after the first."""
-    return 2 * TABLEAUS[params_type].b.size
+    """Scratch rows the pair needs: S, K and two per stage after the first (the new point's
+    two, the height of an extra stage and a spare row), then two per dense-output term."""
+    return dense_rows(params_type) + 2 * DENSE[params_type].d.shape[0]
 
 
 def tableau(scheme):
@@ -162,6 +240,18 @@ def _tableau_ov(scheme):
     t = TABLEAUS[scheme.instance_class]
     a, b, e, e3, combined, q = t.a, t.b, t.e, t.e3, t.combined, t.q
     return lambda scheme: (a, b, e, e3, combined, q)
+
+
+def dense_tableau(scheme):
+    t = DENSE[type(scheme)]
+    return t.ax, t.d
+
+
+@overload(dense_tableau, jit_options=STEP_JIT_OPTIONS)
+def _dense_tableau_ov(scheme):
+    t = DENSE[scheme.instance_class]
+    ax, d = t.ax, t.d
+    return lambda scheme: (ax, d)
 
 
 @step_kernel
@@ -321,3 +411,83 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     if err > 1.0:
         return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
     return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)
+
+
+@step_kernel
+def _combine(coef, v, a, v2, a2, work, ns, i):
+    """Σ_j coef[j] k_j at node i over the stage indices of ``coef`` (the pair's stages, the
+    new point ns, the extra stages): its u part (velocities) and v part (accelerations)."""
+    su = coef[0] * v[i]
+    sv = coef[0] * a[i]
+    for j in range(1, coef.size):
+        c = coef[j]
+        if c != 0.0:
+            if j == ns:
+                su += c * v2[i]
+                sv += c * a2[i]
+            else:
+                su += c * work[2 * j, i]
+                sv += c * work[2 * j + 1, i]
+    return su, sv
+
+
+@step_kernel
+def dense_setup(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
+    """Prepare the dense output of the step of length dt from (u, v, a) to (u2, v2, a2)
+    that just left its stages in ``work``: evaluate the extra stages (dop853) and store the
+    terms R_m.  Returns ``(status, value)``: OK, or the failure code of an extra stage
+    outside the admissible set and its offending number."""
+    A, _, _, _, _, _ = tableau(scheme)
+    AX, D = dense_tableau(scheme)
+    ns = A.shape[0]
+    n1 = u.size
+    us = work[2 * ns]
+    for e in range(AX.shape[0]):
+        j = ns + 1 + e
+        vj = work[2 * j]
+        aj = work[2 * j + 1]
+        for i in range(n1):
+            su, sv = _combine(AX[e], v, a, v2, a2, work, ns, i)
+            us[i] = u[i] + dt * su
+            vj[i] = v[i] + dt * sv
+        status, val, _, _, _ = full_accel(system, rod, floor, us, vj, aj, work[S], work[K],
+                                          False)
+        if status != OK:
+            return status, val
+    base = 2 * D.shape[1]
+    for m in range(D.shape[0]):
+        ru = work[base + 2 * m]
+        rv = work[base + 2 * m + 1]
+        for i in range(n1):
+            su, sv = _combine(D[m], v, a, v2, a2, work, ns, i)
+            ru[i] = dt * su
+            rv[i] = dt * sv
+    return OK, 0.0
+
+
+@step_kernel
+def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
+    """(u, v) at t + θ dt into ``uo``, ``vo``, from the step's ends and the terms R_m that
+    ``dense_setup`` stored (module docstring); reads nothing else, so every output time of
+    the step reuses one setup."""
+    _, D = dense_tableau(scheme)
+    nt = D.shape[0]
+    base = 2 * D.shape[1]
+    s = theta
+    s1 = 1.0 - theta
+    for i in range(u.size):
+        # R_5 … R_m from the innermost: R_{5+k} is multiplied by θ' for even k, θ for odd k
+        tu = 0.0
+        tv = 0.0
+        for k in range(nt - 1, -1, -1):
+            f = s1 if k % 2 == 0 else s
+            tu = f * (work[base + 2 * k, i] + tu)
+            tv = f * (work[base + 2 * k + 1, i] + tv)
+        du = u2[i] - u[i]
+        dv = v2[i] - v[i]
+        bu = dt * v[i] - du
+        bv = dt * a[i] - dv
+        cu = du - dt * v2[i] - bu
+        cv = dv - dt * a2[i] - bv
+        uo[i] = u[i] + s * (du + s1 * (bu + s * (cu + tu)))
+        vo[i] = v[i] + s * (dv + s1 * (bv + s * (cv + tv)))

@@ -1,8 +1,27 @@
 """The compiled time loop: many steps per call, Python sees the state only between calls.
 
-``advance`` steps until t_end, until an output buffer is full, or until ``max_steps``;
-steps land exactly on the output times t0 + k·Δ (integer k).  How a run is cut into calls
-never changes the steps taken, so a resumed run equals an uninterrupted one bit for bit.
+``advance`` steps until t_end, until an output buffer is full, or until ``max_steps``.
+How a run is cut into calls never changes the steps taken, so a resumed run equals an
+uninterrupted one bit for bit.
+
+Outputs (snapshot and diagnostics rows at the grid times t0 + k·Δ, integer k) come one of
+two ways.  Landing (every scheme without a dense output, fixed steps, and
+``output.interpolate = false``): the steps land exactly on the output times, and each row
+is the state of the step that ends there.  Dense output (``Control.dense``: ``dp54`` and
+``dop853`` under adaptive steps): the steps aim at t_end only, and after each accepted step
+from t to t_new every output time in (t, t_new − tol) is evaluated by the scheme's
+continuous extension (``schemes.dense``; ``dense_setup`` once per step that has one, before
+the step is accepted, so a failing extra stage retries the step shorter).  Such a row has
+the grid time exactly, ``snap_step`` = the step count after the step, the energies of the
+interpolated state (``forces.energies``, as for any row), ``dt`` = the proposal after the
+step, and a dissipated energy linear in θ between the values at the step's ends: exact at
+both ends and in flight at μ = 0, otherwise within O(dt · |d(2R)/dt| · dt) of ∫2R dt, first
+order only inside the step, whatever the pair's order.  An output time at t_new (within
+tol), t_end above all, is the step's own state, as under landing.  Before a step the loop
+counts the output times it could cover: if the buffers cannot take them it returns FULL
+first (so the step is the same whatever the buffers' fill), and a step that would cover
+more output times than a whole buffer holds ends on the last one that fits.  The state
+kept between calls is always a step's own state.
 
 A trial step that fails (non-admissible, non-finite, no convergence) is retried shorter;
 one that a scheme rejects for accuracy (status INACCURATE: its error estimate is too
@@ -17,7 +36,7 @@ from ..model.laws import lower, value
 from . import control as C
 from . import layout as L
 from .events import crossing, open_contact, track
-from .schemes import initial, step
+from .schemes import dense, dense_setup, initial, step
 from .._jit import kernel, step_kernel
 
 
@@ -39,39 +58,116 @@ def _skip_past(clock, count, kidx, dtidx, t):
 
 
 @step_kernel
+def _grid_time(clock, count, kidx, dtidx, ahead):
+    """The output time ``ahead`` places after the next one of a grid (inf: grid off)."""
+    if clock[dtidx] > 0.0:
+        return clock[L.T0] + (count[kidx] + ahead) * clock[dtidx]
+    return np.inf
+
+
+@step_kernel
+def _covered(clock, count, kidx, dtidx, t, limit):
+    """How many output times of a grid a step ending at t covers (at most ``limit``)."""
+    n = 0
+    while n < limit and _grid_time(clock, count, kidx, dtidx, n) <= t + clock[L.TOL]:
+        n += 1
+    return n
+
+
+@step_kernel
+def _snapshot_row(u, v, t, step_no, count, snap_t, snap_step, snap_u, snap_v):
+    j = count[L.N_SNAP]
+    snap_t[j] = t
+    snap_step[j] = step_no
+    for i in range(u.size):   # element loops: a slice copy would allocate
+        snap_u[j, i] = u[i]
+        snap_v[j, i] = v[i]
+    count[L.N_SNAP] += 1
+
+
+@step_kernel
+def _diag_row(u, v, work, system, rod, floor, count, t, dt_prop, dissipated, diag):
+    j = count[L.N_DIAG]
+    ke, st, be, fe, ge, emin, z, w = energies(u, v, work[1], system, rod, floor)
+    row = diag[j]
+    row[L.D_T] = t
+    row[L.D_DT] = dt_prop
+    row[L.D_ENERGY_KINETIC] = ke
+    row[L.D_ENERGY_STRETCH] = st
+    row[L.D_ENERGY_BEND] = be
+    row[L.D_ENERGY_FLOOR] = fe
+    row[L.D_ENERGY_GRAVITY] = ge
+    row[L.D_ENERGY_TOTAL] = ke + st + be + fe + ge
+    row[L.D_DISSIPATED] = dissipated
+    row[L.D_U_BOTTOM] = u[0]
+    row[L.D_FLOOR_FORCE] = value(u[0], floor)
+    row[L.D_MIN_STRAIN] = emin
+    row[L.D_CM_HEIGHT] = z
+    row[L.D_CM_VELOCITY] = w
+    count[L.N_DIAG] += 1
+
+
+@step_kernel
 def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
           snap_t, snap_step, snap_u, snap_v, diag):
-    """Write the snapshot and/or diagnostics row due at time t."""
+    """Write the snapshot and/or diagnostics row due at time t, from the state ``cur``."""
     tol = clock[L.TOL]
     if clock[L.SNAP_DT] > 0.0 and clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT] <= t + tol:
-        j = count[L.N_SNAP]
-        snap_t[j] = t
-        snap_step[j] = step_no
-        for i in range(cur.shape[1]):   # element loops: a slice copy would allocate
-            snap_u[j, i] = cur[0, i]
-            snap_v[j, i] = cur[1, i]
-        count[L.N_SNAP] += 1
+        _snapshot_row(cur[0], cur[1], t, step_no, count, snap_t, snap_step, snap_u, snap_v)
         _skip_past(clock, count, L.K_SNAP, L.SNAP_DT, t)
     if clock[L.DIAG_DT] > 0.0 and clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT] <= t + tol:
-        j = count[L.N_DIAG]
-        ke, st, be, fe, ge, emin, z, w = energies(cur[0], cur[1], work[1], system, rod, floor)
-        row = diag[j]
-        row[L.D_T] = t
-        row[L.D_DT] = dt_prop
-        row[L.D_ENERGY_KINETIC] = ke
-        row[L.D_ENERGY_STRETCH] = st
-        row[L.D_ENERGY_BEND] = be
-        row[L.D_ENERGY_FLOOR] = fe
-        row[L.D_ENERGY_GRAVITY] = ge
-        row[L.D_ENERGY_TOTAL] = ke + st + be + fe + ge
-        row[L.D_DISSIPATED] = clock[L.DISSIPATED]
-        row[L.D_U_BOTTOM] = cur[0][0]
-        row[L.D_FLOOR_FORCE] = value(cur[0][0], floor)
-        row[L.D_MIN_STRAIN] = emin
-        row[L.D_CM_HEIGHT] = z
-        row[L.D_CM_VELOCITY] = w
-        count[L.N_DIAG] += 1
+        _diag_row(cur[0], cur[1], work, system, rod, floor, count, t, dt_prop,
+                  clock[L.DISSIPATED], diag)
         _skip_past(clock, count, L.K_DIAG, L.DIAG_DT, t)
+
+
+@step_kernel
+def _dense_target(ctrl, fixed, clock, count, t, dtp, cap_s, cap_d):
+    """A dense-output step from t: ``(target, dt, land, snapshots, diagnostics)``, the step
+    toward t_end, shortened to end on the last output time a whole buffer holds if it
+    would cover more, and the output times of each grid it covers."""
+    t_end = clock[L.T_END]
+    dt, land = C.step_to(ctrl, fixed, t_end - t, dtp)
+    t_new = t_end if land else t + dt
+    n_s = _covered(clock, count, L.K_SNAP, L.SNAP_DT, t_new, cap_s + 1)
+    n_d = _covered(clock, count, L.K_DIAG, L.DIAG_DT, t_new, cap_d + 1)
+    target = t_end
+    if n_s > cap_s:
+        target = min(target, _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, cap_s - 1))
+    if n_d > cap_d:
+        target = min(target, _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, cap_d - 1))
+    if target < t_end:
+        dt, land = C.step_to(ctrl, fixed, target - t, dtp)
+        n_s = min(n_s, cap_s)
+        n_d = min(n_d, cap_d)
+    return target, dt, land, n_s, n_d
+
+
+@step_kernel
+def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
+                t_new, diss_old, diss_new, dt_prop, step_no, snap_t, snap_step, snap_u,
+                snap_v, diag):
+    """The rows of every output time in (t, t_new − tol) of the step of length dt from the
+    state ``old`` to ``new``, by the scheme's dense output into ``interp`` (module
+    docstring); ``dense_setup`` has run for the step."""
+    tol = clock[L.TOL]
+    while True:
+        ts = _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, 0)
+        td = _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, 0)
+        tau = min(ts, td)
+        if not tau < t_new - tol:
+            break
+        theta = (tau - t) / dt
+        dense(scheme, old[0], old[1], old[2], new[0], new[1], new[2], work, dt, theta,
+              interp[0], interp[1])
+        if ts == tau:
+            _snapshot_row(interp[0], interp[1], tau, step_no, count, snap_t, snap_step,
+                          snap_u, snap_v)
+            count[L.K_SNAP] += 1
+        if td == tau:
+            _diag_row(interp[0], interp[1], work, system, rod, floor, count, tau, dt_prop,
+                      diss_old + theta * (diss_new - diss_old), diag)
+            count[L.K_DIAG] += 1
 
 
 @kernel
@@ -105,9 +201,12 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
 
 
 @kernel
-def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock, count, ev,
-            snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail, max_steps):
-    """Step from the state in ``state`` (u, v, a rows) and leave the new state there.
+def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats, clock,
+            count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail,
+            max_steps):
+    """Step from the state in ``state`` (u, v, a rows) and leave the new state there;
+    ``trial`` (3 rows) holds the trial states, ``interp`` (2 rows) the interpolated (u, v)
+    of a dense output (module docstring).
 
     Returns layout.DONE, FULL, PAUSED or FAILED.
     """
@@ -123,6 +222,8 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
     refined = False
     after_reject = False   # no break can come between a rejection and the next acceptance
     fixed = ctrl.dt_fixed > 0.0
+    interpolate = ctrl.dense
+    inside = False   # the trial step has an output time inside it (dense output)
     emin_cur = clock[L.EMIN]
     rod_lo = lower(rod)
     floor_lo = lower(floor)
@@ -143,8 +244,15 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
                 or count[L.N_EP] >= cap_e or count[L.N_BOUNCE] >= cap_b):
             code = L.FULL
             break
-        target = _next_target(clock, count)
-        dt, land = C.step_to(ctrl, fixed, target - t, dtp)
+        if interpolate:
+            target, dt, land, n_s, n_d = _dense_target(ctrl, fixed, clock, count, t, dtp,
+                                                       cap_s, cap_d)
+            if count[L.N_SNAP] + n_s > cap_s or count[L.N_DIAG] + n_d > cap_d:
+                code = L.FULL   # before the step: it is the same whatever the buffers held
+                break
+        else:
+            target = _next_target(clock, count)
+            dt, land = C.step_to(ctrl, fixed, target - t, dtp)
         u = cur[0]
         v = cur[1]
         u2 = nxt[0]
@@ -177,6 +285,15 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
                     or u2[0] - floor_lo < keep * (u[0] - floor_lo)):
                 status = TOO_CLOSE
                 val = emin
+        if status == OK and interpolate:
+            t_new = target if land else t + dt
+            inside = min(_grid_time(clock, count, L.K_SNAP, L.SNAP_DT, 0),
+                         _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, 0)) < t_new - tol
+            if inside:
+                # the extra stages of the continuous extension, once for every output of
+                # the step; one outside the admissible set retries the step shorter
+                status, val = dense_setup(scheme, system, rod, floor, u, v, cur[2], u2, v2,
+                                          nxt[2], work, dt)
         if status != OK:
             count[L.REJECTED] += 1
             retry = C.retry(status == INACCURATE, r.dt_suggest, dt)
@@ -194,8 +311,10 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
         t_new = target if land else t + dt
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
               w, r.w, r.floor_force, emin)
+        diss_old = diss
         diss += r.dissipated
         w = r.w
+        t_old = t
         t = t_new
         cur, nxt = nxt, cur
         swapped = not swapped
@@ -207,7 +326,15 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, sstats, clock,
             dtp = min(dtp, C.gap_limit(ctrl, dt, emin_cur - rod_lo, emin - rod_lo),
                       C.gap_limit(ctrl, dt, u[0] - floor_lo, u2[0] - floor_lo))
         emin_cur = emin
-        if land:
+        if interpolate:
+            if inside:
+                _emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, clock, count,
+                            t_old, dt, t, diss_old, diss, dtp, count[L.STEP], snap_t,
+                            snap_step, snap_u, snap_v, diag)
+            clock[L.DISSIPATED] = diss
+            _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
+                  snap_t, snap_step, snap_u, snap_v, diag)
+        elif land:
             clock[L.DISSIPATED] = diss
             _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
                   snap_t, snap_step, snap_u, snap_v, diag)

@@ -3,8 +3,9 @@
 Each ``Scheme`` says where its compiled ``initial``/``step`` live (a dotted module path,
 imported only when a run uses the scheme), the NamedTuple class of its parameters in that
 module, how the parameters are built from a ``TimeConfig``, the counters its step keeps in
-``sstats``, the rows of scratch space it needs, and whether the loop limits how fast its
-steps approach the barriers.  ``config`` takes the allowed names from here, so adding an
+``sstats``, the rows of scratch space it needs, whether the loop limits how fast its
+steps approach the barriers, and whether it has a dense output (a continuous extension the
+loop evaluates at the output times inside a step instead of landing on them).  ``config`` takes the allowed names from here, so adding an
 integrator is one new module plus one line in ``SCHEMES``.
 
 This module imports no Numba code: ``config`` imports it to validate names.
@@ -30,6 +31,10 @@ class Scheme:
     ``gap_control``: explicit schemes need the loop's barrier-gap limit; a scheme that is
     admissible by construction turns it off.
     ``step_rules`` names the loop's step-size rules for the scheme (``control.RULES``).
+    ``dense``: the scheme's module also provides ``dense_setup`` and ``dense`` (its
+    continuous extension, see ``schemes``); with ``output.interpolate`` on and adaptive
+    steps the loop then steps toward ``time.t_end`` only and interpolates every output
+    time inside a step (``loop.advance``).
     """
 
     name: str
@@ -40,6 +45,7 @@ class Scheme:
     counters: tuple[str, ...] = ()
     gap_control: bool = True
     step_rules: str = "second-order"
+    dense: bool = False
 
 
 def _kdk(tc, P):
@@ -56,11 +62,11 @@ SCHEMES: tuple[Scheme, ...] = (
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), _ENERGY_WORK_ROWS,
            counters=("newton_iterations", "newton_failures"), gap_control=False),
     Scheme("dp54", "rodjit.stepping.erk", "DP54",
-           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 12, gap_control=False,
-           step_rules="pair-dp54"),
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 16, gap_control=False,
+           step_rules="pair-dp54", dense=True),
     Scheme("dop853", "rodjit.stepping.erk", "DOP853",
-           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 24, gap_control=False,
-           step_rules="pair-dop853"),
+           lambda tc, P: P(float(tc.rtol), float(tc.atol)), 40, gap_control=False,
+           step_rules="pair-dop853", dense=True),
     Scheme("radau5", "rodjit.stepping.radau", "Radau5",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
            counters=("newton_iterations", "newton_failures"), gap_control=False),

@@ -7,16 +7,31 @@ A scheme module provides
   ``step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)`` -> ``StepResult``
 where ``step`` never modifies its inputs (a rejected trial costs nothing to undo) and
 ``sstats`` is the int64 array of the registry's counters (``registry.SCHEME_STATS``).
+
+A scheme with a dense output (``registry.Scheme.dense``) also provides, for the step of
+length dt from (u, v, a) to (u2, v2, a2) that it has just taken,
+  ``dense_setup(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt)``
+      -> ``(status, value)``: once per step with an output time inside it, before the loop
+      accepts it (OK, or a failure code that makes the loop retry the step shorter)
+  ``dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)``: (u, v) at t + θ dt,
+      0 < θ ≤ 1, into the caller's rows ``uo``, ``vo``, for each output time of the step
+(both may use only ``work`` rows the step leaves alone).  For a scheme without one the loop
+never calls them (``control.build`` turns interpolation off); they compile to a failure
+code and NaN rows, so a call by mistake cannot pass unnoticed.
 """
 from __future__ import annotations
 
 from numba.extending import overload
 
+import numpy as np
+
 from . import registry
 from .registry import SCHEME_STATS, make_scheme
+from ..kernels.forces import NON_FINITE, OK
 from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
 
-__all__ = ["make_scheme", "initial", "step", "gap_control", "work_rows", "SCHEME_STATS"]
+__all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "gap_control",
+           "has_dense", "work_rows", "SCHEME_STATS"]
 
 
 def _module(params_type):
@@ -25,6 +40,10 @@ def _module(params_type):
 
 def _module_for(numba_type):
     return _module(getattr(numba_type, "instance_class", None))
+
+
+def _dense_for(numba_type) -> bool:
+    return registry.entry_of(getattr(numba_type, "instance_class", None)).dense
 
 
 def initial(scheme, system, rod, floor, u, v, a, work):
@@ -48,6 +67,45 @@ def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     impl = _module_for(scheme).step
     return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(
         scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)
+
+
+def dense_setup(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
+    return _module(type(scheme)).dense_setup(scheme, system, rod, floor, u, v, a, u2, v2, a2,
+                                             work, dt)
+
+
+def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
+    return _module(type(scheme)).dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)
+
+
+@overload(dense_setup, jit_options=STEP_JIT_OPTIONS)
+def _dense_setup_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
+    if not _dense_for(scheme):
+        return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt: (
+            NON_FINITE, np.nan)
+    impl = _module_for(scheme).dense_setup
+    return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt: impl(
+        scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt)
+
+
+def _no_dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
+    for i in range(uo.size):
+        uo[i] = np.nan
+        vo[i] = np.nan
+
+
+@overload(dense, jit_options=STEP_JIT_OPTIONS)
+def _dense_ov(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
+    if not _dense_for(scheme):
+        return _no_dense
+    impl = _module_for(scheme).dense
+    return lambda scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo: impl(
+        scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)
+
+
+def has_dense(scheme) -> bool:
+    """Whether the scheme has a dense output (``registry.Scheme.dense``)."""
+    return registry.entry_of(type(scheme)).dense
 
 
 def gap_control(scheme) -> bool:
