@@ -74,7 +74,7 @@ class _Spec:
             raise ValueError(f"{key} must be set ({self.describe()})")
         if isinstance(value, str) and self.kind != "str":
             raise ValueError(_quoted_error(key, value, self))
-        is_bool = isinstance(value, bool) or type(value).__name__ == "bool_"
+        is_bool = isinstance(value, bool) or type(value).__name__ in ("bool_", "bool")
         if self.kind == "bool":
             if not is_bool:
                 raise ValueError(f"{key} = {value!r} is not a boolean ({self.describe()})")

@@ -95,7 +95,12 @@ def warn_config(config, stacklevel: int = 3) -> None:
 
 class Run:
     """One simulation: build it from a config (or a checkpoint), ``start``, then ``advance``
-    until it returns ``layout.DONE``."""
+    until it returns ``layout.DONE``.
+
+    The output buffers hold ``snapshot_capacity`` and ``diag_capacity`` rows (by default
+    what the run needs, up to a memory bound), and always at least the rows a dense-output
+    step may write in one call (``Control.dense_snapshots``, ``dense_diagnostics``).
+    """
 
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
@@ -103,8 +108,9 @@ class Run:
         self.system, self.rod, self.floor = build_system(config)
         self.scheme = make_scheme(config.time)
         tc = config.time
-        self.ctrl = control.build(tc, self.scheme, config.output.interpolate)
         n1 = config.rod.N + 1
+        self.ctrl = control.build(tc, self.scheme, config.output.interpolate,
+                                  snapshot_rows=_capacity(n1))
         u, v = initial_state(config, u0, v0)
         check_admissible(u, self.rod, self.floor, "u0" if u0 is not None else "initial state")
         self.state = np.zeros((3, n1))
@@ -127,6 +133,11 @@ class Run:
             snapshot_capacity = min(_capacity(n1), _rows_needed(out.snapshot_interval, tc.t_end))
         if diag_capacity is None:
             diag_capacity = min(4096, _rows_needed(out.diagnostics_interval, tc.t_end))
+        # a dense-output step writes all its rows in one call (``control.DENSE_OUTPUTS_MAX``)
+        if out.snapshot_interval > 0:
+            snapshot_capacity = max(snapshot_capacity, self.ctrl.dense_snapshots)
+        if out.diagnostics_interval > 0:
+            diag_capacity = max(diag_capacity, self.ctrl.dense_diagnostics)
         self._shapes = (snapshot_capacity, n1, diag_capacity, event_capacity)
         (self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
          self.bounces) = self._buffers()

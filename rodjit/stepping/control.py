@@ -16,7 +16,13 @@ A scheme with a dense output (``registry.Scheme.dense``: ``dp54``, ``dop853``) d
 on the output times at all under adaptive steps with ``output.interpolate`` on
 (``Control.dense``): its steps aim at ``time.t_end`` only (the rules above then land on it)
 and the loop evaluates the scheme's continuous extension at the output times inside each
-step.  Fixed steps (``time.dt``, which divides every output interval) keep landing.
+step.  Fixed steps (``time.dt``, which divides every output interval) keep landing.  Every
+output of a step is written in the compiled call that takes it (the step's stages live only
+until the next step), so a step covers at most ``Control.dense_snapshots`` snapshot and
+``Control.dense_diagnostics`` diagnostics times (one that would cover more ends on the last
+of them) and the driver's buffers hold at least that many rows: a rule of the run's
+configuration, never of how full the buffers are, so the steps stay the same however the
+run is cut into calls.
 """
 from __future__ import annotations
 
@@ -31,7 +37,7 @@ from .._jit import step_kernel
 __all__ = ["Control", "Rules", "RULES", "build", "output_tolerance", "propose", "gap_limit", "step_to",
            "gap_keep", "GROWTH", "GAP_MAX", "REJECT_SHRINK", "EVENT_MIN", "OUTPUT_TOL",
            "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry",
-           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH"]
+           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH", "DENSE_OUTPUTS_MAX"]
 
 # A proposal grows at most by this factor per step: after a rejection the step recovers
 # over a few steps instead of jumping back to the size that just failed.
@@ -74,6 +80,11 @@ PAIR_GROWTH = {"dp54": 10.0, "dop853": 6.0}
 # instead of two.  Its proposal aims at an error 0.9^(q+1) ≈ 0.43–0.59 of the tolerance, so
 # a 10 % longer step (error × 1.1^(q+1) ≈ 1.6–2.1) still passes.
 PAIR_STRETCH = 0.1
+# A dense-output step covers at most this many output times of each grid (snapshots: fewer
+# where the snapshot buffer's memory rule allows fewer rows); one that would cover more ends
+# on the last of them.  Far above the outputs per step of any run that is not dominated by
+# its output: it only bounds the buffers (the driver allocates at least this many rows).
+DENSE_OUTPUTS_MAX = 256
 
 # Under tolerance control (time.control = "tolerance") an explicit scheme's step is the one
 # its error estimate allows, capped at this fraction of its stability limit 2/ω (a bound
@@ -115,14 +126,19 @@ class Control(NamedTuple):
     gap: float        # a step closes at most this fraction of the distance to a barrier
                       # (ε = −1, u_0 = −β); 0: off (schemes admissible by construction)
     dense: bool = False   # steps aim at t_end only; outputs inside a step are interpolated
+    dense_snapshots: int = 0     # ... and a step covers at most this many snapshot times
+    dense_diagnostics: int = 0   # ... and diagnostics times (0 when not dense)
 
 
-def build(time_config, scheme, interpolate: bool = True) -> Control:
+def build(time_config, scheme, interpolate: bool = True,
+          snapshot_rows: int = DENSE_OUTPUTS_MAX) -> Control:
     """The loop's ``Control`` for a ``TimeConfig`` and the scheme built from it;
     ``interpolate`` (``output.interpolate``): output by the scheme's dense output where it
-    has one and the steps are adaptive."""
+    has one and the steps are adaptive; ``snapshot_rows``: the most snapshot rows a buffer
+    of the run may hold (the driver's memory rule), which bounds ``dense_snapshots``."""
     tc = time_config
     entry = registry.entry_of(type(scheme))
+    dense = bool(interpolate and entry.dense and tc.dt is None)
     rules = RULES[entry.step_rules]
     return Control(
         dt_max=float(tc.dt_max) if tc.dt_max is not None else math.inf,
@@ -133,7 +149,9 @@ def build(time_config, scheme, interpolate: bool = True) -> Control:
         land=rules.land,
         split=rules.split,
         gap=min(float(tc.cfl), GAP_MAX) if entry.gap_control else 0.0,
-        dense=bool(interpolate and entry.dense and tc.dt is None),
+        dense=dense,
+        dense_snapshots=max(1, min(DENSE_OUTPUTS_MAX, int(snapshot_rows))) if dense else 0,
+        dense_diagnostics=DENSE_OUTPUTS_MAX if dense else 0,
     )
 
 

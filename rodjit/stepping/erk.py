@@ -51,7 +51,10 @@ from the step's stages, its new point and three extra stages at c = 0.1, 0.2 and
 which ``dense_setup`` evaluates once for a step with an output time inside it (every
 output of that step reuses them); an extra stage outside the admissible set returns its
 failure code, and the loop retries the step shorter.  θ = 0 gives yⁿ exactly, θ = 1 gives
-yⁿ⁺¹ to rounding (yⁿ + Δ).
+yⁿ⁺¹ to rounding (yⁿ + Δ).  The dissipated energy D, D' = 2R(v), is the same extension of
+the step's quadrature (``dense_dissipated``: the pair applied to the quadrature component,
+k_j = 2R of stage j's velocity), so E + D at an interpolated row keeps the balance to the
+extension's order, and D(1) is the step's own increment.
 """
 from __future__ import annotations
 
@@ -67,7 +70,7 @@ from .step_result import StepResult
 from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
 
 __all__ = ["DP54", "DOP853", "TABLEAUS", "DENSE", "tableau", "dense_tableau", "initial",
-           "step", "dense_setup", "dense", "work_rows"]
+           "step", "dense_setup", "dense", "dense_dissipated", "work_rows"]
 
 
 class DP54(NamedTuple):
@@ -217,6 +220,9 @@ DENSE = {
     DP54: Dense(np.zeros((0, 7)), _D54),
     DOP853: Dense(_AX853, _D853),
 }
+# ``dense_dissipated`` sums the terms R₅ … R₈ in four accumulators
+DENSE_TERMS_MAX = 4
+assert all(t.d.shape[0] <= DENSE_TERMS_MAX for t in DENSE.values())
 
 
 def dense_rows(params_type) -> int:
@@ -491,3 +497,53 @@ def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
         cv = dv - dt * a2[i] - bv
         uo[i] = u[i] + s * (du + s1 * (bu + s * (cu + tu)))
         vo[i] = v[i] + s * (dv + s1 * (bv + s * (cv + tv)))
+
+
+@step_kernel
+def dense_dissipated(scheme, system, v, v2, work, dt, theta):
+    """The viscous energy dissipated from the step's start to t + θ dt: the continuous
+    extension of the step's quadrature Σ b_j 2R(v_j) dt (module docstring); 0 at μ = 0.
+    Needs the stages and ``dense_setup``'s extra stages in ``work``."""
+    if not system.mu > 0.0:
+        return 0.0
+    A, B, _, _, _, _ = tableau(scheme)
+    _, D = dense_tableau(scheme)
+    ns = A.shape[0]
+    nt = D.shape[0]
+    r0 = _rate(system, v)
+    r1 = _rate(system, v2)
+    total = 0.0          # Σ b_j r_j
+    t5 = 0.0             # Σ d_mj r_j, m = 5 … 8 (DENSE_TERMS_MAX)
+    t6 = 0.0
+    t7 = 0.0
+    t8 = 0.0
+    for j in range(D.shape[1]):
+        bj = B[j] if j < ns else 0.0
+        used = bj != 0.0
+        for k in range(nt):
+            used = used or D[k, j] != 0.0
+        if not used:
+            continue
+        r = r0 if j == 0 else r1 if j == ns else _rate(system, work[2 * j])
+        total += bj * r
+        t5 += D[0, j] * r
+        if nt > 1:
+            t6 += D[1, j] * r
+        if nt > 2:
+            t7 += D[2, j] * r
+        if nt > 3:
+            t8 += D[3, j] * r
+    s = theta
+    s1 = 1.0 - theta
+    tail = 0.0
+    if nt > 3:
+        tail = s * (dt * t8)
+    if nt > 2:
+        tail = s1 * (dt * t7 + tail)
+    if nt > 1:
+        tail = s * (dt * t6 + tail)
+    tail = s1 * (dt * t5 + tail)
+    delta = dt * total
+    b0 = dt * r0 - delta
+    c0 = delta - dt * r1 - b0
+    return s * (delta + s1 * (b0 + s * (c0 + tail)))

@@ -14,14 +14,18 @@ continuous extension (``schemes.dense``; ``dense_setup`` once per step that has 
 the step is accepted, so a failing extra stage retries the step shorter).  Such a row has
 the grid time exactly, ``snap_step`` = the step count after the step, the energies of the
 interpolated state (``forces.energies``, as for any row), ``dt`` = the proposal after the
-step, and a dissipated energy linear in θ between the values at the step's ends: exact at
-both ends and in flight at μ = 0, otherwise within O(dt · |d(2R)/dt| · dt) of ∫2R dt, first
-order only inside the step, whatever the pair's order.  An output time at t_new (within
-tol), t_end above all, is the step's own state, as under landing.  Before a step the loop
-counts the output times it could cover: if the buffers cannot take them it returns FULL
-first (so the step is the same whatever the buffers' fill), and a step that would cover
-more output times than a whole buffer holds ends on the last one that fits.  The state
-kept between calls is always a step's own state.
+step, and the dissipated energy at the step's start plus the scheme's extension of the
+step's quadrature of ∫2R dt (``schemes.dense_dissipated``; a linear interpolation between
+the step's ends would be first order only, and its error would show in E + dissipated,
+which stays balanced to the extension's order).  An output time at t_new (within
+tol), t_end above all, is the step's own state, as under landing (the row's time is the
+grid time, or t_end).  Every row of a step is
+written in the call that takes it: a step covers at most ``ctrl.dense_snapshots`` and
+``ctrl.dense_diagnostics`` output times (one that would cover more ends on the last of
+them; the buffers hold at least that many rows), and before a step the loop counts the
+output times it covers and returns FULL first if the buffers cannot take them.  Neither
+rule depends on how full the buffers are, so the steps are the same however the run is cut
+into calls.  The state kept between calls is always a step's own state.
 
 A trial step that fails (non-admissible, non-finite, no convergence) is retried shorter;
 one that a scheme rejects for accuracy (status INACCURATE: its error estimate is too
@@ -36,7 +40,7 @@ from ..model.laws import lower, value
 from . import control as C
 from . import layout as L
 from .events import crossing, open_contact, track
-from .schemes import dense, dense_setup, initial, step
+from .schemes import dense, dense_dissipated, dense_setup, initial, step
 from .._jit import kernel, step_kernel
 
 
@@ -109,44 +113,51 @@ def _diag_row(u, v, work, system, rod, floor, count, t, dt_prop, dissipated, dia
 
 @step_kernel
 def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
-          snap_t, snap_step, snap_u, snap_v, diag):
-    """Write the snapshot and/or diagnostics row due at time t, from the state ``cur``."""
+          snap_t, snap_step, snap_u, snap_v, diag, at_grid=False):
+    """Write the snapshot and/or diagnostics row due at time t, from the state ``cur``;
+    the rows' time is t, or with ``at_grid`` each grid's own output time (within the
+    output tolerance of t)."""
     tol = clock[L.TOL]
-    if clock[L.SNAP_DT] > 0.0 and clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT] <= t + tol:
-        _snapshot_row(cur[0], cur[1], t, step_no, count, snap_t, snap_step, snap_u, snap_v)
+    ts = clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT]
+    if clock[L.SNAP_DT] > 0.0 and ts <= t + tol:
+        _snapshot_row(cur[0], cur[1], ts if at_grid else t, step_no, count, snap_t,
+                      snap_step, snap_u, snap_v)
         _skip_past(clock, count, L.K_SNAP, L.SNAP_DT, t)
-    if clock[L.DIAG_DT] > 0.0 and clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT] <= t + tol:
-        _diag_row(cur[0], cur[1], work, system, rod, floor, count, t, dt_prop,
-                  clock[L.DISSIPATED], diag)
+    td = clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT]
+    if clock[L.DIAG_DT] > 0.0 and td <= t + tol:
+        _diag_row(cur[0], cur[1], work, system, rod, floor, count, td if at_grid else t,
+                  dt_prop, clock[L.DISSIPATED], diag)
         _skip_past(clock, count, L.K_DIAG, L.DIAG_DT, t)
 
 
 @step_kernel
-def _dense_target(ctrl, fixed, clock, count, t, dtp, cap_s, cap_d):
+def _dense_target(ctrl, fixed, clock, count, t, dtp):
     """A dense-output step from t: ``(target, dt, land, snapshots, diagnostics)``, the step
-    toward t_end, shortened to end on the last output time a whole buffer holds if it
-    would cover more, and the output times of each grid it covers."""
+    toward t_end, shortened to end on the last output time it may cover
+    (``ctrl.dense_snapshots``, ``ctrl.dense_diagnostics``) if it would cover more, and at
+    most how many output times of each grid it covers."""
     t_end = clock[L.T_END]
+    m_s = ctrl.dense_snapshots
+    m_d = ctrl.dense_diagnostics
     dt, land = C.step_to(ctrl, fixed, t_end - t, dtp)
     t_new = t_end if land else t + dt
-    n_s = _covered(clock, count, L.K_SNAP, L.SNAP_DT, t_new, cap_s + 1)
-    n_d = _covered(clock, count, L.K_DIAG, L.DIAG_DT, t_new, cap_d + 1)
+    n_s = _covered(clock, count, L.K_SNAP, L.SNAP_DT, t_new, m_s + 1)
+    n_d = _covered(clock, count, L.K_DIAG, L.DIAG_DT, t_new, m_d + 1)
     target = t_end
-    if n_s > cap_s:
-        target = min(target, _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, cap_s - 1))
-    if n_d > cap_d:
-        target = min(target, _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, cap_d - 1))
+    if n_s > m_s:
+        target = min(target, _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, m_s - 1))
+    if n_d > m_d:
+        target = min(target, _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, m_d - 1))
     if target < t_end:
         dt, land = C.step_to(ctrl, fixed, target - t, dtp)
-        n_s = min(n_s, cap_s)
-        n_d = min(n_d, cap_d)
+        n_s = min(n_s, m_s)
+        n_d = min(n_d, m_d)
     return target, dt, land, n_s, n_d
 
 
 @step_kernel
 def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                t_new, diss_old, diss_new, dt_prop, step_no, snap_t, snap_step, snap_u,
-                snap_v, diag):
+                t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v, diag):
     """The rows of every output time in (t, t_new − tol) of the step of length dt from the
     state ``old`` to ``new``, by the scheme's dense output into ``interp`` (module
     docstring); ``dense_setup`` has run for the step."""
@@ -165,8 +176,9 @@ def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count
                           snap_u, snap_v)
             count[L.K_SNAP] += 1
         if td == tau:
+            diss = diss_old + dense_dissipated(scheme, system, old[1], new[1], work, dt, theta)
             _diag_row(interp[0], interp[1], work, system, rod, floor, count, tau, dt_prop,
-                      diss_old + theta * (diss_new - diss_old), diag)
+                      diss, diag)
             count[L.K_DIAG] += 1
 
 
@@ -245,8 +257,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
             code = L.FULL
             break
         if interpolate:
-            target, dt, land, n_s, n_d = _dense_target(ctrl, fixed, clock, count, t, dtp,
-                                                       cap_s, cap_d)
+            target, dt, land, n_s, n_d = _dense_target(ctrl, fixed, clock, count, t, dtp)
             if count[L.N_SNAP] + n_s > cap_s or count[L.N_DIAG] + n_d > cap_d:
                 code = L.FULL   # before the step: it is the same whatever the buffers held
                 break
@@ -329,11 +340,13 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         if interpolate:
             if inside:
                 _emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, clock, count,
-                            t_old, dt, t, diss_old, diss, dtp, count[L.STEP], snap_t,
-                            snap_step, snap_u, snap_v, diag)
+                            t_old, dt, t, diss_old, dtp, count[L.STEP], snap_t, snap_step,
+                            snap_u, snap_v, diag)
             clock[L.DISSIPATED] = diss
+            # an output time at the step's end: its own state (at the grid's time unless
+            # the step landed there, as on t_end)
             _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
-                  snap_t, snap_step, snap_u, snap_v, diag)
+                  snap_t, snap_step, snap_u, snap_v, diag, not land)
         elif land:
             clock[L.DISSIPATED] = diss
             _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],

@@ -15,7 +15,9 @@ length dt from (u, v, a) to (u2, v2, a2) that it has just taken,
       accepts it (OK, or a failure code that makes the loop retry the step shorter)
   ``dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)``: (u, v) at t + θ dt,
       0 < θ ≤ 1, into the caller's rows ``uo``, ``vo``, for each output time of the step
-(both may use only ``work`` rows the step leaves alone).  For a scheme without one the loop
+  ``dense_dissipated(scheme, system, v, v2, work, dt, theta)`` -> the viscous energy
+      dissipated from t to t + θ dt, consistent with the step's own increment at θ = 1
+(all may use only ``work`` rows the step leaves alone).  For a scheme without one the loop
 never calls them (``control.build`` turns interpolation off); they compile to a failure
 code and NaN rows, so a call by mistake cannot pass unnoticed.
 """
@@ -30,8 +32,8 @@ from .registry import SCHEME_STATS, make_scheme
 from ..kernels.forces import NON_FINITE, OK
 from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
 
-__all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "gap_control",
-           "has_dense", "work_rows", "SCHEME_STATS"]
+__all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "dense_dissipated",
+           "gap_control", "has_dense", "work_rows", "SCHEME_STATS"]
 
 
 def _module(params_type):
@@ -101,6 +103,19 @@ def _dense_ov(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
     impl = _module_for(scheme).dense
     return lambda scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo: impl(
         scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)
+
+
+def dense_dissipated(scheme, system, v, v2, work, dt, theta):
+    return _module(type(scheme)).dense_dissipated(scheme, system, v, v2, work, dt, theta)
+
+
+@overload(dense_dissipated, jit_options=STEP_JIT_OPTIONS)
+def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
+    if not _dense_for(scheme):
+        return lambda scheme, system, v, v2, work, dt, theta: np.nan
+    impl = _module_for(scheme).dense_dissipated
+    return lambda scheme, system, v, v2, work, dt, theta: impl(
+        scheme, system, v, v2, work, dt, theta)
 
 
 def has_dense(scheme) -> bool:

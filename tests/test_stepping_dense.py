@@ -1,0 +1,316 @@
+"""Dense output of the embedded pairs (``output.interpolate``, on by default).
+
+Checked: the continuous extensions' order (4 for dp54, 7 for dop853: local error of the
+interpolant ∝ h^(p+1)), their ends (θ = 0 the old state, θ = 1 the new one, the dissipated
+energy likewise), that the steps no longer depend on the output schedule, the accuracy of
+a bouncing run's rows against a tight reference (the same order as landing, in fewer
+steps), runs cut into calls, buffers and files bit for bit, ``output.interpolate = false``
+landing as before, and the key's validation.
+"""
+import warnings
+
+import numpy as np
+import pytest
+
+import rodjit
+from conftest import assert_resume_is_bit_identical, assert_same_files
+from rodjit import presets
+from rodjit.config import Config, ModelWarning
+from rodjit.driver.run import Run
+from rodjit.model import reference
+from rodjit.model.system import build_system
+from rodjit.records.result import MemorySink
+from rodjit.stepping import control, erk, layout as L, registry
+from rodjit.stepping.kdk import Verlet
+
+PAIRS = {"dp54": 4, "dop853": 7}       # the order of each pair's continuous extension
+QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
+# a smooth flight far above the floor: pre-strained, vibrating, viscous (μ > 0 puts v into
+# the acceleration; at μ = 0, u'' = g(u), dop853's extension converges an order faster)
+FLIGHT = {"rod.N": 5, "rod.kappa": 1.0, "rod.mu": 0.3, "initial.height": 3.0,
+          "initial.strain": 0.3, "initial.velocity": 0.0, **QUIET}
+# step sizes h, h/2, h/4 in the asymptotic range, errors above rounding (≥ 1e-13)
+STEPS = {"dp54": 1e-2, "dop853": 4e-2}
+THETAS = (0.25, 0.5, 0.75)
+
+
+def _cfg(integrator, **over):
+    return Config().override({"time.integrator": integrator, **over})
+
+
+def _paper(integrator, **over):
+    """The paper's μ = 0 run over 1 s, outputs every 5 ms."""
+    return presets.load_preset("paper-mu0").override({
+        "time.integrator": integrator, "time.t_end": 1.0, "output.snapshot_interval": 0.005,
+        "output.diagnostics_interval": 0.005, **over})
+
+
+def _simulate(cfg):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelWarning)    # μ = γ = 0: shocks
+        return rodjit.simulate(cfg)
+
+
+def _one_step(integrator, h, thetas, **over):
+    """One step of length h from the initial state, then the dense output at each θ:
+    (old (u, v), new (u, v), [interpolated (u, v)], [dissipated to θ], step's dissipated)."""
+    run = Run(_cfg(integrator, **FLIGHT, **over))
+    run.start(MemorySink())
+    scheme, _, system, rod, floor = run._args()
+    s = run.state
+    new = np.zeros_like(s)
+    r = erk.step(scheme, system, rod, floor, s[0], s[1], s[2], new[0], new[1], new[2],
+                 run.work, run.sstats, h)
+    assert r.status in (erk.OK, erk.INACCURATE)    # a valid state (its error aside)
+    status, _ = erk.dense_setup(scheme, system, rod, floor, s[0], s[1], s[2], new[0], new[1],
+                                new[2], run.work, h)
+    assert status == erk.OK
+    out, diss = [], []
+    for theta in thetas:
+        y = np.zeros((2, s.shape[1]))
+        erk.dense(scheme, s[0], s[1], s[2], new[0], new[1], new[2], run.work, h, theta,
+                  y[0], y[1])
+        out.append(y)
+        diss.append(erk.dense_dissipated(scheme, system, s[1], new[1], run.work, h, theta))
+    return s[:2].copy(), new[:2], out, diss, r.dissipated
+
+
+def _exact(t):
+    """The flight at time t: dop853 in 64 fixed steps ending exactly there."""
+    res = rodjit.simulate(_cfg("dop853", **FLIGHT, **{"time.t_end": t, "time.dt": t / 64}))
+    return np.array([res.u_final, res.v_final])
+
+
+# ---- the continuous extensions ----------------------------------------------------------
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_interpolation_error_scales_as_h_to_the_order_plus_one(integrator):
+    hs = STEPS[integrator] / 2.0 ** np.arange(3)
+    errs = []
+    for h in hs:
+        _, _, ys, _, _ = _one_step(integrator, h, THETAS)
+        errs.append(max(np.abs(y - _exact(th * h)).max() for th, y in zip(THETAS, ys)))
+    errs = np.array(errs)
+    slope = np.polyfit(np.log(hs), np.log(errs), 1)[0]
+    assert errs[-1] > 1e-13, errs                        # above rounding
+    assert abs(slope - (PAIRS[integrator] + 1)) <= 0.3, (slope, errs)
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_the_ends_are_the_old_and_the_new_state(integrator):
+    h = STEPS[integrator]
+    old, new, ys, diss, step_diss = _one_step(integrator, h, (0.0, 1e-9, 1.0))
+    np.testing.assert_array_equal(ys[0], old)           # θ = 0: exactly
+    scale = np.abs(new).max()
+    np.testing.assert_allclose(ys[2], new, rtol=0, atol=4 * np.finfo(float).eps * scale)
+    assert np.abs(ys[1] - old).max() <= 1e-8 * np.abs(new - old).max()     # θ → 0
+    # the dissipated energy: 0 at the start, the step's own increment at its end
+    assert diss[0] == 0.0 and step_diss > 0.0
+    assert abs(diss[2] - step_diss) < 1e-14 * step_diss
+    assert 0.0 < diss[1] < 1e-6 * step_diss
+
+
+# ---- the loop ---------------------------------------------------------------------------
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_steps_do_not_depend_on_the_output_schedule(integrator):
+    """Interpolated outputs cost no steps: the run with snapshots and diagnostics every
+    5 ms takes exactly the steps of the run without outputs (both land on t_end), and its
+    rows are at the exact grid times, the last one the final state itself."""
+    cfg = _paper(integrator, **{"time.t_end": 0.6, "time.rtol": 1e-6, "time.atol": 1e-6})
+    res, quiet = _simulate(cfg), _simulate(cfg.override(QUIET))
+    assert res.stats["steps"] == quiet.stats["steps"]
+    assert res.stats["rejected_steps"] == quiet.stats["rejected_steps"]
+    np.testing.assert_array_equal(res.u_final, quiet.u_final)
+    np.testing.assert_array_equal(res.t, np.arange(121) * 0.005)
+    np.testing.assert_array_equal(res.diagnostics["t"], res.t)
+    np.testing.assert_array_equal(res.u[-1], res.u_final)
+    assert res.n_bounces >= 1
+    # each diagnostics row is the energy of its snapshot's (interpolated) state
+    system, rod, floor = build_system(cfg)
+    for k in range(0, 121, 7):
+        e = reference.energies(res.u[k], res.v[k], system, rod, floor)["energy_total"]
+        assert abs(res.diagnostics["energy_total"][k] - e) < 1e-12 * abs(e)
+
+
+def _reference_rows(cfg):
+    return _simulate(cfg.override({"time.integrator": "dop853", "time.rtol": 1e-13,
+                                   "time.atol": 1e-15, "output.interpolate": False}))
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_a_bouncing_run_is_as_accurate_in_fewer_steps(integrator):
+    """paper-mu0 over 1 s (the first bounce, chatter) at rtol = atol = 1e-6: the
+    interpolated rows are as close to a tight reference as the landed ones, and the run
+    takes fewer steps.  Both runs cap the step at 15 ms (≈ 1.7/ω, the rod's stiffest mode):
+    without it the free fall before the first impact, whose internal modes are not excited,
+    is stepped far beyond the pair's stability limit (hω ≈ 10) and rounding grows to ~1e-7
+    — the same with outputs off, so a matter of the step control, not of the interpolant,
+    and landing on every 5 ms output hides it."""
+    cfg = _paper(integrator, **{"time.rtol": 1e-6, "time.atol": 1e-6, "time.dt_max": 0.015})
+    ref = _reference_rows(cfg.override({"time.dt_max": None}))
+    dense, land = _simulate(cfg), _simulate(cfg.override({"output.interpolate": False}))
+    err = {}
+    for name, res in (("dense", dense), ("land", land)):
+        np.testing.assert_array_equal(res.t, ref.t)
+        err[name] = (np.abs(res.u - ref.u).max(), np.abs(res.v - ref.v).max())
+    assert err["dense"][0] < 4 * err["land"][0] and err["dense"][0] < 1e-5, err
+    assert err["dense"][1] < 4 * err["land"][1], err
+    cost = {n: r.stats["steps"] + r.stats["rejected_steps"] for n, r in (("dense", dense),
+                                                                        ("land", land))}
+    assert dense.stats["steps"] < land.stats["steps"] and cost["dense"] < cost["land"], cost
+    free = _simulate(cfg.override({"time.dt_max": None}))       # and fewer still uncapped
+    assert free.stats["steps"] < dense.stats["steps"]
+
+
+def _in_pieces(cfg, rng, **capacities):
+    run = Run(cfg, **capacities)
+    sink = MemorySink()
+    run.start(sink)
+    while run.advance(sink, max_steps=int(rng.integers(1, 40))) != L.DONE:
+        pass
+    return sink.result(run), np.concatenate(sink._step)
+
+
+def _same(a, b):
+    np.testing.assert_array_equal(a.u_final, b.u_final)
+    np.testing.assert_array_equal(a.t, b.t)
+    np.testing.assert_array_equal(a.u, b.u)
+    np.testing.assert_array_equal(a.v, b.v)
+    for name in a.diagnostics:
+        np.testing.assert_array_equal(a.diagnostics[name], b.diagnostics[name])
+    for name in a.bounces:
+        np.testing.assert_array_equal(a.bounces[name], b.bounces[name])
+    assert a.stats["steps"] == b.stats["steps"]
+    assert a.stats["rejected_steps"] == b.stats["rejected_steps"]
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_a_run_cut_into_calls_and_small_buffers_is_bitwise_the_same(integrator, rng,
+                                                                    monkeypatch):
+    """Calls of 1–40 steps into buffers of 3 snapshots and 5 diagnostics rows, with steps
+    allowed to cover at most 2 output times of each grid (FULL before many steps, many
+    steps ended on an output time): the same steps and rows as one call into large
+    buffers under the same rule."""
+    monkeypatch.setattr(control, "DENSE_OUTPUTS_MAX", 2)
+    cfg = _paper(integrator, **{"time.t_end": 0.6, "rod.mu": 0.5,
+                                "output.diagnostics_interval": 0.002})
+    one = _simulate(cfg)
+    cut, _ = _in_pieces(cfg, rng, snapshot_capacity=3, diag_capacity=5, event_capacity=1)
+    _same(one, cut)
+    np.testing.assert_array_equal(cut.diagnostics["t"], np.arange(301) * 0.002)
+    # without the rule's cut the run takes fewer steps: every output time was interpolated
+    monkeypatch.undo()
+    free = _simulate(cfg)
+    assert free.stats["steps"] < one.stats["steps"]
+    assert np.abs(free.diagnostics["u_bottom"] - one.diagnostics["u_bottom"]).max() < 1e-3
+
+
+def test_requested_buffers_below_a_steps_outputs_are_enlarged():
+    cfg = _paper("dp54", **{"output.diagnostics_interval": 1e-4})
+    run = Run(cfg, snapshot_capacity=3, diag_capacity=5)
+    assert run.snap_t.size == run.ctrl.dense_snapshots == control.DENSE_OUTPUTS_MAX
+    assert run.diag.shape[0] == run.ctrl.dense_diagnostics == control.DENSE_OUTPUTS_MAX
+    big = Run(cfg.override({"rod.N": 20_000}))        # the snapshot buffer's memory rule
+    assert big.ctrl.dense_snapshots == big.snap_t.size < control.DENSE_OUTPUTS_MAX
+    quiet = Run(cfg.override(QUIET), snapshot_capacity=1, diag_capacity=1)
+    assert quiet.snap_t.size == quiet.diag.shape[0] == 1       # no outputs, no rows
+    land = Run(cfg.override({"output.interpolate": False}), snapshot_capacity=3)
+    assert land.snap_t.size == 3 and land.ctrl.dense_snapshots == 0
+
+
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_resume_from_a_checkpoint_is_bit_identical(integrator):
+    cfg = _paper(integrator, **{"time.t_end": 0.6, "rod.mu": 0.2, "time.rtol": 1e-7})
+    assert Run(cfg).ctrl.dense
+    assert_resume_is_bit_identical(cfg, max_steps=57)
+
+
+def test_an_interrupted_run_file_resumes_bit_for_bit(tmp_path, many_calls):
+    """Through the HDF5 path: stopped at a compiled call, resumed from the file's
+    checkpoint, the same file as an uninterrupted run."""
+    import os
+    import signal
+    cfg = _paper("dp54", **{"rod.mu": 0.5})
+    ref, cut = tmp_path / "ref.h5", tmp_path / "cut.h5"
+    state = {"n": 0}
+
+    def progress(run):
+        state["n"] += 1
+        if state["n"] == 3:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ModelWarning)
+        rodjit.run_to_file(cfg, ref)
+        with pytest.raises(rodjit.RunInterrupted):
+            rodjit.run_to_file(cfg, cut, progress=progress)
+        assert rodjit.resume_file(cut).status == "completed"
+    assert_same_files(cut, ref)
+
+
+# ---- output.interpolate = false ----------------------------------------------------------
+@pytest.mark.parametrize("integrator", sorted(PAIRS))
+def test_interpolate_false_lands_every_row_on_a_step(integrator):
+    """Each snapshot is the state of the step that ends at its time: a run stopped there
+    (time.t_end = that time) ends in it bit for bit, and every row has its own step.  With
+    interpolation several rows share a step and are not a step's state."""
+    cfg = _paper(integrator, **{"time.t_end": 0.4, "time.rtol": 1e-6, "time.atol": 1e-6})
+    land = cfg.override({"output.interpolate": False})
+    assert not Run(land).ctrl.dense
+    run = Run(land)
+    sink = MemorySink()
+    run.start(sink)
+    while run.advance(sink) != L.DONE:
+        pass
+    res = sink.result(run)
+    steps = np.concatenate(sink._step)
+    assert np.all(np.diff(steps) > 0)
+    for k in (17, 40, 63):
+        stopped = _simulate(land.override({"time.t_end": float(res.t[k])}))
+        np.testing.assert_array_equal(stopped.u_final, res.u[k])
+        np.testing.assert_array_equal(stopped.v_final, res.v[k])
+    _, dense_steps = _in_pieces(cfg, np.random.default_rng(1))
+    assert np.any(np.diff(dense_steps) == 0)
+
+
+def test_control_says_when_the_loop_interpolates():
+    for name in registry.NAMES:
+        cfg = _cfg(name)
+        assert Run(cfg).ctrl.dense is (name in PAIRS)
+        assert registry.get(name).dense is (name in PAIRS)
+    dp = _cfg("dp54")
+    assert not Run(dp.override({"output.interpolate": False})).ctrl.dense
+    assert not Run(dp.override({"time.dt": 1e-4})).ctrl.dense   # fixed steps land
+    assert control.build(Config().time, Verlet(0.05), True).dense is False
+    for params in (erk.DP54, erk.DOP853):
+        assert registry.entry_of(params).work_rows == erk.work_rows(params)
+
+
+# ---- the key -----------------------------------------------------------------------------
+@pytest.mark.parametrize("value, message", [
+    (1, "output.interpolate = 1 is not a boolean (true or false)"),
+    ("maybe", "output.interpolate = 'maybe' is not a boolean (true or false)"),
+    (np.float64(0.0), "output.interpolate = np.float64(0.0) is not a boolean"),
+    (None, "output.interpolate must be set (true or false)"),
+])
+def test_a_bad_value_is_one_line_naming_the_key(value, message):
+    with pytest.raises(ValueError) as info:
+        Config().override({"output.interpolate": value})
+    assert str(info.value).startswith(message) and "\n" not in str(info.value)
+
+
+def test_the_key_reads_from_toml_and_the_command_line_form():
+    assert Config().output.interpolate is True
+    assert Config().override({"output.interpolate": "false"}).output.interpolate is False
+    assert Config().override({"output.interpolate": np.bool_(False)}).output.interpolate is False
+    assert Config.from_toml_string("[output]\ninterpolate = false\n").output.interpolate is False
+    with pytest.raises(ValueError, match="output.interpolate = 'true' is a quoted boolean; "
+                                         "write true without quotes"):
+        Config.from_toml_string('[output]\ninterpolate = "true"\n')
+    cfg = Config().override({"output.interpolate": False})
+    assert Config.from_toml_string(cfg.commented_toml()) == cfg
+    assert "interpolate = false" in cfg.to_toml()
+    # a stored configuration written before the key existed ran with landing steps
+    old = "\n".join(line for line in Config().to_toml().splitlines()
+                    if not line.startswith("interpolate"))
+    assert Config.from_stored_toml(old).output.interpolate is False
+    assert Config.from_stored_toml(Config().to_toml()).output.interpolate is True
