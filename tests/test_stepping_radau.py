@@ -172,7 +172,9 @@ def test_agrees_with_dop853_and_energy_on_the_paper_mu100_run():
     """The paper's μ = 100 rod over its first second (impact, contact, settling), at every
     snapshot: radau5 at tolerance 1e-10 agrees with dop853 at 1e-12 far below energy's own
     error at 1e-9, and the error follows the tolerance."""
-    ref = _paper("dop853", 1e-12)
+    # the reference lands on every snapshot: at μ = 100 dop853 is stability-bound, and its
+    # dense output amplifies the stiff components between a step's ends (up to ~15×)
+    ref = _paper("dop853", 1e-12, **{"output.interpolate": False})
     assert len(ref.bounces) >= 1
     errs = {tol: np.abs(_final(_paper("radau5", tol)) - _final(ref)).max()
             for tol in (1e-6, 1e-10)}

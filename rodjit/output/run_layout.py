@@ -48,7 +48,8 @@ TABLES = {
 
 _DESCRIPTIONS = {
     "snapshots/t": "simulated time of each snapshot (t0 + k * output.snapshot_interval)",
-    "snapshots/step": "accepted steps taken before the snapshot",
+    "snapshots/step": ("accepted steps taken up to the snapshot (for a row interpolated by a "
+                       "dense output: up to the end of the step it lies in)"),
     "snapshots/u": "height u_i of every node (rows: times, columns: nodes at x)",
     "snapshots/v": "velocity v_i of every node",
     "snapshots/x": "natural position x_i = i/N of each node",

@@ -51,7 +51,10 @@ from the step's stages, its new point and three extra stages at c = 0.1, 0.2 and
 which ``dense_setup`` evaluates once for a step with an output time inside it (every
 output of that step reuses them); an extra stage outside the admissible set returns its
 failure code, and the loop retries the step shorter.  θ = 0 gives yⁿ exactly, θ = 1 gives
-yⁿ⁺¹ to rounding (yⁿ + Δ).  The dissipated energy D, D' = 2R(v), is the same extension of
+yⁿ⁺¹ to rounding (yⁿ + Δ).  An extension has its own stability function R(θ, z): dp54's
+stays below 1 on the negative real axis up to the step's limit, dop853's reaches about 15
+at interior θ near its edge (z ≈ −6, and ±5.9i), so where the steps are stability-bound
+the interpolated states carry the stiff components amplified that much.  The dissipated energy D, D' = 2R(v), is the same extension of
 the step's quadrature (``dense_dissipated``: the pair applied to the quadrature component,
 k_j = 2R of stage j's velocity), so E + D at an interpolated row keeps the balance to the
 extension's order, and D(1) is the step's own increment.
