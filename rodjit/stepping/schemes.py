@@ -23,17 +23,16 @@ code and NaN rows, so a call by mistake cannot pass unnoticed.
 """
 from __future__ import annotations
 
-from numba.extending import overload
-
 import numpy as np
+from numba.extending import overload
 
 from . import registry
 from .registry import SCHEME_STATS, make_scheme
-from ..kernels.forces import NON_FINITE, OK
+from ..kernels.forces import NON_FINITE
 from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
 
 __all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "dense_dissipated",
-           "gap_control", "has_dense", "work_rows", "SCHEME_STATS"]
+           "gap_control", "work_rows", "SCHEME_STATS"]
 
 
 def _module(params_type):
@@ -116,11 +115,6 @@ def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
     impl = _module_for(scheme).dense_dissipated
     return lambda scheme, system, v, v2, work, dt, theta: impl(
         scheme, system, v, v2, work, dt, theta)
-
-
-def has_dense(scheme) -> bool:
-    """Whether the scheme has a dense output (``registry.Scheme.dense``)."""
-    return registry.entry_of(type(scheme)).dense
 
 
 def gap_control(scheme) -> bool:
