@@ -40,7 +40,7 @@ from ..model.laws import lower, value
 from . import control as C
 from . import layout as L
 from .events import crossing, open_contact, track
-from .schemes import dense, dense_dissipated, dense_setup, initial, step
+from .schemes import dense, dense_dissipated, dense_setup, has_dense, initial, step
 from .._jit import kernel, step_kernel
 
 
@@ -234,7 +234,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
     refined = False
     after_reject = False   # no break can come between a rejection and the next acceptance
     fixed = ctrl.dt_fixed > 0.0
-    interpolate = ctrl.dense
+    interpolate = ctrl.dense and has_dense(scheme)   # a constant False without one
     inside = False   # the trial step has an output time inside it (dense output)
     emin_cur = clock[L.EMIN]
     rod_lo = lower(rod)

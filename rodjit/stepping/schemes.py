@@ -32,7 +32,7 @@ from ..kernels.forces import NON_FINITE
 from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
 
 __all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "dense_dissipated",
-           "gap_control", "work_rows", "SCHEME_STATS"]
+           "has_dense", "gap_control", "work_rows", "SCHEME_STATS"]
 
 
 def _module(params_type):
@@ -115,6 +115,19 @@ def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
     impl = _module_for(scheme).dense_dissipated
     return lambda scheme, system, v, v2, work, dt, theta: impl(
         scheme, system, v, v2, work, dt, theta)
+
+
+def has_dense(scheme) -> bool:
+    """Whether the scheme has a dense output (``registry.Scheme.dense``); in compiled code
+    a constant, so the loop of a scheme without one compiles without its branches."""
+    return registry.entry_of(type(scheme)).dense
+
+
+@overload(has_dense, jit_options=STEP_JIT_OPTIONS)
+def _has_dense_ov(scheme):
+    if _dense_for(scheme):
+        return lambda scheme: True
+    return lambda scheme: False
 
 
 def gap_control(scheme) -> bool:
