@@ -82,6 +82,38 @@ def _exact(t):
 
 
 # ---- the continuous extensions ----------------------------------------------------------
+def _weights(params, theta):
+    """The extension as y(θ) = yⁿ + dt Σ_j b_j(θ) k_j over the stage indices (the pair's
+    stages, the new point, the extra stages), and the stages' nodes c_j."""
+    t, d = erk.TABLEAUS[params], erk.DENSE[params]
+    ns, se = t.b.size, d.d.shape[1]
+    a = np.zeros((se, se))
+    a[:ns, :ns - 1] = t.a
+    a[ns, :ns] = t.b
+    a[ns + 1:, :] = d.ax
+    delta = np.zeros(se)
+    delta[:ns] = t.b
+    b = np.eye(se)[0] - delta
+    c = delta - np.eye(se)[ns] - b
+    tail = np.zeros(se)
+    for k in range(d.d.shape[0] - 1, -1, -1):
+        tail = (1 - theta if k % 2 == 0 else theta) * (d.d[k] + tail)
+    return theta * (delta + (1 - theta) * (b + theta * (c + tail))), a.sum(axis=1)
+
+
+@pytest.mark.parametrize("params", [erk.DP54, erk.DOP853])
+def test_the_published_coefficients_meet_the_quadrature_conditions(params):
+    """Σ_j b_j(θ) c_j^(k−1) = θ^k / k for k up to the extension's order, at every θ (the
+    extra stages' nodes are 0.1, 0.2, 7/9): a wrong digit in a coefficient shows here."""
+    order = PAIRS["dp54" if params is erk.DP54 else "dop853"]
+    for theta in (0.2, 0.5, 0.9, 1.0):
+        w, c = _weights(params, theta)
+        for k in range(1, order + 1):
+            assert abs(w @ c ** (k - 1) - theta ** k / k) < 1e-13, (theta, k)
+    if params is erk.DOP853:
+        np.testing.assert_allclose(c[-3:], [0.1, 0.2, 7 / 9], rtol=0, atol=1e-15)
+
+
 @pytest.mark.parametrize("integrator", sorted(PAIRS))
 def test_interpolation_error_scales_as_h_to_the_order_plus_one(integrator):
     hs = STEPS[integrator] / 2.0 ** np.arange(3)

@@ -54,10 +54,11 @@ failure code, and the loop retries the step shorter.  θ = 0 gives yⁿ exactly,
 yⁿ⁺¹ to rounding (yⁿ + Δ).  An extension has its own stability function R(θ, z): dp54's
 stays below 1 on the negative real axis up to the step's limit, dop853's reaches about 15
 at interior θ near its edge (z ≈ −6, and ±5.9i), so where the steps are stability-bound
-the interpolated states carry the stiff components amplified that much.  The dissipated energy D, D' = 2R(v), is the same extension of
-the step's quadrature (``dense_dissipated``: the pair applied to the quadrature component,
-k_j = 2R of stage j's velocity), so E + D at an interpolated row keeps the balance to the
-extension's order, and D(1) is the step's own increment.
+the interpolated states carry the stiff components amplified that much.  The dissipated
+energy D, D' = 2R(v), is the same extension of the step's quadrature
+(``dense_dissipated``: the pair applied to the quadrature component, k_j = 2R of stage j's
+velocity), so E + D at an interpolated row keeps the balance to the extension's order, and
+D(1) is the step's own increment.
 """
 from __future__ import annotations
 
@@ -225,7 +226,8 @@ DENSE = {
 }
 # ``dense_dissipated`` sums the terms R₅ … R₈ in four accumulators
 DENSE_TERMS_MAX = 4
-assert all(t.d.shape[0] <= DENSE_TERMS_MAX for t in DENSE.values())
+if any(t.d.shape[0] > DENSE_TERMS_MAX for t in DENSE.values()):
+    raise ValueError(f"a dense output has more than {DENSE_TERMS_MAX} terms R_m")
 
 
 def dense_rows(params_type) -> int:
