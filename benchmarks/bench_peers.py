@@ -41,7 +41,7 @@ interpolated in log-log along its cost–error Pareto front (the cheapest measur
 among settings with error ≤ E, interpolated towards the next cheaper, less accurate one);
 the ratio printed is peer cost / rodjit's best cost (the cheapest rodjit integrator at E).
 
-    python benchmarks/bench_peers.py [--quick] [--repeat 3] [--settings paper-mu0,...]
+    python benchmarks/bench_peers.py [--quick] [--repeat 3] [--settings paper-mu0,...] [--out NAME]
 """
 from __future__ import annotations
 
@@ -436,6 +436,9 @@ def main(argv=None):
                     help="seconds: a scan stops refining once one run takes longer")
     ap.add_argument("--settings", default=None, help="comma-separated subset of "
                     + ", ".join(SETTINGS))
+    ap.add_argument("--out", default=None,
+                    help="name of the results file (results/<out>.json; default peers, or "
+                         "peers_quick with --quick)")
     args = ap.parse_args(argv)
     names = args.settings.split(",") if args.settings else (
         ["paper-mu0", "paper-mu100"] if args.quick else list(SETTINGS))
@@ -450,7 +453,7 @@ def main(argv=None):
     for n in names:
         results[n] = run_setting(n, args.quick, rounds, budget)
         # written after every setting (a long run interrupted keeps what it measured)
-        path = _util.save("peers_quick" if args.quick else "peers",
+        path = _util.save(args.out or ("peers_quick" if args.quick else "peers"),
                           {"versions": vers, "quick": args.quick, "repeat": args.repeat,
                            "budget_seconds": budget, "complete": len(results) == len(names),
                            "settings": results})

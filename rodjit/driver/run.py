@@ -84,7 +84,7 @@ class Block:
         self.diagnostics = run.diag[:int(c[L.N_DIAG])]
         self.episodes = run.episodes[:int(c[L.N_EP])]
         self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
-        self.finite = bool(np.all(np.isfinite(self.diagnostics)))
+        self.finite = bool(np.isfinite(self.diagnostics).all())
 
 
 def warn_config(config, stacklevel: int = 3) -> None:

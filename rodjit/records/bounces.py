@@ -22,7 +22,8 @@ def bounce_table(blocks, pending=None) -> dict[str, np.ndarray]:
     if pending is not None:
         rows.append(np.asarray(pending[0])[None, :])
         is_open.append(np.array([bool(pending[1])]))
-    b = np.concatenate(rows) if rows else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
+    b = (rows[0] if len(rows) == 1 else np.concatenate(rows)) if rows \
+        else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
     out = {name: b[:, j].copy() for j, name in enumerate(BOUNCE_ROW_COLUMNS)}
     out["n_episodes"] = out["n_episodes"].astype(np.int64)
     out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)

@@ -158,7 +158,7 @@ def _run_in_memory(config) -> tuple[dict, dict]:
     sink = _PointSink()
     status, message = "completed", ""
     try:
-        run.start(sink)
+        run.start(None)   # the outputs at t0 wait in the buffers for the first drain
         while run.advance(sink) != L.DONE:
             pass
     except SimulationError as exc:
