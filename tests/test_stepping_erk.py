@@ -263,3 +263,24 @@ def test_resume_through_bounces_and_outputs_is_bit_identical(integrator):
         pass
     np.testing.assert_array_equal(run.state, one.state)
     assert run.steps == one.steps and run.rejected == one.rejected
+
+
+def test_the_imaginary_stability_limit_is_where_the_amplification_passes_one():
+    """``erk.imaginary_limit`` from the stability polynomial: |R(iy)| ≤ 1 up to it and > 1
+    just beyond, R evaluated independently as 1 + z bᵀ(I − zA)⁻¹1; the cap is below it."""
+    from rodjit.stepping import erk
+    for params, t in erk.TABLEAUS.items():
+        s = t.b.size
+        a = np.zeros((s, s))
+        a[:, :t.a.shape[1]] = t.a[:s]
+
+        def amp(y):
+            z = 1j * y
+            return abs(1.0 + z * t.b @ np.linalg.solve(np.eye(s) - z * a, np.ones(s)))
+
+        limit = erk.imaginary_limit(t.a, t.b)
+        assert 0.5 < limit < 10.0
+        assert max(amp(y) for y in np.linspace(1e-3, limit, 400)) <= 1.0 + 1e-12
+        assert amp(limit * 1.01) > 1.0
+        assert np.isclose(amp(limit), 1.0, atol=1e-9)
+        assert erk.STABILITY_CAP[params] < limit

@@ -30,7 +30,13 @@ stay inside the pair's stability region (it reaches about −3.3 on the negative
 dp54 and about −6 for dop853; viscosity adds real eigenvalues down to about −4μ/h², the
 floor in contact frequencies from √(6κ_b/(βh)) up), so with stiff viscosity, a stiff floor
 or a long rod the error controller keeps the step near that limit (rejecting the steps
-that grow past it) and ``energy`` is the better choice.
+that grow past it) and ``energy`` is the better choice.  On the imaginary axis (the
+undamped oscillations of the rod) the regions reach only |z| ≈ 1.0 (dp54) and 6.0
+(dop853) (``imaginary_limit``, from each tableau's stability polynomial).  A mode the
+motion does not excite (the rod in free fall) leaves the error estimate blind to it, so
+without a cap the steps of a free flight would grow until ω·dt is far outside, and the
+rounding seeded in that mode would grow each step; the next step is therefore capped at
+``STABILITY_CAP`` / ω, ω the Gershgorin bound at the new state.
 
 The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
 tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature
@@ -175,6 +181,46 @@ TABLEAUS = {
 }
 
 
+def stability_polynomial(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Coefficients r_0 … r_s (lowest first) of an explicit pair's stability function
+    R(z) = 1 + z bᵀ(I − zA)⁻¹1 = Σ_k bᵀA^(k−1)1 z^k: the amplification of y' = λy per step,
+    z = λ dt."""
+    s = b.size
+    A = np.zeros((s, s))
+    A[:, :a.shape[1]] = a[:s]
+    r = [1.0]
+    w = np.ones(s)
+    for _ in range(s):
+        r.append(float(b @ w))
+        w = A @ w
+    return np.array(r)
+
+
+def imaginary_limit(a: np.ndarray, b: np.ndarray) -> float:
+    """The largest y with |R(iy')| ≤ 1 for every 0 ≤ y' ≤ y: the stretch of the imaginary
+    axis (undamped oscillation, z = iω dt) inside the stability region.  |R(iy)|² − 1 is
+    a polynomial in y; its smallest positive root at which it turns positive."""
+    r = stability_polynomial(a, b)
+    p = np.polynomial.Polynomial(r * (1j) ** np.arange(r.size))
+    m = (p * np.polynomial.Polynomial(p.coef.conj())).coef.real   # |R(iy)|², in y
+    m[0] -= 1.0
+    g = np.polynomial.Polynomial(m)
+    roots = sorted(x.real for x in g.roots() if abs(x.imag) < 1e-9 * max(1.0, abs(x)) and
+                   x.real > 1e-6)
+    for y in roots:
+        if g(y * (1.0 + 1e-6)) > 0.0:
+            return float(y)
+    return math.inf
+
+
+# An undamped mode whose ω dt leaves that stretch grows every step (rounding seeds it even
+# where the motion does not excite it) unseen by the error estimate until it is large:
+# the pair's step is capped at this fraction of imaginary_limit / ω, ω the Gershgorin bound
+# at the new state (itself above the highest frequency).
+IMAG_SAFETY = 0.9
+STABILITY_CAP = {P: IMAG_SAFETY * imaginary_limit(t.a, t.b) for P, t in TABLEAUS.items()}
+
+
 # ---- dense output (module docstring): the extra stages' coefficients over every earlier
 # stage (stage index: the pair's stages, the new point, the extra stages) and the weights
 # d_mj of the terms R_m, as published in Hairer's dopri5.f and dop853.f
@@ -246,6 +292,17 @@ def tableau(scheme):
     return t.a, t.b, t.e, t.e3, t.combined, t.q
 
 
+def stability_cap(scheme):
+    """``STABILITY_CAP`` of the scheme: the largest ω·dt its steps may take."""
+    return STABILITY_CAP[type(scheme)]
+
+
+@overload(stability_cap, jit_options=STEP_JIT_OPTIONS)
+def _stability_cap_ov(scheme):
+    cap = STABILITY_CAP[scheme.instance_class]
+    return lambda scheme: cap
+
+
 @overload(tableau, jit_options=STEP_JIT_OPTIONS)
 def _tableau_ov(scheme):
     t = TABLEAUS[scheme.instance_class]
@@ -294,7 +351,7 @@ def _rate(system, v):
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state and Hairer's starting step: h0 = 0.01‖y‖/‖f‖,
     then from a trial Euler step the step whose error (‖f'‖ h^(q+1)) is 0.01, at most 100 h0,
-    and at most 2/ω (the explicit stability scale)."""
+    and at most ``STABILITY_CAP`` / ω (the stability limit of undamped oscillation)."""
     status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
@@ -312,7 +369,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     d1 = math.sqrt(d1 / m)
     h0 = 0.01 * d0 / d1 if d0 > 1e-5 and d1 > 1e-5 else 1e-6
     if om2 > 0.0:
-        h0 = min(h0, 2.0 / math.sqrt(om2))
+        h0 = min(h0, stability_cap(scheme) / math.sqrt(om2))
     u1 = work[2]   # stage rows as scratch
     v1 = work[3]
     a1 = work[4]
@@ -381,8 +438,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                 dv += cl * work[2 * l + 1, i]
         u2[i] = u[i] + dt * du
         v2[i] = v[i] + dt * dv
-    status, val, emin, fl, _ = full_accel(system, rod, floor, u2, v2, a2, work[S], work[K],
-                                          False)
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S],
+                                            work[K], True)
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     # error norm over u and v (module docstring)
@@ -419,9 +476,12 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     w = momentum(v2, system.h)
     diss *= dt
     fac = _factor(err, q)
+    dt_next = dt * fac
+    if om2 > 0.0:
+        dt_next = min(dt_next, stability_cap(scheme) / math.sqrt(om2))
     if err > 1.0:
-        return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
-    return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)
+        return StepResult(INACCURATE, err, emin, fl, dt_next, w, diss)
+    return StepResult(OK, 0.0, emin, fl, dt_next, w, diss)
 
 
 @step_kernel
