@@ -66,8 +66,9 @@ from .registry import counter_index
 from .step_result import StepResult
 from .._jit import exact_step_kernel, step_kernel
 
-__all__ = ["Radau5", "initial", "step", "WORK_ROWS", "C", "E", "T", "TI", "MU_REAL",
-           "ALPHA", "BETA", "B"]
+__all__ = ["Radau5", "initial", "step", "dense_setup", "dense", "dense_dissipated",
+           "WORK_ROWS", "C", "E", "T", "TI", "MU_REAL", "ALPHA", "BETA", "B", "DENSE_L",
+           "DENSE_W"]
 
 NEWTON_ITERATIONS = counter_index("newton_iterations")
 NEWTON_FAILURES = counter_index("newton_failures")
@@ -95,6 +96,31 @@ _TI10, _TI11, _TI12 = TI[1]
 _TI20, _TI21, _TI22 = TI[2]
 _C0, _C1 = C[0], C[1]
 _B0, _B1, _B2 = B
+
+
+def _collocation_weights():
+    """Polynomial coefficients (highest power first, for Horner) of the dense output.
+
+    ``L[i]``: the Lagrange basis polynomial of node c_i on the nodes {0, c_1, c_2, c_3 = 1}
+    (i = 0, 1, 2 for c_1 … c_3), so that the collocation polynomial of the step is
+    y(t + θ dt) = yⁿ + Σ_i L_i(θ) Z_i (its increment is 0 at θ = 0 and Z_i at c_i).
+    ``W[k]``: ∫₀^θ of the basis polynomial of node k (k = 0: the node 0) on the same nodes,
+    the weights of the interpolatory quadrature of a rate from the step's start to θ; at
+    θ = 1 they are (0, b_1, b_2, b_3), the step's own Radau quadrature, because the
+    four-node rule is exact to degree 4 like the Radau rule, which has weight 0 at node 0.
+    """
+    nodes = np.concatenate([[0.0], C])
+    basis = []
+    for k in range(4):
+        others = np.delete(nodes, k)
+        poly = np.poly1d(np.poly(others)) / np.prod(nodes[k] - others)
+        basis.append(poly)
+    lagrange = np.array([basis[k].coeffs for k in range(1, 4)])
+    integrals = np.array([basis[k].integ().coeffs for k in range(4)])
+    return lagrange, integrals
+
+
+DENSE_L, DENSE_W = _collocation_weights()
 _E0, _E1, _E2 = E
 
 MAX_NEWTON = 7        # the first (free) update and up to six with stage evaluations
@@ -563,3 +589,48 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     if err > 1.0:
         return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
     return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)
+
+
+@step_kernel
+def _horner(coef, x):
+    r = 0.0
+    for c in coef:
+        r = r * x + c
+    return r
+
+
+@step_kernel
+def dense_setup(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
+    """Nothing to prepare: the collocation polynomial needs only the stage increments Z_i
+    the step left in rows ZU…, which nothing overwrites before the next step."""
+    return OK, 0.0
+
+
+@step_kernel
+def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
+    """(u, v) at t + θ dt into ``uo``, ``vo``: the step's collocation polynomial
+    yⁿ + Σ_i L_i(θ) Z_i (``DENSE_L``), of degree 3: yⁿ⁺¹ at θ = 1 (to rounding; the
+    stiffly accurate last stage) and of the stage order 3 inside the step."""
+    l0 = _horner(DENSE_L[0], theta)
+    l1 = _horner(DENSE_L[1], theta)
+    l2 = _horner(DENSE_L[2], theta)
+    for i in range(u.size):
+        uo[i] = u[i] + (l0 * work[ZU, i] + l1 * work[ZU + 2, i] + l2 * work[ZU + 4, i])
+        vo[i] = v[i] + (l0 * work[ZU + 1, i] + l1 * work[ZU + 3, i] + l2 * work[ZU + 5, i])
+
+
+@step_kernel
+def dense_dissipated(scheme, system, v, v2, work, dt, theta):
+    """The viscous energy dissipated from the step's start to t + θ dt: the interpolatory
+    quadrature of the rate 2R over the nodes 0, c_1, c_2, 1 (``DENSE_W``), which at θ = 1 is
+    the step's own Radau quadrature; 0 at μ = 0.  Uses row YV as scratch."""
+    if not system.mu > 0.0:
+        return 0.0
+    yv = work[YV]
+    total = _horner(DENSE_W[0], theta) * _rate(system, v)
+    for j in range(2):
+        for i in range(v.size):
+            yv[i] = v[i] + work[ZU + 2 * j + 1, i]
+        total += _horner(DENSE_W[j + 1], theta) * _rate(system, yv)
+    total += _horner(DENSE_W[3], theta) * _rate(system, v2)
+    return dt * total

@@ -69,7 +69,8 @@ SCHEMES: tuple[Scheme, ...] = (
            step_rules="pair-dop853", dense=True),
     Scheme("radau5", "rodjit.stepping.radau", "Radau5",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
-           counters=("newton_iterations", "newton_failures"), gap_control=False),
+           counters=("newton_iterations", "newton_failures"), gap_control=False,
+           dense=True),
 )
 
 NAMES: tuple[str, ...] = tuple(s.name for s in SCHEMES)
