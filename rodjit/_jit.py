@@ -35,6 +35,18 @@ thread while the loop computes (``driver.pipeline``); it changes only the Python
 wrapper, not the compiled loop.
 Stress laws written by users should use ``kernel`` too (and so must not allocate).
 
+Literal flags: a ``True``/``False`` written in a kernel is a compile-time literal to Numba,
+and a kernel called with a literal is compiled for that value (its own specialisation, with
+the flag's branches pruned).  A flag that one call site passes as ``True`` and another as
+``False`` or as a run-time bool, or a variable that starts as a literal and later takes
+run-time values (type inference then compiles the callee for the literal first), so
+compiles the callee twice, each copy optimised and code-generated again in every caller it
+is inlined into.  Kernels pass such flags as ``bool(True)``/``bool(False)``, a run-time
+bool: one specialisation serves every call site, and inlining into a caller that passes a
+constant folds the flag's branches anyway.  Written so that no branch multiplies a value
+the code after the branch uses, such a kernel compiles to the same instructions as its
+literal specialisations (a select of ``x·c`` and ``x`` can lose the fused multiply-add).
+
 Numba invalidates a cached function only when *its own* file changes, not when a function
 it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever
 any source of the compiled layers differs from the last process that compiled them.

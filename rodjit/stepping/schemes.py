@@ -36,18 +36,18 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                                       work, sstats, dt)
 
 
-@overload(initial, jit_options=JIT_OPTIONS)
+# The overloads compile the scheme module's own function (its Python source, arguments bound
+# by position, under the options here: ``initial`` called, ``step`` inlined into the loop),
+# not a wrapper calling its kernel: a wrapper is one more function that LLVM optimises and
+# code-generates with the whole step inlined into it.
+@overload(initial, jit_options=JIT_OPTIONS, strict=False)
 def _initial_ov(scheme, system, rod, floor, u, v, a, work):
-    impl = _module_for(scheme).initial
-    return lambda scheme, system, rod, floor, u, v, a, work: impl(
-        scheme, system, rod, floor, u, v, a, work)
+    return _module_for(scheme).initial.py_func
 
 
-@overload(step, jit_options=STEP_JIT_OPTIONS)   # inlined into the loop, like the step
+@overload(step, jit_options=STEP_JIT_OPTIONS, strict=False)
 def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
-    impl = _module_for(scheme).step
-    return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(
-        scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)
+    return _module_for(scheme).step.py_func
 
 
 def gap_control(scheme) -> bool:
