@@ -33,6 +33,11 @@ that guarantee is checked at compile time.
 ``nogil=True``: a compiled call releases the GIL, so the run file is written by another
 thread while the loop computes (``driver.pipeline``); it changes only the Python entry
 wrapper, not the compiled loop.
+``no_cfunc_wrapper=True``: Numba would give every compiled kernel, beside the Python entry
+wrapper, a C-ABI wrapper (for a kernel used as a first-class function value or a ctypes
+address), which rodjit never uses; skipping it saves lowering, optimising and
+code-generating one more function in every kernel's compile (the cold start of a run,
+benchmarks/cold_start.py).
 Stress laws written by users should use ``kernel`` too (and so must not allocate).
 
 Literal flags: a ``True``/``False`` written in a kernel is a compile-time literal to Numba,
@@ -65,8 +70,10 @@ from numba.core.cpu import CPUTargetOptions
 # ``_nrt`` is an option of Numba's CPU target (Numba compiles its own allocation-free
 # helpers with it); a Numba without it compiles the kernels with reference counting
 _CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
+_CAN_SKIP_CFUNC = hasattr(CPUTargetOptions, "no_cfunc_wrapper")
 JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
-               "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
+               "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {}),
+               **({"no_cfunc_wrapper": True} if _CAN_SKIP_CFUNC else {})}
 
 _kernel = numba.njit(**JIT_OPTIONS)
 
