@@ -33,7 +33,24 @@ that guarantee is checked at compile time.
 ``nogil=True``: a compiled call releases the GIL, so the run file is written by another
 thread while the loop computes (``driver.pipeline``); it changes only the Python entry
 wrapper, not the compiled loop.
+``no_cfunc_wrapper=True``: Numba would give every compiled kernel, beside the Python entry
+wrapper, a C-ABI wrapper (for a kernel used as a first-class function value or a ctypes
+address), which rodjit never uses; skipping it saves lowering, optimising and
+code-generating one more function in every kernel's compile (the cold start of a run,
+benchmarks/cold_start.py).
 Stress laws written by users should use ``kernel`` too (and so must not allocate).
+
+Literal flags: a ``True``/``False`` written in a kernel is a compile-time literal to Numba,
+and a kernel called with a literal is compiled for that value (its own specialisation, with
+the flag's branches pruned).  A flag that one call site passes as ``True`` and another as
+``False`` or as a run-time bool, or a variable that starts as a literal and later takes
+run-time values (type inference then compiles the callee for the literal first), so
+compiles the callee twice, each copy optimised and code-generated again in every caller it
+is inlined into.  Kernels pass such flags as ``bool(True)``/``bool(False)``, a run-time
+bool: one specialisation serves every call site, and inlining into a caller that passes a
+constant folds the flag's branches anyway.  Written so that no branch multiplies a value
+the code after the branch uses, such a kernel compiles to the same instructions as its
+literal specialisations (a select of ``x·c`` and ``x`` can lose the fused multiply-add).
 
 Numba invalidates a cached function only when *its own* file changes, not when a function
 it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever
@@ -53,8 +70,10 @@ from numba.core.cpu import CPUTargetOptions
 # ``_nrt`` is an option of Numba's CPU target (Numba compiles its own allocation-free
 # helpers with it); a Numba without it compiles the kernels with reference counting
 _CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
+_CAN_SKIP_CFUNC = hasattr(CPUTargetOptions, "no_cfunc_wrapper")
 JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
-               "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {})}
+               "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {}),
+               **({"no_cfunc_wrapper": True} if _CAN_SKIP_CFUNC else {})}
 
 _kernel = numba.njit(**JIT_OPTIONS)
 

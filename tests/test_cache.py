@@ -54,6 +54,52 @@ def test_a_second_process_loads_every_kernel_from_the_cache(tmp_path):
     assert int(found) >= 10
 
 
+
+# Every function Numba compiles for one short run, from a cold cache: rodjit's kernels with
+# the signatures they were compiled for, and whether the compile made a C-ABI wrapper.
+COMPILES = textwrap.dedent("""
+    import json, sys
+    from numba.core import event
+    compiled = {}
+    class Compiles(event.Listener):
+        def on_start(self, ev):
+            pass
+        def on_end(self, ev):
+            d = ev.data["dispatcher"]
+            if d.py_func.__module__.startswith("rodjit"):
+                args = tuple(ev.data["args"])
+                lib = d.overloads[args].library
+                cfunc = d.overloads[args].fndesc.llvm_cfunc_wrapper_name
+                entry = compiled.setdefault(id(d), [d.py_func.__qualname__, [], False])
+                entry[1].append(str(args))
+                entry[2] |= any(f.name == cfunc for f in lib.get_defined_functions())
+    event.register("numba:compile", Compiles())
+    import rodjit
+    rodjit.simulate(rodjit.Config().override({"time.integrator": sys.argv[1],
+                                              "time.t_end": 0.05}))
+    print(json.dumps(list(compiled.values())))
+""")
+
+
+@pytest.mark.slow   # a cold compile of every kernel per integrator: minutes
+@pytest.mark.parametrize("integrator", ["energy", "dp54", "verlet"])
+def test_a_cold_run_compiles_each_kernel_once(tmp_path, integrator):
+    """A kernel called with a literal flag at one call site and another value (or a
+    run-time bool) at the next compiles twice, each copy optimised again in every caller
+    (rodjit._jit: literal flags); a run compiles each of rodjit's functions for one
+    signature, and none with the C-ABI wrapper nothing calls."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    out = subprocess.run([sys.executable, "-c", COMPILES, integrator], env=env,
+                         capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    compiled = json.loads(out.stdout.strip().splitlines()[-1])
+    assert len(compiled) > 20, compiled   # the events were seen
+    twice = {name: sigs for name, sigs, _ in compiled if len(sigs) > 1}
+    assert not twice, twice
+    assert not [name for name, _, cfunc in compiled if cfunc]
+
+
 def _fresh_kernel(tmp_path, name):
     """A cached njit function in a module of its own (so Numba has a cache to save to)."""
     import importlib

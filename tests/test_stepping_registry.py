@@ -107,6 +107,30 @@ def test_adding_a_scheme_is_one_module_and_one_registry_line(monkeypatch):
     np.testing.assert_allclose(r.w, (masses(8) * trial[1]).sum(), rtol=1e-14)
 
 
+
+def test_the_loop_compiles_each_scheme_kernel_itself_not_a_wrapper(monkeypatch):
+    """rodjit's schemes compile ``initial`` with the kernel options and ``step`` with the
+    step options, so the loop's dispatch compiles their own source (no wrapper optimised
+    again with the whole step inlined into it, benchmarks/cold_start.py); a scheme kernel
+    compiled otherwise (the toy scheme's plain-kernel step) is called through a wrapper."""
+    from rodjit._jit import JIT_OPTIONS
+    for entry in registry.SCHEMES:
+        module, _ = registry.load(entry)
+        scheme = registry.make_scheme(rodjit.Config().override(
+            {"time.integrator": entry.name}).time)
+        nt = numba.typeof(scheme)
+        assert schemes._initial_ov(nt, *[None] * 7) is module.initial.py_func, entry.name
+        assert schemes._step_ov(nt, *[None] * 12) is module.step.py_func, entry.name
+        assert not schemes._compiled_with(module.step, JIT_OPTIONS)
+    line = registry.Scheme("toy", "toy_scheme", "Toy", lambda tc, P: P(float(tc.cfl)),
+                           workspace.WORK_ROWS)
+    monkeypatch.setattr(registry, "SCHEMES", registry.SCHEMES + (line,))
+    import toy_scheme
+    assert schemes._compiled_with(toy_scheme.step, JIT_OPTIONS)
+    wrapper = schemes._step_ov(numba.typeof(toy_scheme.Toy(0.5)), *[None] * 12)
+    assert wrapper is not toy_scheme.step.py_func and wrapper.__name__ == "<lambda>"
+
+
 # ---- the kick–drift–kick stage table --------------------------------------------------------
 def test_every_kdk_scheme_has_a_row_of_the_stage_table():
     kdk_entries = [e for e in registry.SCHEMES if e.module == kdk.__name__]

@@ -53,15 +53,15 @@ def add_beam_term(u, out, k, h, scale, by_mass):
     f0 = scale * (0.0 - 2.0 * k[0] + k[1]) * ih
     fn = scale * (k[n - 1] - 2.0 * k[n] + 0.0) * ih
     if by_mass:
-        f0 *= 2.0 * ih
-        fn *= 2.0 * ih
         for j in range(1, n):
             out[j] += scale * (k[j - 1] - 2.0 * k[j] + k[j + 1]) * ih * ih
+        out[0] += f0 * (2.0 * ih)
+        out[n] += fn * (2.0 * ih)
     else:
         for j in range(1, n):
             out[j] += scale * (k[j - 1] - 2.0 * k[j] + k[j + 1]) * ih
-    out[0] += f0
-    out[n] += fn
+        out[0] += f0
+        out[n] += fn
 
 
 @step_kernel
@@ -126,7 +126,7 @@ def assemble(u, a, s, k, fl, system, beam):
         a[i] = (s[i] - s[i - 1]) * ih + g
     a[n] = -s[n - 1] * ie + g
     if beam and system.gamma > 0.0:
-        add_beam_term(u, a, k, h, -system.gamma, True)
+        add_beam_term(u, a, k, h, -system.gamma, bool(True))
 
 
 @step_kernel

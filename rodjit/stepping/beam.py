@@ -47,7 +47,7 @@ def beam_midpoint(system, u, v, u2, dt, work):
         y[i] = u[i] + 0.25 * dt * v[i]
         rhs[i] = node_mass(i, n, h) * v[i]
     # (M + dt²γ/4 B) v⁺ = M v − dt γ B (u + dt/4 v)
-    add_beam_term(y, rhs, work[W.K], h, -dt * gam, False)
+    add_beam_term(y, rhs, work[W.K], h, -dt * gam, bool(False))
     beam_matrix(work[W.BA0], work[W.BA1], work[W.BA2], 0.25 * dt * dt * gam, h, n)
     penta_factor(work[W.BA0], work[W.BA1], work[W.BA2], work[W.BL1], work[W.BL2], work[W.BDINV])
     penta_solve(work[W.BL1], work[W.BL2], work[W.BDINV], rhs, v)

@@ -54,7 +54,7 @@ from ..model.laws import deriv, lower
 from .beam import add_bending
 from .registry import counter_index
 from .step_result import StepResult
-from .._jit import step_kernel
+from .._jit import kernel, step_kernel
 
 __all__ = ["Energy", "initial", "step", "WORK_ROWS"]
 
@@ -179,7 +179,7 @@ def jerk(system, rod, floor, u, v, a, out, k, strains):
         t_prev = t
     out[n] = -t_prev * _inv_mass(n, n, ih)
     if system.gamma > 0.0:
-        add_beam_term(v, out, k, h, -system.gamma, True)
+        add_beam_term(v, out, k, h, -system.gamma, bool(True))
 
 
 @step_kernel
@@ -191,11 +191,12 @@ def _error_rate(scheme, u, ad):
     return r
 
 
-@step_kernel
+@kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state.  The first step: the accuracy estimate from ȧ, at most the explicit limit
     2/ω (the controller grows it from there)."""
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K],
+                                            bool(True))
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     jerk(system, rod, floor, u, v, a, work[AD], work[K], work[E1])
@@ -251,7 +252,7 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             ub[i] = u[i] + 0.5 * d[i]
             r[i] = 0.0
             sc[i] = 0.0
-        add_beam_term(ub, r, work[K], h, cb, False)
+        add_beam_term(ub, r, work[K], h, cb, bool(False))
         if jac:
             kk = work[K]
             for i in range(1, n):   # magnitude of the bending terms, for the rounding scale
@@ -388,13 +389,13 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     dtr = work[DT]
     rounding2 = (64.0 * EPS) ** 2
     last = np.inf
-    fresh = True
+    fresh = bool(True)   # a run-time flag (rodjit._jit: literal flags)
     rn2 = 0.0
     sn2 = 0.0
     for it in range(scheme.max_newton):
         if fresh:
             status, rn2, sn2, fl, emin = _evaluate(system, rod, floor, u, v, d, u2, dt,
-                                                   work, True)
+                                                   work, bool(True))
             if status != OK:   # only the start can be outside: trials are backtracked
                 return status, 0.0, row, 0.0, 0.0
         _newton_update(system, work, fresh)
@@ -417,7 +418,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
                 for i in range(n1):
                     dtr[i] = d[i] - alpha * y[i]
             status, rt2, _, fl, emin = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work,
-                                                 False)
+                                                 bool(False))
             armijo = 1.0 - ARMIJO * alpha
             if status == OK and (small or rt2 <= armijo * armijo * rn2
                                  or rt2 <= rounding2 * sn2):

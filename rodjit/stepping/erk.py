@@ -324,7 +324,8 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state and Hairer's starting step: h0 = 0.01‖y‖/‖f‖,
     then from a trial Euler step the step whose error (‖f'‖ h^(q+1)) is 0.01, at most 100 h0,
     and at most ``STABILITY_CAP`` / ω (the stability limit of undamped oscillation)."""
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K], True)
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K],
+                                            bool(True))
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     _, _, _, _, _, q = tableau(scheme)
@@ -348,7 +349,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     for i in range(n1):
         u1[i] = u[i] + h0 * v[i]
         v1[i] = v[i] + h0 * a[i]
-    st1 = full_accel(system, rod, floor, u1, v1, a1, work[S], work[K], False)[0]
+    st1 = full_accel(system, rod, floor, u1, v1, a1, work[S], work[K], bool(False))[0]
     dt = h0
     if st1 == OK:
         d2 = 0.0
@@ -394,7 +395,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             u2[i] = u[i] + dt * du
             vj[i] = v[i] + dt * dv
         status, val, emin, fl, _ = full_accel(system, rod, floor, u2, vj, aj, work[S],
-                                              work[K], False)
+                                              work[K], bool(False))
         if status != OK:
             return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
         if system.mu > 0.0 and B[j] != 0.0:
@@ -411,7 +412,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         u2[i] = u[i] + dt * du
         v2[i] = v[i] + dt * dv
     status, val, emin, fl, om2 = full_accel(system, rod, floor, u2, v2, a2, work[S],
-                                            work[K], True)
+                                            work[K], bool(True))
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     # error norm over u and v (module docstring)
@@ -494,7 +495,7 @@ def dense_setup(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
             us[i] = u[i] + dt * su
             vj[i] = v[i] + dt * sv
         status, val, _, _, _ = full_accel(system, rod, floor, us, vj, aj, work[S], work[K],
-                                          False)
+                                          bool(False))
         if status != OK:
             return status, val
     base = 2 * D.shape[1]

@@ -112,7 +112,7 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
     # an apex closes the bounce (its last episode has ended: no contact is active)
     if ev[L.IN_CONTACT] == 0.0 and wa > 0.0 and wb <= 0.0 and ev[L.B_NEP] > 0.0:
         j = count[L.N_BOUNCE]
-        write_bounce(bounces[j], ev, False)
+        write_bounce(bounces[j], ev, bool(False))   # the type Python calls it with
         count[L.N_BOUNCE] += 1
         count[L.BOUNCES_TOTAL] += 1
         ev[L.B_NEP] = 0.0

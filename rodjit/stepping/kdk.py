@@ -129,7 +129,7 @@ def _suggest(scheme, st, system, floor, om2, u0, v0):
     at time.cfl under either control."""
     if not scheme.tolerance:
         return explicit_dt(system, floor, om2, u0, v0, scheme.cfl, st.viscous_limit)
-    dt = explicit_dt(system, floor, om2, u0, v0, STABILITY_CFL, False)
+    dt = explicit_dt(system, floor, om2, u0, v0, STABILITY_CFL, bool(False))
     if st.viscous_limit and system.mu > 0.0:
         dt = min(dt, scheme.cfl * system.h * system.h / (2.0 * system.mu))
     return dt

@@ -202,7 +202,7 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     ke, st, be, fe, ge, emin, z, w = energies(u, v, work[1], system, rod, floor)
     clock[L.E0] = ke + st + be + fe + ge
     clock[L.W] = w
-    clock[L.DT] = C.propose(ctrl, r.dt_suggest, np.inf)
+    clock[L.DT] = C.propose(ctrl, r.dt_suggest, np.inf, bool(False))
     clock[L.EMIN] = emin
     if u[0] < 0.0:
         open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin)
@@ -232,7 +232,9 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
     diss = clock[L.DISSIPATED]
     w = clock[L.W]
     refined = False
-    after_reject = False   # no break can come between a rejection and the next acceptance
+    # no break can come between a rejection and the next acceptance; a run-time flag
+    # (rodjit._jit: literal flags)
+    after_reject = bool(False)
     fixed = ctrl.dt_fixed > 0.0
     interpolate = ctrl.dense and has_dense(scheme)   # a constant False without one
     inside = False   # the trial step has an output time inside it (dense output)
@@ -332,7 +334,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         count[L.STEP] += 1
         taken += 1
         dtp = C.propose(ctrl, r.dt_suggest, dtp, after_reject)
-        after_reject = False
+        after_reject = bool(False)
         if ctrl.gap > 0.0 and not fixed:
             dtp = min(dtp, C.gap_limit(ctrl, dt, emin_cur - rod_lo, emin - rod_lo),
                       C.gap_limit(ctrl, dt, u[0] - floor_lo, u2[0] - floor_lo))

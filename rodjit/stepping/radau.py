@@ -64,7 +64,7 @@ from .beam import add_bending
 from .erk import _rate
 from .registry import counter_index
 from .step_result import StepResult
-from .._jit import exact_step_kernel, step_kernel
+from .._jit import exact_step_kernel, kernel, step_kernel
 
 __all__ = ["Radau5", "initial", "step", "dense_setup", "dense", "dense_dissipated",
            "WORK_ROWS", "C", "E", "T", "TI", "MU_REAL", "ALPHA", "BETA", "B", "DENSE_L",
@@ -425,7 +425,7 @@ def _newton(scheme, system, rod, floor, u, v, a, work, sstats, dt):
                 _stage_state(u, v, work, j)
                 status, val, _, _, _ = energy.full_accel(system, rod, floor, work[YU],
                                                          work[YV], work[FA + j], work[S],
-                                                         work[K], False)
+                                                         work[K], bool(False))
                 if status != OK:
                     return status, val, it
         for i in range(n1):
@@ -524,7 +524,7 @@ def _error_rhs(v, a, work, fu, fv, idt):
         ev[i] = fv[i] + zv * idt
 
 
-@step_kernel
+@kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
     """Full acceleration of the initial state and the first step (``energy.initial``'s
     estimate: the controller grows it from there)."""
@@ -551,7 +551,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         u2[i] = u[i] + zu[i]
         v2[i] = v[i] + zv[i]
     status, val, emin, fl, _ = energy.full_accel(system, rod, floor, u2, v2, a2, work[S],
-                                                 work[K], False)
+                                                 work[K], bool(False))
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     idt = 1.0 / dt
@@ -566,7 +566,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             yu[i] = u[i] + work[EU, i]
             yv[i] = v[i] + work[EV, i]
         st = energy.full_accel(system, rod, floor, yu, yv, work[EA], work[S], work[K],
-                               False)[0]
+                               bool(False))[0]
         if st == OK:
             _error_rhs(v, a, work, yv, work[EA], idt)
             _solve_real(system, work, lr, work[EU], work[EV], False)

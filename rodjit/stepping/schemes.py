@@ -56,16 +56,32 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                                       work, sstats, dt)
 
 
-@overload(initial, jit_options=JIT_OPTIONS)
+def _compiled_with(impl, options) -> bool:
+    """Whether the scheme's kernel ``impl`` is compiled with ``options``.  An overload with
+    those options then compiles the kernel's own Python source instead of a wrapper calling
+    it: a wrapper is one more function that LLVM optimises and code-generates with the whole
+    step inlined into it.  Under the same options the two compiles are one function and
+    share one cache entry (so the overloads keep the Python entry wrapper, which Numba's
+    overloads leave out by default)."""
+    own = {k: v for k, v in impl.targetoptions.items() if k not in ("nopython", "boundscheck")}
+    return own == {k: v for k, v in options.items() if k != "cache"}
+
+
+@overload(initial, jit_options={**JIT_OPTIONS, "no_cpython_wrapper": False}, strict=False)
 def _initial_ov(scheme, system, rod, floor, u, v, a, work):
     impl = _module_for(scheme).initial
+    if _compiled_with(impl, JIT_OPTIONS):
+        return impl.py_func
     return lambda scheme, system, rod, floor, u, v, a, work: impl(
         scheme, system, rod, floor, u, v, a, work)
 
 
-@overload(step, jit_options=STEP_JIT_OPTIONS)   # inlined into the loop, like the step
+# inlined into the loop, like the step
+@overload(step, jit_options={**STEP_JIT_OPTIONS, "no_cpython_wrapper": False}, strict=False)
 def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     impl = _module_for(scheme).step
+    if _compiled_with(impl, STEP_JIT_OPTIONS):
+        return impl.py_func
     return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(
         scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)
 
