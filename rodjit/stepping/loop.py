@@ -40,8 +40,11 @@ from ..model.laws import lower, value
 from . import control as C
 from . import layout as L
 from .events import crossing, open_contact, track
-from .schemes import dense, dense_dissipated, dense_setup, has_dense, initial, step
-from .._jit import kernel, step_kernel
+from numba.extending import overload
+
+from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
+                      step)
+from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
 
 
 @step_kernel
@@ -113,7 +116,7 @@ def _diag_row(u, v, work, system, rod, floor, count, t, dt_prop, dissipated, dia
 
 @step_kernel
 def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
-          snap_t, snap_step, snap_u, snap_v, diag, at_grid=False):
+          snap_t, snap_step, snap_u, snap_v, diag, at_grid):
     """Write the snapshot and/or diagnostics row due at time t, from the state ``cur``;
     the rows' time is t, or with ``at_grid`` each grid's own output time (within the
     output tolerance of t)."""
@@ -156,8 +159,9 @@ def _dense_target(ctrl, fixed, clock, count, t, dtp):
 
 
 @step_kernel
-def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v, diag):
+def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
+                     t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
+                     diag):
     """The rows of every output time in (t, t_new − tol) of the step of length dt from the
     state ``old`` to ``new``, by the scheme's dense output into ``interp`` (module
     docstring); ``dense_setup`` has run for the step."""
@@ -180,6 +184,26 @@ def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count
             _diag_row(interp[0], interp[1], work, system, rod, floor, count, tau, dt_prop,
                       diss, diag)
             count[L.K_DIAG] += 1
+
+
+def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
+                t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v, diag):
+    """``_emit_dense_rows`` for a scheme with a dense output; compiled for one without, a
+    no-op, so its loop does not compile the interpolation it never runs."""
+    _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
+                     t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
+                     diag)
+
+
+@overload(_emit_dense, jit_options=STEP_JIT_OPTIONS)
+def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
+                   t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
+                   diag):
+    if not has_dense_type(scheme):
+        return (lambda scheme, old, new, work, interp, system, rod, floor, clock, count, t,
+                dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
+                diag: None)
+    return _emit_dense
 
 
 @kernel
@@ -207,7 +231,7 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     if u[0] < 0.0:
         open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin)
     _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
-          count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag)
+          count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
     count[L.STARTED] = 1
     return OK
 
@@ -352,7 +376,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         elif land:
             clock[L.DISSIPATED] = diss
             _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
-                  snap_t, snap_step, snap_u, snap_v, diag)
+                  snap_t, snap_step, snap_u, snap_v, diag, bool(False))
     clock[L.T] = t
     clock[L.DT] = dtp
     clock[L.DISSIPATED] = diss

@@ -32,7 +32,7 @@ from ..kernels.forces import NON_FINITE
 from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
 
 __all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "dense_dissipated",
-           "has_dense", "gap_control", "work_rows", "SCHEME_STATS"]
+           "has_dense", "has_dense_type", "gap_control", "work_rows", "SCHEME_STATS"]
 
 
 def _module(params_type):
@@ -135,8 +135,15 @@ def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
 
 def has_dense(scheme) -> bool:
     """Whether the scheme has a dense output (``registry.Scheme.dense``); in compiled code
-    a constant, so the loop of a scheme without one compiles without its branches."""
+    a constant, whose branches LLVM removes from the loop of a scheme without one (they are
+    still typed: the kernels they call compile to no-ops for such a scheme,
+    ``has_dense_type``)."""
     return registry.entry_of(type(scheme)).dense
+
+
+def has_dense_type(numba_type) -> bool:
+    """``has_dense`` of a scheme's Numba type, for an overload choosing its implementation."""
+    return _dense_for(numba_type)
 
 
 @overload(has_dense, jit_options=STEP_JIT_OPTIONS)
