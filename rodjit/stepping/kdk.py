@@ -43,7 +43,8 @@ above 1 rejects the step (INACCURATE), and the next step is dt·0.9·ratio^(−1
 arrays, no force evaluation.
 
 The row is a compile-time constant of the scheme's parameter type (``stages``): each
-scheme compiles to its own straight-line step.  A new kick–drift–kick variant is one more
+scheme compiles to its own straight-line step, and only the sub-steps of its own row are
+compiled at all (``_for_rows``).  A new kick–drift–kick variant is one more
 parameter class and one more row (plus its line in ``registry``).
 """
 import math
@@ -147,13 +148,6 @@ def initial(scheme, system, rod, floor, u, v, a, work):
 
 
 @step_kernel
-def _viscous(st, vin, vout, tau, system, work):
-    if st.viscous == SDIRK2:
-        return viscous_sdirk2(vin, vout, tau, system, work)
-    return viscous_cn(vin, vout, tau, system, work)
-
-
-@step_kernel
 def _stiffness(v, h, n):
     """vᵀKv = Σ (v_{i+1} − v_i)²/h, twice the Rayleigh function over μ."""
     acc = 0.0
@@ -204,6 +198,38 @@ def _error_ratio(scheme, u, u2, a, a2, dt):
     return r
 
 
+def _for_rows(uses, kernel):
+    """``kernel`` as a step operator of the stage table: called with the scheme first, it
+    compiles to ``kernel`` for the schemes whose row ``uses`` it and to a stub (0.0) for
+    the others, whose step calls it only in branches their row's constants make dead.  So
+    a scheme's run compiles the kernels of its own row only (verlet never the beam
+    midpoint, semi-implicit never Crank–Nicolson)."""
+    def operator(scheme, *args):
+        return kernel(*args)
+
+    @overload(operator, jit_options=STEP_JIT_OPTIONS)
+    def _operator_ov(scheme, *args):
+        if uses(STAGES[scheme.instance_class]):
+            return lambda scheme, *args: kernel(*args)
+        return lambda scheme, *args: 0.0
+
+    return operator
+
+
+_cn = _for_rows(lambda st: st.viscous == CRANK_NICOLSON, viscous_cn)
+_sdirk2 = _for_rows(lambda st: st.viscous == SDIRK2, viscous_sdirk2)
+_imex_first = _for_rows(lambda st: st.viscous == IMEX_KICK, _imex_first_kick)
+_imex_second = _for_rows(lambda st: st.viscous == IMEX_KICK, _imex_second_kick)
+_beam_drift = _for_rows(lambda st: st.drift == BEAM_MIDPOINT, beam_midpoint)
+
+
+@step_kernel
+def _viscous(scheme, st, vin, vout, tau, system, work):
+    if st.viscous == SDIRK2:
+        return _sdirk2(scheme, vin, vout, tau, system, work)
+    return _cn(scheme, vin, vout, tau, system, work)
+
+
 @step_kernel
 def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     """Trial step from (u, v, a) into (u2, v2, a2); the inputs are never modified.
@@ -219,17 +245,17 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     diss = 0.0
     imex = st.viscous == IMEX_KICK and system.mu > 0.0
     if imex:
-        _imex_first_kick(v, a, v2, hdt, system, work)
+        _imex_first(scheme, v, a, v2, hdt, system, work)
         diss += hdt * system.mu * _stiffness(v2, h, n)
     elif system.mu > 0.0:
-        diss += _viscous(st, v, v2, hdt, system, work)
+        diss += _viscous(scheme, st, v, v2, hdt, system, work)
         for i in range(n + 1):
             v2[i] += hdt * a[i]
     else:
         for i in range(n + 1):
             v2[i] = v[i] + hdt * a[i]
     if st.drift == BEAM_MIDPOINT and system.gamma > 0.0:
-        beam_midpoint(system, u, v2, u2, dt, work)
+        _beam_drift(scheme, system, u, v2, u2, dt, work)
     else:
         for i in range(n + 1):
             u2[i] = u[i] + dt * v2[i]
@@ -239,12 +265,12 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         return StepResult(status, val, emin, fl, 0.0, 0.0, diss)
     if imex:
         diss += hdt * system.mu * _stiffness(v2, h, n)
-        _imex_second_kick(v2, a2, hdt, system)
+        _imex_second(scheme, v2, a2, hdt, system)
         w = momentum(v2, h)
     else:
         w = kick(v2, a2, hdt, h)
         if system.mu > 0.0:   # both viscous sub-steps conserve momentum: w is unchanged
-            diss += _viscous(st, v2, v2, hdt, system, work)
+            diss += _viscous(scheme, st, v2, v2, hdt, system, work)
     dts = _suggest(scheme, st, system, floor, om2, u2[0], v2[0])
     if scheme.tolerance:
         err = _error_ratio(scheme, u, u2, a, a2, dt)
