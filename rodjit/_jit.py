@@ -41,16 +41,21 @@ benchmarks/cold_start.py).
 Stress laws written by users should use ``kernel`` too (and so must not allocate).
 
 Literal flags: a ``True``/``False`` written in a kernel is a compile-time literal to Numba,
-and a kernel called with a literal is compiled for that value (its own specialisation, with
-the flag's branches pruned).  A flag that one call site passes as ``True`` and another as
-``False`` or as a run-time bool, or a variable that starts as a literal and later takes
-run-time values (type inference then compiles the callee for the literal first), so
-compiles the callee twice, each copy optimised and code-generated again in every caller it
-is inlined into.  Kernels pass such flags as ``bool(True)``/``bool(False)``, a run-time
-bool: one specialisation serves every call site, and inlining into a caller that passes a
-constant folds the flag's branches anyway.  Written so that no branch multiplies a value
-the code after the branch uses, such a kernel compiles to the same instructions as its
-literal specialisations (a select of ``x·c`` and ``x`` can lose the fused multiply-add).
+and a kernel called with a literal is compiled for that value.  A flag passed as ``True``
+at one call site and as ``False`` or a run-time bool at another, or a variable that starts
+as a literal and later takes run-time values (type inference compiles the callee for the
+literal first), so compiles the callee twice, and each copy is optimised and
+code-generated again in every caller it is inlined into.  Kernels pass such flags as
+``bool(True)``/``bool(False)``, a run-time bool: one compile serves every call site, and a
+caller that passes a constant folds the flag's branches once the callee is inlined.  A
+branch on a flag must not merely rescale a value that the code after it uses (``if
+flag: x *= c``, then ``y += x``): LLVM turns that into ``x * select(flag, c, 1)`` and the
+fused multiply-add of the literal compile is lost; each branch does its own update
+(``forces.add_beam_term``).  A literal stays where a compile per value pays at run time:
+the energy step's residual evaluation with and without the Jacobian (``energy._evaluate``)
+are two different passes, and one compile of both behind a run-time flag, inlined twice,
+makes the step several per cent slower.  tests/test_cache.py checks that a run compiles
+every other kernel once.
 
 Numba invalidates a cached function only when *its own* file changes, not when a function
 it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever

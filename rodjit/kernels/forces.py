@@ -49,7 +49,8 @@ def add_beam_term(u, out, k, h, scale, by_mass):
     n = u.size - 1
     curvatures(u, h, k)
     ih = 1.0 / h
-    # the end nodes (k_{−1}, k_{N+1} absent), then a branch-free loop that vectorises
+    # the end nodes (k_{−1}, k_{N+1} absent) and a branch-free loop that vectorises; each
+    # branch updates the ends itself (rodjit._jit: literal flags)
     f0 = scale * (0.0 - 2.0 * k[0] + k[1]) * ih
     fn = scale * (k[n - 1] - 2.0 * k[n] + 0.0) * ih
     if by_mass:

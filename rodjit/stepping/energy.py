@@ -394,8 +394,9 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
     sn2 = 0.0
     for it in range(scheme.max_newton):
         if fresh:
+            # ``jac`` literal: each pass compiled for its own (rodjit._jit: literal flags)
             status, rn2, sn2, fl, emin = _evaluate(system, rod, floor, u, v, d, u2, dt,
-                                                   work, bool(True))
+                                                   work, True)
             if status != OK:   # only the start can be outside: trials are backtracked
                 return status, 0.0, row, 0.0, 0.0
         _newton_update(system, work, fresh)
@@ -418,7 +419,7 @@ def _newton(scheme, system, rod, floor, u, v, u2, dt, work, sstats):
                 for i in range(n1):
                     dtr[i] = d[i] - alpha * y[i]
             status, rt2, _, fl, emin = _evaluate(system, rod, floor, u, v, dtr, u2, dt, work,
-                                                 bool(False))
+                                                 False)
             armijo = 1.0 - ARMIJO * alpha
             if status == OK and (small or rt2 <= armijo * armijo * rn2
                                  or rt2 <= rounding2 * sn2):
