@@ -75,10 +75,11 @@ def _grid_time(clock, count, kidx, dtidx, ahead):
 @step_kernel
 def _covered(clock, count, kidx, dtidx, t, limit):
     """How many output times of a grid a step ending at t covers (at most ``limit``)."""
-    n = 0
-    while n < limit and _grid_time(clock, count, kidx, dtidx, n) <= t + clock[L.TOL]:
-        n += 1
-    return n
+    # a range, not a counter from a literal 0: ``_grid_time`` compiles once (rodjit._jit)
+    for n in range(limit):
+        if _grid_time(clock, count, kidx, dtidx, n) > t + clock[L.TOL]:
+            return n
+    return max(limit, 0)
 
 
 @step_kernel
@@ -167,8 +168,8 @@ def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, 
     docstring); ``dense_setup`` has run for the step."""
     tol = clock[L.TOL]
     while True:
-        ts = _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, 0)
-        td = _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, 0)
+        ts = _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0))
+        td = _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))
         tau = min(ts, td)
         if not tau < t_new - tol:
             break
@@ -324,8 +325,8 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
                 val = emin
         if status == OK and interpolate:
             t_new = target if land else t + dt
-            inside = min(_grid_time(clock, count, L.K_SNAP, L.SNAP_DT, 0),
-                         _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, 0)) < t_new - tol
+            inside = min(_grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0)),
+                         _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))) < t_new - tol
             if inside:
                 # the extra stages of the continuous extension, once for every output of
                 # the step; one outside the admissible set retries the step shorter
