@@ -209,9 +209,9 @@ _FIELDS: dict[str, dict[str, _Spec]] = {
         "compression": _Spec("str", choices=COMPRESSIONS,
                              meaning="compression of the HDF5 tables"),
         "interpolate": _Spec("bool",
-                             meaning="outputs of dp54 and radau5 from the integrator's "
-                                     "dense output between steps (true) or from steps "
-                                     "landing on each output time (false)"),
+                             meaning="outputs of dp54, dop853 and radau5 from the "
+                                     "integrator's dense output between steps (true) or from "
+                                     "steps landing on each output time (false)"),
     },
 }
 
@@ -460,13 +460,13 @@ class OutputConfig(_Section):
     compression : str
         Compression of the HDF5 tables, one of ``COMPRESSIONS``.
     interpolate : bool
-        True (the default): the integrators with a dense output, ``dp54`` and ``radau5``,
-        step toward ``time.t_end`` only and give each output time inside a step by their
-        continuous extension (4th order for ``dp54``, the collocation polynomial of stage
-        order 3 for ``radau5``), so the output schedule costs them no steps; False: their
-        steps land on every output time, so each row is the state of a step (the
-        second-order schemes, ``energy`` and ``dop853`` always land, and so does any
-        integrator under a fixed ``time.dt``).
+        True (the default): the integrators with a dense output, ``dp54``, ``dop853`` and
+        ``radau5``, step toward ``time.t_end`` only and give each output time inside a step
+        by their continuous extension (4th order for ``dp54``, 7th for ``dop853``, the
+        collocation polynomial of stage order 3 for ``radau5``), so the output schedule
+        costs them no steps; False: their steps land on every output time, so each row is
+        the state of a step (the second-order schemes and ``energy`` always land, and so
+        does any integrator under a fixed ``time.dt``).
         Rows at ``time.t_end`` are always a step's own state.
 
     Raises

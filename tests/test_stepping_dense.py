@@ -1,7 +1,8 @@
-"""Dense output of dp54 and radau5 (``output.interpolate``, on by default).
+"""Dense output of dp54, dop853 and radau5 (``output.interpolate``, on by default).
 
-Checked: the continuous extensions' order (4 for dp54, the stage order 3 for radau5: local
-error of the interpolant ∝ h^(p+1)), their ends (θ = 0 the old state, θ = 1 the new one, the dissipated
+Checked: the continuous extensions' order (4 for dp54, 7 for dop853, the stage order 3 for
+radau5: local error of the interpolant ∝ h^(p+1)), the pairs' caps that keep the
+interpolated rows from growing any mode, their ends (θ = 0 the old state, θ = 1 the new one, the dissipated
 energy likewise), that the steps no longer depend on the output schedule, the accuracy of
 a bouncing run's rows against a tight reference (the same order as landing, in fewer
 steps), runs cut into calls, buffers and files bit for bit, ``output.interpolate = false``
@@ -23,17 +24,17 @@ from rodjit.records.result import MemorySink
 from rodjit.stepping import control, erk, layout as L, registry
 from rodjit.stepping.kdk import Verlet
 
-PAIRS = {"dp54": 4}       # the order of each pair's continuous extension (dop853 lands)
+PAIRS = {"dp54": 4, "dop853": 7}       # the order of each pair's continuous extension
 # every integrator with a dense output, and its order: radau5's collocation polynomial has
 # the stage order 3
 DENSE = {**PAIRS, "radau5": 3}
 QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
 # a smooth flight far above the floor: pre-strained, vibrating, viscous (μ > 0 puts v into
-# the acceleration)
+# the acceleration; at μ = 0, u'' = g(u), dop853's extension converges an order faster)
 FLIGHT = {"rod.N": 5, "rod.kappa": 1.0, "rod.mu": 0.3, "initial.height": 3.0,
           "initial.strain": 0.3, "initial.velocity": 0.0, **QUIET}
 # step sizes h, h/2, h/4 in the asymptotic range, errors above rounding (≥ 1e-13)
-STEPS = {"dp54": 1e-2, "radau5": 2e-2}
+STEPS = {"dp54": 1e-2, "dop853": 4e-2, "radau5": 2e-2}
 THETAS = (0.25, 0.5, 0.75)
 
 
@@ -105,14 +106,61 @@ def _weights(params, theta):
     return theta * (delta + (1 - theta) * (b + theta * (c + tail))), a.sum(axis=1)
 
 
-def test_the_published_coefficients_meet_the_quadrature_conditions():
-    """Σ_j b_j(θ) c_j^(k−1) = θ^k / k for k up to the extension's order, at every θ: a
-    wrong digit in a coefficient shows here."""
-    assert set(erk.DENSE) == {erk.DP54}
+@pytest.mark.parametrize("params", [erk.DP54, erk.DOP853])
+def test_the_published_coefficients_meet_the_quadrature_conditions(params):
+    """Σ_j b_j(θ) c_j^(k−1) = θ^k / k for k up to the extension's order, at every θ (the
+    extra stages' nodes are 0.1, 0.2, 7/9): a wrong digit in a coefficient shows here."""
+    assert set(erk.DENSE) == {erk.DP54, erk.DOP853}
+    order = PAIRS["dp54" if params is erk.DP54 else "dop853"]
     for theta in (0.2, 0.5, 0.9, 1.0):
-        w, c = _weights(erk.DP54, theta)
-        for k in range(1, PAIRS["dp54"] + 1):
+        w, c = _weights(params, theta)
+        for k in range(1, order + 1):
             assert abs(w @ c ** (k - 1) - theta ** k / k) < 1e-13, (theta, k)
+    if params is erk.DOP853:
+        np.testing.assert_allclose(c[-3:], [0.1, 0.2, 7 / 9], rtol=0, atol=1e-15)
+
+
+def _amplification(params, z, theta):
+    """|y(θ)| for y' = λy, y⁰ = 1, z = λ dt, from the extension's weights b_j(θ) over the
+    stages of the linear problem solved as a dense system (independent of the
+    vectorised recursion of ``erk.dense_amplification``)."""
+    t, d = erk.TABLEAUS[params], erk.DENSE[params]
+    ns, se = t.b.size, d.d.shape[1]
+    a = np.zeros((se, se))
+    a[:ns, :ns - 1] = t.a
+    a[ns, :ns] = t.b
+    a[ns + 1:, :] = d.ax
+    k = z * np.linalg.solve(np.eye(se) - z * a, np.ones(se))    # dt·f of every stage
+    w, _ = _weights(params, theta)
+    return abs(1.0 + w @ k)
+
+
+@pytest.mark.parametrize("params", [erk.DP54, erk.DOP853])
+def test_the_caps_keep_every_mode_from_growing_in_the_rows(params):
+    """Inside the caps no mode grows between a step's ends by more than DENSE_GROWTH: on
+    the half disc |z| ≤ STABILITY_CAP (every underdamped mode, |z| = ω_k dt) and on the
+    real axis down to −VISCOUS_CAP (overdamped ones); just beyond the limits a mode does
+    grow (dop853: by about 15 near ±5.9i and −6, which gave rows with 10⁴ × E0)."""
+    r, x = erk.STABILITY_CAP[params], erk.VISCOUS_CAP[params]
+    worst = max(_amplification(params, rho * np.exp(1j * phi), th)
+                for rho in np.linspace(0.05, 1.0, 12) * r
+                for phi in np.linspace(np.pi / 2, np.pi, 13)
+                for th in np.linspace(0.0, 1.0, 21))
+    assert worst <= erk.DENSE_GROWTH, worst
+    worst_real = max(_amplification(params, -xx, th) for xx in np.linspace(0.05, 1.0, 40) * x
+                     for th in np.linspace(0.0, 1.0, 41))
+    assert worst_real <= erk.DENSE_GROWTH, worst_real
+    y_lim, x_lim = erk.dense_limits(params)
+    if y_lim < np.inf:
+        assert max(_amplification(params, 1.05j * y_lim, th)
+                   for th in np.linspace(0, 1, 101)) > erk.DENSE_GROWTH
+    assert max(_amplification(params, -1.05 * x_lim, th)
+               for th in np.linspace(0, 1, 101)) > erk.DENSE_GROWTH
+    # the vectorised scan agrees with this construction
+    z = np.array([0.7j * r, -0.5 * x, r * np.exp(2.5j)])
+    np.testing.assert_allclose(
+        erk.dense_amplification(params, z, [0.3, 0.8]),
+        [[_amplification(params, zz, th) for th in (0.3, 0.8)] for zz in z], rtol=1e-12)
 
 
 @pytest.mark.parametrize("integrator", sorted(DENSE))
@@ -201,7 +249,7 @@ def test_rows_at_a_loose_tolerance_keep_the_energy(integrator):
     """paper-mu0 at rtol = atol = 1e-2 (long steps through the contacts): no row's energy
     leaves E0 by more than 5 %.  An extension whose stability function exceeds 1 inside the
     step amplifies the stiff components of a contact between the step's ends (dop853's
-    reaches about 15: with it, rows had 10⁴ × E0, which is why dop853 lands)."""
+    reaches about 15 beyond its caps: uncapped, rows had 10⁴ × E0)."""
     res = _simulate(_paper(integrator, **{"time.rtol": 1e-2, "time.atol": 1e-2}))
     e = res.diagnostics["energy_total"]
     assert e.size == 201

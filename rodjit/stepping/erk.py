@@ -36,7 +36,8 @@ undamped oscillations of the rod) the regions reach only |z| ≈ 1.0 (dp54) and 
 motion does not excite (the rod in free fall) leaves the error estimate blind to it, so
 without a cap the steps of a free flight would grow until ω·dt is far outside, and the
 rounding seeded in that mode would grow each step; the next step is therefore capped at
-``STABILITY_CAP`` / ω, ω the Gershgorin bound at the new state.
+``STABILITY_CAP`` / ω, ω the Gershgorin bound at the new state (and, with viscosity, at
+``VISCOUS_CAP`` · h²/(4μ): dense output below).
 
 The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
 tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature
@@ -51,19 +52,23 @@ with Δ = yⁿ⁺¹ − yⁿ, B = dt f(yⁿ) − Δ, C = Δ − dt f(yⁿ⁺¹) 
 takes both ends and both slopes exactly) and R_m = dt Σ_j d_mj k_j over the stages.
 ``dp54``: the 4th-order extension of Shampine (1986) that Hairer's DOPRI5 uses (HNW I,
 §II.6, "Dense output"; R₅ only, coefficients d_j of dopri5.f, the last column of SciPy's
-RK45 interpolation matrix), free: it needs only the step's own stages.  θ = 0 gives yⁿ
-exactly, θ = 1 gives yⁿ⁺¹ to rounding (yⁿ + Δ).  Its stability function R(θ, z) stays
-below 1 on the negative real axis up to the step's limit.  ``dop853`` has no dense output
-and lands on every output time: the 7th-order extension of Hairer's DOP853 has a stability
-function reaching about 15 at interior θ near the edge of the region (z ≈ −6, and ±5.9i),
-and the steps of a contact or of stiff viscosity sit at that edge, so its interpolated
-states carried the stiff components amplified that much (on the paper's μ = 0 and
-μ = 100 runs at rtol = atol = 1e-2, rows with an energy 10⁴ times the initial one).  The dissipated
+RK45 interpolation matrix), free: it needs only the step's own stages.  ``dop853``: the
+7th-order extension of Hairer's DOP853 (dop853.f; SciPy's ``dop853_coefficients``), R₅ … R₈
+from the step's stages, its new point and three extra stages at c = 0.1, 0.2 and 7/9,
+which ``dense_setup`` evaluates once for a step with an output time inside it (every
+output of that step reuses them); an extra stage outside the admissible set returns its
+failure code, and the loop retries the step shorter.  θ = 0 gives yⁿ exactly, θ = 1 gives
+yⁿ⁺¹ to rounding (yⁿ + Δ).  An extension has its own stability function |y(θ)| for
+y' = λy (``dense_amplification``): near the edge of the step's region dop853's reaches
+about 15 at interior θ (z ≈ −6, and ±5.9i; uncapped, rows of the paper's runs at
+rtol = atol = 1e-2 had 10⁴ times the initial energy), dp54's about 1.07 at −3.3.  The
+caps of the next step (``STABILITY_CAP``, ``VISCOUS_CAP``) keep z where neither the step
+nor its extension grows a mode by more than ``DENSE_GROWTH``.  The dissipated
 energy D, D' = 2R(v), is the same extension of the step's quadrature
 (``dense_dissipated``: the pair applied to the quadrature component, k_j = 2R of stage j's
 velocity), so E + D at an interpolated row keeps the balance to the extension's order, and
 D(1) is the step's own increment.  The extension's code is written for any pair in
-``DENSE`` (extra stages, any number of terms R_m).
+``DENSE`` (extra stages, up to ``DENSE_TERMS_MAX`` terms R_m).
 """
 from __future__ import annotations
 
@@ -79,7 +84,8 @@ from .step_result import StepResult
 from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
 
 __all__ = ["DP54", "DOP853", "TABLEAUS", "DENSE", "tableau", "dense_tableau", "initial",
-           "step", "dense_setup", "dense", "dense_dissipated", "work_rows"]
+           "step", "dense_setup", "dense", "dense_dissipated", "work_rows", "dense_amplification",
+           "dense_limits"]
 
 
 class DP54(NamedTuple):
@@ -212,20 +218,41 @@ def imaginary_limit(a: np.ndarray, b: np.ndarray) -> float:
     return math.inf
 
 
-# An undamped mode whose ω dt leaves that stretch grows every step (rounding seeds it even
-# where the motion does not excite it) unseen by the error estimate until it is large:
-# the pair's step is capped at this fraction of imaginary_limit / ω, ω the Gershgorin bound
-# at the new state (itself above the highest frequency).
-IMAG_SAFETY = 0.9
-STABILITY_CAP = {P: IMAG_SAFETY * imaginary_limit(t.a, t.b) for P, t in TABLEAUS.items()}
-
-
 # ---- dense output (module docstring): the extra stages' coefficients over every earlier
 # stage (stage index: the pair's stages, the new point, the extra stages) and the weights
-# d_mj of the terms R_m, as published in Hairer's dopri5.f
+# d_mj of the terms R_m, as published in Hairer's dopri5.f and dop853.f
 _D54 = np.array([[-12715105075.0 / 11282082432.0, 0.0, 87487479700.0 / 32700410799.0,
                   -10690763975.0 / 1880347072.0, 701980252875.0 / 199316789632.0,
                   -1453857185.0 / 822651844.0, 69997945.0 / 29380423.0]])
+_AX853 = np.array([
+    [0.056167502283047954, 0.0, 0.0, 0.0, 0.0, 0.0, 0.25350021021662483, -0.2462390374708025,
+     -0.12419142326381637, 0.15329179827876568, 0.00820105229563469, 0.007567897660545699,
+     -0.008298, 0.0, 0.0, 0.0],
+    [0.03183464816350214, 0.0, 0.0, 0.0, 0.0, 0.028300909672366776, 0.053541988307438566,
+     -0.05492374857139099, 0.0, 0.0, -0.00010834732869724932, 0.0003825710908356584,
+     -0.00034046500868740456, 0.1413124436746325, 0.0, 0.0],
+    [-0.42889630158379194, 0.0, 0.0, 0.0, 0.0, -4.697621415361164, 7.683421196062599,
+     4.06898981839711, 0.3567271874552811, 0.0, 0.0, 0.0, -0.0013990241651590145,
+     2.9475147891527724, -9.15095847217987, 0.0]])
+_D853 = np.array([
+    [-8.428938276109013, 0.0, 0.0, 0.0, 0.0, 0.5667149535193777, -3.0689499459498917,
+     2.38466765651207, 2.117034582445028, -0.871391583777973, 2.2404374302607883,
+     0.6315787787694688, -0.08899033645133331, 18.148505520854727, -9.194632392478356,
+     -4.436036387594894],
+    [10.427508642579134, 0.0, 0.0, 0.0, 0.0, 242.28349177525817, 165.20045171727028,
+     -374.5467547226902, -22.113666853125306, 7.733432668472264, -30.674084731089398,
+     -9.332130526430229, 15.697238121770845, -31.139403219565178, -9.35292435884448,
+     35.81684148639408],
+    [19.985053242002433, 0.0, 0.0, 0.0, 0.0, -387.0373087493518, -189.17813819516758,
+     527.8081592054236, -11.57390253995963, 6.8812326946963, -1.0006050966910838,
+     0.7777137798053443, -2.778205752353508, -60.19669523126412, 84.32040550667716,
+     11.99229113618279],
+    [-25.69393346270375, 0.0, 0.0, 0.0, 0.0, -154.18974869023643, -231.5293791760455,
+     357.6391179106141, 93.40532418362432, -37.45832313645163, 104.0996495089623,
+     29.8402934266605, -43.53345659001114, 96.32455395918828, -39.17726167561544,
+     -149.72683625798564]])
+
+
 class Dense(NamedTuple):
     """A pair's continuous extension: ``ax`` (extra stages, stages in all) the extra
     stages' coefficients over every earlier stage, ``d`` (terms, stages in all) the weights
@@ -238,6 +265,7 @@ class Dense(NamedTuple):
 
 DENSE = {
     DP54: Dense(np.zeros((0, 7)), _D54),
+    DOP853: Dense(_AX853, _D853),
 }
 # ``dense_dissipated`` sums the terms R₅ … R₈ in four accumulators
 DENSE_TERMS_MAX = 4
@@ -259,6 +287,86 @@ def work_rows(params_type) -> int:
     return dense_rows(params_type) + 2 * DENSE[params_type].d.shape[0]
 
 
+def dense_amplification(params_type, z, thetas) -> np.ndarray:
+    """|y(θ)| of the pair's continuous extension applied to y' = λy from y⁰ = 1 over one
+    step, z = λ dt (an array), at each θ of ``thetas``: shape (len(z), len(thetas)).  A
+    value above 1 at an interior θ is a mode the interpolated rows show grown, although
+    the step itself (θ = 1, |R(z)|) damps it."""
+    t, ext = TABLEAUS[params_type], DENSE[params_type]
+    z = np.asarray(z, dtype=complex)[:, None]
+    ns = t.b.size
+    A = np.zeros((ns, ns))
+    A[:, :t.a.shape[1]] = t.a[:ns]
+    k = np.zeros((z.shape[0], ext.d.shape[1]), dtype=complex)   # dt·f at each stage
+    for i in range(ns):
+        k[:, i] = z[:, 0] * (1.0 + k[:, :i] @ A[i, :i])
+    y1 = 1.0 + k[:, :ns] @ t.b
+    k[:, ns] = z[:, 0] * y1                                      # the new point
+    for m in range(ext.ax.shape[0]):
+        j = ns + 1 + m
+        k[:, j] = z[:, 0] * (1.0 + k[:, :j] @ ext.ax[m, :j])
+    r = k @ ext.d.T                                              # the terms R₅ …
+    s = np.asarray(thetas, dtype=float)[None, :]
+    s1 = 1.0 - s
+    delta = (y1 - 1.0)[:, None]
+    b = k[:, :1] - delta
+    c = delta - k[:, ns:ns + 1] - b
+    tail = np.zeros_like(delta * s)
+    for m in range(r.shape[1] - 1, -1, -1):
+        tail = (s1 if m % 2 == 0 else s) * (r[:, m:m + 1] + tail)
+    return np.abs(1.0 + s * (delta + s1 * (b + s * (c + tail))))
+
+
+# The largest growth a dense output may show a mode in its rows (1 %: the stiff
+# components of a contact, whose steps sit at the cap, stay at their size between steps)
+DENSE_GROWTH = 1.01
+_THETAS = np.linspace(0.0, 1.0, 101)
+
+
+def _first_exceeding(values, ok) -> float:
+    """The last of ``values`` (increasing) before the first at which ``ok`` is False."""
+    bad = np.flatnonzero(~ok)
+    return float(values[bad[0] - 1]) if bad.size else math.inf
+
+
+def dense_limits(params_type) -> tuple[float, float]:
+    """``(y, x)``: the stretches [0, iy] of the imaginary axis (undamped modes, z = iω dt)
+    and [−x, 0] of the negative real one (overdamped viscous modes) on which the pair's
+    dense output grows no mode by more than ``DENSE_GROWTH`` (inf: not before the pair's
+    own stability limit there).  Scanned in steps of 0.01 up to the stability limits."""
+    t = TABLEAUS[params_type]
+    y_stab = imaginary_limit(t.a, t.b)
+    ys = np.arange(0.01, y_stab + 0.005, 0.01)
+    y = _first_exceeding(ys, dense_amplification(params_type, 1j * ys, _THETAS).max(axis=1)
+                         <= DENSE_GROWTH)
+    r = stability_polynomial(t.a, t.b)
+    xs = np.arange(0.01, 20.0, 0.01)
+    stable = np.abs(np.polynomial.polynomial.polyval(-xs, r)) <= 1.0
+    x_stab = _first_exceeding(xs, stable)
+    xs = xs[xs <= x_stab]
+    x = _first_exceeding(xs, dense_amplification(params_type, -xs, _THETAS).max(axis=1)
+                         <= DENSE_GROWTH)
+    return y, x
+
+
+# An undamped mode whose ω dt leaves the pair's stretch of the imaginary axis grows every
+# step (rounding seeds it even where the motion does not excite it) unseen by the error
+# estimate until it is large: the pair's step is capped at this fraction of
+# imaginary_limit / ω, ω the Gershgorin bound at the new state (itself above the highest
+# frequency).  A pair with a dense output is capped also where its extension would grow a
+# mode in the rows (``dense_limits``): on the imaginary axis through ω, and on the real
+# axis through the Gershgorin bound 4μ/h² of the viscous term's rates (``VISCOUS_CAP``;
+# every damped mode has |z| ≤ dt·max(ω, 4μ/h²), and the extensions grow none inside that
+# half disc beyond what they do on its two axes, tests/test_stepping_dense.py).
+IMAG_SAFETY = 0.9
+_DENSE_LIMITS = {P: dense_limits(P) for P in DENSE}
+STABILITY_CAP = {P: IMAG_SAFETY * min(imaginary_limit(t.a, t.b),
+                                      _DENSE_LIMITS.get(P, (math.inf, math.inf))[0])
+                 for P, t in TABLEAUS.items()}
+VISCOUS_CAP = {P: IMAG_SAFETY * _DENSE_LIMITS.get(P, (math.inf, math.inf))[1]
+               for P in TABLEAUS}
+
+
 def tableau(scheme):
     t = TABLEAUS[type(scheme)]
     return t.a, t.b, t.e, t.e3, t.combined, t.q
@@ -272,6 +380,17 @@ def stability_cap(scheme):
 @overload(stability_cap, jit_options=STEP_JIT_OPTIONS)
 def _stability_cap_ov(scheme):
     cap = STABILITY_CAP[scheme.instance_class]
+    return lambda scheme: cap
+
+
+def viscous_cap(scheme):
+    """``VISCOUS_CAP`` of the scheme: the largest dt·4μ/h² its steps may take."""
+    return VISCOUS_CAP[type(scheme)]
+
+
+@overload(viscous_cap, jit_options=STEP_JIT_OPTIONS)
+def _viscous_cap_ov(scheme):
+    cap = VISCOUS_CAP[scheme.instance_class]
     return lambda scheme: cap
 
 
@@ -343,6 +462,8 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     h0 = 0.01 * d0 / d1 if d0 > 1e-5 and d1 > 1e-5 else 1e-6
     if om2 > 0.0:
         h0 = min(h0, stability_cap(scheme) / math.sqrt(om2))
+    if system.mu > 0.0:
+        h0 = min(h0, viscous_cap(scheme) * system.h * system.h / (4.0 * system.mu))
     u1 = work[2]   # stage rows as scratch
     v1 = work[3]
     a1 = work[4]
@@ -452,6 +573,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     dt_next = dt * fac
     if om2 > 0.0:
         dt_next = min(dt_next, stability_cap(scheme) / math.sqrt(om2))
+    if system.mu > 0.0:
+        dt_next = min(dt_next, viscous_cap(scheme) * system.h * system.h / (4.0 * system.mu))
     if err > 1.0:
         return StepResult(INACCURATE, err, emin, fl, dt_next, w, diss)
     return StepResult(OK, 0.0, emin, fl, dt_next, w, diss)
