@@ -87,15 +87,24 @@ def _exact(t):
 
 
 # ---- the continuous extensions ----------------------------------------------------------
-def _weights(params, theta):
-    """The extension as y(θ) = yⁿ + dt Σ_j b_j(θ) k_j over the stage indices (the pair's
-    stages, the new point, the extra stages), and the stages' nodes c_j."""
+def _stage_matrix(params):
+    """The coefficients of every stage index (the pair's stages, the new point, the extra
+    stages) over the earlier ones, as one strictly lower triangular matrix."""
     t, d = erk.TABLEAUS[params], erk.DENSE[params]
     ns, se = t.b.size, d.d.shape[1]
     a = np.zeros((se, se))
     a[:ns, :ns - 1] = t.a
     a[ns, :ns] = t.b
     a[ns + 1:, :] = d.ax
+    return a
+
+
+def _weights(params, theta):
+    """The extension as y(θ) = yⁿ + dt Σ_j b_j(θ) k_j over the stage indices, and the
+    stages' nodes c_j."""
+    t, d = erk.TABLEAUS[params], erk.DENSE[params]
+    ns, se = t.b.size, d.d.shape[1]
+    a = _stage_matrix(params)
     delta = np.zeros(se)
     delta[:ns] = t.b
     b = np.eye(se)[0] - delta
@@ -124,12 +133,8 @@ def _amplification(params, z, theta):
     """|y(θ)| for y' = λy, y⁰ = 1, z = λ dt, from the extension's weights b_j(θ) over the
     stages of the linear problem solved as a dense system (independent of the
     vectorised recursion of ``erk.dense_amplification``)."""
-    t, d = erk.TABLEAUS[params], erk.DENSE[params]
-    ns, se = t.b.size, d.d.shape[1]
-    a = np.zeros((se, se))
-    a[:ns, :ns - 1] = t.a
-    a[ns, :ns] = t.b
-    a[ns + 1:, :] = d.ax
+    a = _stage_matrix(params)
+    se = a.shape[0]
     k = z * np.linalg.solve(np.eye(se) - z * a, np.ones(se))    # dt·f of every stage
     w, _ = _weights(params, theta)
     return abs(1.0 + w @ k)

@@ -372,26 +372,28 @@ def tableau(scheme):
     return t.a, t.b, t.e, t.e3, t.combined, t.q
 
 
-def stability_cap(scheme):
-    """``STABILITY_CAP`` of the scheme: the largest ω·dt its steps may take."""
-    return STABILITY_CAP[type(scheme)]
+def step_caps(scheme):
+    """``(STABILITY_CAP, VISCOUS_CAP)`` of the scheme: the largest ω·dt and dt·4μ/h² its
+    steps may take."""
+    return STABILITY_CAP[type(scheme)], VISCOUS_CAP[type(scheme)]
 
 
-@overload(stability_cap, jit_options=STEP_JIT_OPTIONS)
-def _stability_cap_ov(scheme):
-    cap = STABILITY_CAP[scheme.instance_class]
-    return lambda scheme: cap
+@overload(step_caps, jit_options=STEP_JIT_OPTIONS)
+def _step_caps_ov(scheme):
+    caps = STABILITY_CAP[scheme.instance_class], VISCOUS_CAP[scheme.instance_class]
+    return lambda scheme: caps
 
 
-def viscous_cap(scheme):
-    """``VISCOUS_CAP`` of the scheme: the largest dt·4μ/h² its steps may take."""
-    return VISCOUS_CAP[type(scheme)]
-
-
-@overload(viscous_cap, jit_options=STEP_JIT_OPTIONS)
-def _viscous_cap_ov(scheme):
-    cap = VISCOUS_CAP[scheme.instance_class]
-    return lambda scheme: cap
+@step_kernel
+def _capped(scheme, system, dt, om2):
+    """``dt`` within the scheme's caps at the state whose Gershgorin bound of ω² is
+    ``om2`` (module docstring)."""
+    imag, visc = step_caps(scheme)
+    if om2 > 0.0:
+        dt = min(dt, imag / math.sqrt(om2))
+    if system.mu > 0.0:
+        dt = min(dt, visc * system.h * system.h / (4.0 * system.mu))
+    return dt
 
 
 @overload(tableau, jit_options=STEP_JIT_OPTIONS)
@@ -460,10 +462,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     d0 = math.sqrt(d0 / m)
     d1 = math.sqrt(d1 / m)
     h0 = 0.01 * d0 / d1 if d0 > 1e-5 and d1 > 1e-5 else 1e-6
-    if om2 > 0.0:
-        h0 = min(h0, stability_cap(scheme) / math.sqrt(om2))
-    if system.mu > 0.0:
-        h0 = min(h0, viscous_cap(scheme) * system.h * system.h / (4.0 * system.mu))
+    h0 = _capped(scheme, system, h0, om2)
     u1 = work[2]   # stage rows as scratch
     v1 = work[3]
     a1 = work[4]
@@ -571,10 +570,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     diss *= dt
     fac = _factor(err, q)
     dt_next = dt * fac
-    if om2 > 0.0:
-        dt_next = min(dt_next, stability_cap(scheme) / math.sqrt(om2))
-    if system.mu > 0.0:
-        dt_next = min(dt_next, viscous_cap(scheme) * system.h * system.h / (4.0 * system.mu))
+    dt_next = _capped(scheme, system, dt_next, om2)
     if err > 1.0:
         return StepResult(INACCURATE, err, emin, fl, dt_next, w, diss)
     return StepResult(OK, 0.0, emin, fl, dt_next, w, diss)

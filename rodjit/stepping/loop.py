@@ -34,14 +34,13 @@ large) is retried at the scheme's ``dt_suggest``, and under fixed steps accepted
 ``control``.
 """
 import numpy as np
+from numba.extending import overload
 
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
 from ..model.laws import lower, value
 from . import control as C
 from . import layout as L
 from .events import crossing, open_contact, track
-from numba.extending import overload
-
 from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
                       step)
 from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel

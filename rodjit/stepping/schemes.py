@@ -43,7 +43,8 @@ def _module_for(numba_type):
     return _module(getattr(numba_type, "instance_class", None))
 
 
-def _dense_for(numba_type) -> bool:
+def has_dense_type(numba_type) -> bool:
+    """``has_dense`` of a scheme's Numba type, for an overload choosing its implementation."""
     return registry.entry_of(getattr(numba_type, "instance_class", None)).dense
 
 
@@ -97,7 +98,7 @@ def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
 
 @overload(dense_setup, jit_options=STEP_JIT_OPTIONS)
 def _dense_setup_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
-    if not _dense_for(scheme):
+    if not has_dense_type(scheme):
         return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt: (
             NON_FINITE, np.nan)
     impl = _module_for(scheme).dense_setup
@@ -113,7 +114,7 @@ def _no_dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
 
 @overload(dense, jit_options=STEP_JIT_OPTIONS)
 def _dense_ov(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
-    if not _dense_for(scheme):
+    if not has_dense_type(scheme):
         return _no_dense
     impl = _module_for(scheme).dense
     return lambda scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo: impl(
@@ -126,7 +127,7 @@ def dense_dissipated(scheme, system, v, v2, work, dt, theta):
 
 @overload(dense_dissipated, jit_options=STEP_JIT_OPTIONS)
 def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
-    if not _dense_for(scheme):
+    if not has_dense_type(scheme):
         return lambda scheme, system, v, v2, work, dt, theta: np.nan
     impl = _module_for(scheme).dense_dissipated
     return lambda scheme, system, v, v2, work, dt, theta: impl(
@@ -141,14 +142,9 @@ def has_dense(scheme) -> bool:
     return registry.entry_of(type(scheme)).dense
 
 
-def has_dense_type(numba_type) -> bool:
-    """``has_dense`` of a scheme's Numba type, for an overload choosing its implementation."""
-    return _dense_for(numba_type)
-
-
 @overload(has_dense, jit_options=STEP_JIT_OPTIONS)
 def _has_dense_ov(scheme):
-    if _dense_for(scheme):
+    if has_dense_type(scheme):
         return lambda scheme: True
     return lambda scheme: False
 
