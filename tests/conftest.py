@@ -1,6 +1,7 @@
 """Shared helpers: small configurations, a subprocess runner for the CLI, file comparison."""
 from __future__ import annotations
 
+import signal
 import subprocess
 import sys
 
@@ -55,6 +56,24 @@ def module_runs(cfg):
         return path
 
     return result, run_file
+
+
+# SIGINT and SIGTERM as the worker process found them, before any test
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_SESSION_HANDLERS = {s: signal.getsignal(s) for s in _SIGNALS}
+
+
+@pytest.fixture(autouse=True)
+def _session_signal_handlers():
+    """Every test starts with the session's SIGINT and SIGTERM handlers, unblocked.  A
+    command run in-process (CliRunner) ends the way a process that exits does: a sweep
+    leaves the signals recorded (``signals.hold_on_exit``), the entry point ignores and
+    blocks them (``entry._finish``); a later test in the same worker that delivers SIGINT
+    would otherwise depend on which files that worker ran before it."""
+    for s, handler in _SESSION_HANDLERS.items():
+        signal.signal(s, handler)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, set(_SIGNALS))
+    yield
 
 
 def rodjit_cli(*args, cwd=None, timeout=300, limit: int | None = None,
