@@ -135,3 +135,36 @@ def test_sigint_at_any_moment_of_a_sweep_exits_130_or_0_with_a_usable_file(tmp_p
             assert table.status == "interrupted" and p.returncode == 130
             assert rodjit.sweep(output=out, resume=True, scheduler="inline").status == \
                 "completed"
+
+
+def test_a_signal_inside_llvmlites_callbacks_arrives_just_after_them():
+    """A start-up signal handled while the interpreter runs llvmlite's Python code (the
+    callbacks LLVM makes through ctypes while Numba compiles or loads a kernel, where an
+    exception is printed with its traceback and dropped) raises Interrupted once outside
+    it, instead of inside the callback.  The callback is imitated by a function whose code
+    lives in llvmlite's binding package."""
+    import llvmlite.binding.executionengine as engine
+
+    from rodjit.driver import signals
+
+    fake = os.path.join(os.path.dirname(engine.__file__), "executionengine.py")
+    namespace = {"sys": sys}
+    exec(compile("def callback(handler):\n    handler(15, sys._getframe())\n", fake, "exec"),
+         namespace)
+    old = signal.getsignal(signal.SIGALRM)
+    try:
+        namespace["callback"](signals.raise_interrupted)    # no exception inside it
+        with pytest.raises(signals.Interrupted) as exc:
+            deadline = time.monotonic() + 5.0
+            while time.monotonic() < deadline:
+                time.sleep(0.001)
+        assert exc.value.signum == signal.SIGTERM
+        assert not signals._PENDING
+        assert signal.getsignal(signal.SIGALRM) == old        # put back as it was
+        with pytest.raises(signals.Interrupted):          # outside llvmlite: at once
+            signals.raise_interrupted(signal.SIGINT, sys._getframe())
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+        signals._PENDING.clear()
+        signals._ALARM_BEFORE.clear()

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 from contextlib import contextmanager
 
@@ -21,9 +22,45 @@ class Interrupted(BaseException):
         self.signum = signum
 
 
+def _in_llvm_callback(frame) -> bool:
+    """Whether ``frame`` runs inside llvmlite's Python code, among it the callbacks that
+    LLVM calls through ctypes while Numba compiles or loads a kernel (the object cache's
+    notify and getbuffer): ctypes prints an exception raised there as "Exception ignored"
+    with its traceback, and drops it."""
+    engine = sys.modules.get("llvmlite.binding.executionengine")
+    if engine is None:
+        return False
+    binding = os.path.dirname(engine.__file__)
+    while frame is not None:
+        if os.path.dirname(frame.f_code.co_filename) == binding:
+            return True
+        frame = frame.f_back
+    return False
+
+
+_REDELIVER_S = 0.005   # retry of a signal that came inside llvmlite (``raise_interrupted``)
+_PENDING: list[int] = []
+_ALARM_BEFORE: list = []   # the SIGALRM handler to put back once the signal is raised
+
+
+def _redeliver(_alarm, frame):
+    if _in_llvm_callback(frame):
+        signal.setitimer(signal.ITIMER_REAL, _REDELIVER_S)
+        return
+    signal.signal(signal.SIGALRM, _ALARM_BEFORE.pop() if _ALARM_BEFORE else signal.SIG_DFL)
+    raise Interrupted(_PENDING.pop(0))
+
+
 def raise_interrupted(signum, frame):
-    """Signal handler: raise Interrupted."""
-    raise Interrupted(signum)
+    """Signal handler: raise Interrupted; inside llvmlite (``_in_llvm_callback``) a few
+    milliseconds later instead, once the interpreter is out of it (SIGALRM retries), so
+    the interrupt is neither lost nor printed as a traceback."""
+    if not _in_llvm_callback(frame):
+        raise Interrupted(signum)
+    if not _PENDING:
+        _PENDING.append(signum)
+        _ALARM_BEFORE.append(signal.signal(signal.SIGALRM, _redeliver))
+        signal.setitimer(signal.ITIMER_REAL, _REDELIVER_S)
 
 
 _HOLD = [False]        # set by ``hold_on_exit``
