@@ -24,7 +24,9 @@ def bounce_table(blocks, pending=None) -> dict[str, np.ndarray]:
         is_open.append(np.array([bool(pending[1])]))
     b = (rows[0] if len(rows) == 1 else np.concatenate(rows)) if rows \
         else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
-    out = {name: b[:, j].copy() for j, name in enumerate(BOUNCE_ROW_COLUMNS)}
+    # one transposed copy: each column a contiguous row of it
+    cols = np.array(b.T, order="C")
+    out = dict(zip(BOUNCE_ROW_COLUMNS, cols))
     out["n_episodes"] = out["n_episodes"].astype(np.int64)
     out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)
     return out

@@ -202,7 +202,7 @@ class MemorySink(Sink):
         n1 = run.system.n + 1
         diag = _joined(self._diag, (0, len(DIAG_COLUMNS)))
         # one transposed copy: each column a contiguous row of it
-        diag_t = np.ascontiguousarray(diag.T)
+        diag_t = np.array(diag.T, order="C")
         ep = _joined(self._ep, (0, len(EPISODE_COLUMNS)))
         return Result(
             config=run.config,
@@ -210,8 +210,8 @@ class MemorySink(Sink):
             t=_joined(self._t, (0,)),
             u=_joined(self._u, (0, n1)),
             v=_joined(self._v, (0, n1)),
-            diagnostics={name: diag_t[j] for j, name in enumerate(DIAG_COLUMNS)},
-            episodes={name: ep[:, j].copy() for j, name in enumerate(EPISODE_COLUMNS)},
+            diagnostics=dict(zip(DIAG_COLUMNS, diag_t)),
+            episodes=dict(zip(EPISODE_COLUMNS, np.array(ep.T, order="C"))),
             bounces=bounce_table(self._b, run.pending_bounce()),
             stats=run.stats(),
             status=status,

@@ -281,7 +281,11 @@ def lower(p):
     float
         −1 for the Aiki–Kosugi rod, −β for the floor.
     """
-    return _BY_TYPE[type(p)].lower(p)
+    # from Python, the law's own Python function: a closed form of the parameters, for
+    # which a compiled call would cost more than the arithmetic (compiled code calls the
+    # kernel, through the overload below)
+    fn = _BY_TYPE[type(p)].lower
+    return float(getattr(fn, "py_func", fn)(p))
 
 
 def max_deriv(u, ih, lo, hi, p):
