@@ -64,7 +64,9 @@ def machine() -> dict:
         "scipy": _version("scipy"),
         "rodjit_module": _rodjit_path(),
         "rodjit_commit": _git("rev-parse", "HEAD"),
-        "rodjit_dirty": bool(_git("status", "--porcelain", "--untracked-files=no")),
+        # the results and their logs, rewritten by the run itself, do not count
+        "rodjit_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", "--",
+                                  ".", ":!benchmarks/results")),
     }
 
 

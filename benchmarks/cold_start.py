@@ -9,7 +9,14 @@ measured from outside.  A second cold process per integrator records Numba's com
 exclusive time (inclusive minus the compiles nested inside it, i.e. of the functions it
 calls), so the table shows where the time goes.
 
-    python benchmarks/cold_start.py [--integrators verlet,semi-implicit,energy]
+The baseline, measured in the same run: the *Numba floor*, a process that imports Numba and
+calls one cached one-line kernel (warm: loaded from the cache), the least any Numba program
+pays here before its first compiled call.  Warm starts are printed as ratios against it.
+Numba imports SciPy's linear algebra (``numba.np.linalg.ensure_blas``) the first time any
+compiled function is used, whenever SciPy is installed, so the floor and the warm starts
+depend on whether it is; the header says which (rodjit itself does not need SciPy).
+
+    python benchmarks/cold_start.py [--integrators verlet,semi-implicit,energy] [--out NAME]
 """
 from __future__ import annotations
 
@@ -64,6 +71,37 @@ def cli_run(cache: Path, integrator: str, out: Path) -> float:
     return time.perf_counter() - t0
 
 
+FLOOR = textwrap.dedent("""
+    import numba
+
+    @numba.njit(cache=True)
+    def one(x):
+        return x + 1.0
+
+    one(1.0)
+""")
+
+
+def numba_floor(tmp: Path, repeats: int = 3) -> list[float]:
+    """Wall times of ``repeats`` warm processes running the floor (module docstring)."""
+    script = tmp / "floor.py"
+    script.write_text(FLOOR)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp / "floor-cache"))
+    env.pop("NUMBA_DISABLE_JIT", None)
+    times = []
+    for k in range(repeats + 1):      # the first one fills the cache
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, str(script)], env=env, check=True, timeout=600)
+        if k:
+            times.append(time.perf_counter() - t0)
+    return times
+
+
+def has_scipy() -> bool:
+    p = subprocess.run([sys.executable, "-c", "import scipy"], capture_output=True)
+    return p.returncode == 0
+
+
 def recorded(cache: Path, integrator: str, out: Path) -> dict:
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     env.pop("NUMBA_DISABLE_JIT", None)
@@ -76,8 +114,16 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--integrators", default="verlet,semi-implicit,energy")
     ap.add_argument("--top", type=int, default=12)
+    ap.add_argument("--out", default="cold_start",
+                    help="name of the results file (results/<out>.json)")
     args = ap.parse_args(argv)
     _util.header("cold start: rodjit run paper-mu0 --t-end 0.01, fresh Numba cache")
+    scipy = has_scipy()
+    with tempfile.TemporaryDirectory(prefix="rodjit-floor-") as tmp:
+        floor = numba_floor(Path(tmp))
+    base = sorted(floor)[len(floor) // 2]
+    print(f"   SciPy installed: {'yes' if scipy else 'no'}; Numba floor (a cached one-line "
+          f"kernel, warm process): {min(floor):.2f}–{max(floor):.2f} s")
     results = {}
     for integ in args.integrators.split(","):
         with tempfile.TemporaryDirectory(prefix="rodjit-cold-") as tmp:
@@ -88,7 +134,8 @@ def main(argv=None):
             rec = recorded(Path(tmp) / "cache", integ, Path(tmp) / "a.h5")
         rows = sorted(rec["rows"].items(), key=lambda kv: -kv[1][1])
         compiled = sum(r[1] for _, r in rows)
-        print(f"\n   {integ}: cold {cold:.1f} s, warm {min(warm):.2f}–{max(warm):.2f} s; "
+        print(f"\n   {integ}: cold {cold:.1f} s, warm {min(warm):.2f}–{max(warm):.2f} s "
+              f"({min(warm) / base:.2f}–{max(warm) / base:.2f}× the Numba floor); "
               f"recorded process {rec['total']:.1f} s, {len(rows)} functions compiled, "
               f"{compiled:.1f} s in Numba compiles")
         print("   " + _util.table([[n.replace("rodjit.", ""), r[1], r[0], r[2]]
@@ -101,7 +148,8 @@ def main(argv=None):
                           "functions": {n: {"exclusive": r[1], "inclusive": r[0],
                                             "compiles": r[2]} for n, r in rows}}
         sys.stdout.flush()
-    path = _util.save("cold_start", {"integrators": results})
+    path = _util.save(args.out, {"scipy_installed": scipy, "numba_floor_seconds": floor,
+                                     "integrators": results})
     print(f"\nwrote {path}")
 
 
