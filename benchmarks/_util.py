@@ -64,9 +64,11 @@ def machine() -> dict:
         "scipy": _version("scipy"),
         "rodjit_module": _rodjit_path(),
         "rodjit_commit": _git("rev-parse", "HEAD"),
-        # the results and their logs, rewritten by the run itself, do not count
+        # what the measured code is made of (not the results and logs the run rewrites,
+        # nor the documentation)
         "rodjit_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", "--",
-                                  ".", ":!benchmarks/results")),
+                                  "rodjit", "benchmarks/*.py", "benchmarks/*.c",
+                                  "pyproject.toml")),
     }
 
 
