@@ -1,4 +1,4 @@
-"""Compiled code cached on disk: start-up of a fresh process, cold and warm (issue 2).
+"""Compiled code cached on disk: start-up of a fresh process, cold and warm.
 
 Each measurement is a new Python process with NUMBA_CACHE_DIR set to a temporary
 directory: empty for the cold start, filled by the cold process for the warm starts.  The

@@ -1,4 +1,4 @@
-"""Time to solution at matched accuracy: ``energy`` against ``semi-implicit`` (issue 5).
+"""Time to solution at matched accuracy: ``energy`` against ``semi-implicit``.
 
 The rod (κ = 100, γ = 0, μ = 0.1 by default) drops from 1 m onto a stiff floor
 (κ_b = 1e5, β = 1e-3) with N = 200 and N = 1000, and, for contrast, onto the paper's soft

@@ -1,4 +1,4 @@
-"""Explicit step throughput at N = 1000 against the C speed limit (issue 2, target ≤ 1.25×).
+"""Explicit step throughput at N = 1000 against the C speed limit (target ≤ 1.25×).
 
 The anchor ``limit.c`` (vendored beside this script) is compiled with ``gcc -O3 -march=native``
 and run here, interleaved with rodjit, so both see the same machine load; each figure is

@@ -1,5 +1,5 @@
 """The paper's two settings against scipy.integrate.solve_ivp at matched accuracy
-(issue 2, target ≥ 100× faster, compile time excluded and reported apart).
+(target ≥ 100× faster, compile time excluded and reported apart).
 
 Both sides integrate the same semi-discrete system (MODEL.md §2, N = 5, γ = 0): rodjit with
 its compiled integrators, SciPy with ``rodjit.model.reference.rhs`` (the plain-NumPy

@@ -1,4 +1,4 @@
-"""Semi-implicit steps do not depend on γ or μ (issue 2, target: steps per simulated
+"""Semi-implicit steps do not depend on γ or μ (target: steps per simulated
 second the same within 20 % for μ ∈ {0.1, 100} × γ ∈ {0, 1e-3} at N = 1000).
 
 Scenario: N = 1000, the rod in free flight (bottom at 1 m, no contact during the 0.02 s

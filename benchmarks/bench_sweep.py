@@ -1,4 +1,4 @@
-"""Parameter sweeps (issue 4): scaling over two cores, Dask against the process pool, and
+"""Parameter sweeps: scaling over two cores, Dask against the process pool, and
 the overhead per point.
 
 1. A 64-point grid over μ × κ_b × β (4 × 4 × 4) on the paper setting (data/paper_mu100.toml:

@@ -1,4 +1,4 @@
-"""Run the benchmarks of issue 2 (solver speed) and print a one-line verdict per target.
+"""Run the solver-speed benchmarks and print a one-line verdict per target.
 
     python benchmarks/run_all.py [--quick] [--all]
 
@@ -23,7 +23,8 @@ import bench_scipy  # noqa: E402
 import bench_semi_implicit  # noqa: E402
 
 
-# the other benchmarks in this directory (issues 3 and 5), run as they are
+# the other benchmarks in this directory (streaming, start-up, accuracy, the energy step,
+# sweeps), run as they are
 OTHERS = ("streaming_overhead.py", "startup.py", "bench_accuracy.py", "bench_energy.py",
           "bench_sweep.py")
 

@@ -1,4 +1,4 @@
-"""The discrete-gradient integrator (``time.integrator = "energy"``, issue 5).
+"""The discrete-gradient integrator (``time.integrator = "energy"``).
 
 Checked against: the discrete energy identity at every step of the real loop (μ = 0 and
 μ > 0, 100 bounces), the NumPy spec of the step equations, 50-digit energies, exact free
