@@ -11,7 +11,7 @@ import os
 __all__ = ["COMPILING", "kernels_cold", "RunBar", "SweepBar", "run_progress",
            "sweep_progress", "close"]
 
-COMPILING = "compiling kernels (first run only, ~15 s)…"
+COMPILING = "compiling kernels (first run of an integrator only, about half a minute)…"
 
 
 def kernels_cold() -> bool:
