@@ -143,3 +143,33 @@ def test_a_step_loop_that_stops_advancing_time_fails_in_one_line():
     assert message.startswith("time stopped advancing at t = 1e+20: 50 steps of dt = ")
     assert "resolution of t there is 1.64e+04" in message and "\n" not in message
     assert run.t == 1e20 and run.steps == 50
+
+
+def test_a_later_run_of_the_same_types_skips_the_warm_up_call(monkeypatch):
+    """The warm-up call (``advance`` for no step, to time the compile apart) runs once per
+    process and argument types: a later run of other values but the same types skips it,
+    a run of other types makes it, and the results are the same bit for bit either way."""
+    import rodjit.driver.run as run_module
+
+    cfg = rodjit.Config().override({"time.t_end": 0.05, "rod.mu": 2.0})
+    rodjit.simulate(cfg)                        # compiled or loaded in this process
+    calls = []
+    original = Run._call
+
+    def spy(self, max_steps):
+        calls.append(max_steps)
+        return original(self, max_steps)
+
+    monkeypatch.setattr(Run, "_call", spy)
+    warm = rodjit.simulate(cfg.override({"rod.mu": 3.0}))
+    assert calls and 0 not in calls
+    calls.clear()
+    monkeypatch.setattr(run_module, "_COMPILED", set())     # as in a fresh process
+    cold = rodjit.simulate(cfg.override({"rod.mu": 3.0}))
+    assert calls[0] == 0
+    assert np.array_equal(warm.u, cold.u) and np.array_equal(warm.v, cold.v)
+    calls.clear()
+    rodjit.simulate(cfg.override({"time.integrator": "dp54"}))     # other scheme types
+    assert calls[0] == 0
+    keys = run_module._COMPILED
+    assert len(keys) == 2 and len({k[0][0] for k in keys}) == 2

@@ -101,3 +101,13 @@ def test_run_stats_fields():
                      scheme_counts=())["node_steps_per_second"] == 0.0
     from rodjit.stepping.schemes import SCHEME_STATS
     assert [s[name] for name in SCHEME_STATS] == [7, 1][:len(SCHEME_STATS)]
+
+
+def test_a_one_row_table_owns_its_arrays_too():
+    """A single bounce row transposes to a contiguous view of its block; the table copies
+    it all the same, so the sink's block and the table never share memory."""
+    block = rows(1)
+    t = B.bounce_table([block])
+    block[:] = -1.0
+    assert t["t_impact"][0] == 0.0
+    assert not any(np.shares_memory(t[c], block) for c in BOUNCE_ROW_COLUMNS)
