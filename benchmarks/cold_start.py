@@ -61,9 +61,15 @@ RECORD = textwrap.dedent("""
 """)
 
 
-def cli_run(cache: Path, integrator: str, out: Path) -> float:
+def _compiling_env(cache: Path) -> dict:
+    """This process's environment for a child that compiles into the cache ``cache``."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     env.pop("NUMBA_DISABLE_JIT", None)
+    return env
+
+
+def cli_run(cache: Path, integrator: str, out: Path) -> float:
+    env = _compiling_env(cache)
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "rodjit", "run", "paper-mu0", "--t-end", "0.01",
                     "-q", "--overwrite", "-o", str(out), "--set",
@@ -86,8 +92,7 @@ def numba_floor(tmp: Path, repeats: int = 3) -> list[float]:
     """Wall times of ``repeats`` warm processes running the floor (module docstring)."""
     script = tmp / "floor.py"
     script.write_text(FLOOR)
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp / "floor-cache"))
-    env.pop("NUMBA_DISABLE_JIT", None)
+    env = _compiling_env(tmp / "floor-cache")
     times = []
     for k in range(repeats + 1):      # the first one fills the cache
         t0 = time.perf_counter()
@@ -103,8 +108,7 @@ def has_scipy() -> bool:
 
 
 def recorded(cache: Path, integrator: str, out: Path) -> dict:
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
-    env.pop("NUMBA_DISABLE_JIT", None)
+    env = _compiling_env(cache)
     p = subprocess.run([sys.executable, "-c", RECORD, integrator, str(out)], env=env,
                        check=True, timeout=3600, capture_output=True, text=True)
     return json.loads(p.stdout.strip().splitlines()[-1])

@@ -250,8 +250,8 @@ class Run:
         """Compile ``advance`` without stepping, so its compile time is measured apart.
 
         Once per process and argument types (``_compiled_key``): a later run of the same
-        types skips the call, which at a few nodes is a noticeable share of a short run's
-        fixed cost (one dispatch of two dozen arguments)."""
+        types skips the call, one dispatch of two dozen arguments (a few µs, which a
+        sweep of short rods pays at every point)."""
         key = self._compiled_key()
         if key not in _COMPILED:
             t0 = time.perf_counter()

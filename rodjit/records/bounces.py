@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .columns import BOUNCE_ROW_COLUMNS
+from .columns import BOUNCE_ROW_COLUMNS, columns_of
 
 __all__ = ["bounce_table", "empty_bounces"]
 
@@ -24,9 +24,7 @@ def bounce_table(blocks, pending=None) -> dict[str, np.ndarray]:
         is_open.append(np.array([bool(pending[1])]))
     b = (rows[0] if len(rows) == 1 else np.concatenate(rows)) if rows \
         else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
-    # one transposed copy: each column a contiguous row of it
-    cols = np.array(b.T, order="C")
-    out = dict(zip(BOUNCE_ROW_COLUMNS, cols))
+    out = columns_of(b, BOUNCE_ROW_COLUMNS)
     out["n_episodes"] = out["n_episodes"].astype(np.int64)
     out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)
     return out

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._extras import need
 from .bounces import bounce_table
-from .columns import DIAG_COLUMNS, EPISODE_COLUMNS
+from .columns import DIAG_COLUMNS, EPISODE_COLUMNS, columns_of
 from .datasets import run_dataset, strain_of
 from .extremes import Extremes
 from .observables import ImpactTrack, impact_values
@@ -201,8 +201,6 @@ class MemorySink(Sink):
     def result(self, run, status="completed", message="") -> Result:
         n1 = run.system.n + 1
         diag = _joined(self._diag, (0, len(DIAG_COLUMNS)))
-        # one transposed copy: each column a contiguous row of it
-        diag_t = np.array(diag.T, order="C")
         ep = _joined(self._ep, (0, len(EPISODE_COLUMNS)))
         return Result(
             config=run.config,
@@ -210,8 +208,8 @@ class MemorySink(Sink):
             t=_joined(self._t, (0,)),
             u=_joined(self._u, (0, n1)),
             v=_joined(self._v, (0, n1)),
-            diagnostics=dict(zip(DIAG_COLUMNS, diag_t)),
-            episodes=dict(zip(EPISODE_COLUMNS, np.array(ep.T, order="C"))),
+            diagnostics=columns_of(diag, DIAG_COLUMNS),
+            episodes=columns_of(ep, EPISODE_COLUMNS),
             bounces=bounce_table(self._b, run.pending_bounce()),
             stats=run.stats(),
             status=status,
