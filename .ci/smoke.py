@@ -47,6 +47,8 @@ def main() -> None:
     ap.add_argument("workdir", type=Path)
     ap.add_argument("--expect-site", action="store_true",
                     help="rodjit must be imported from this environment, not a source tree")
+    ap.add_argument("--expect-aot", action="store_true",
+                    help="the install built the ahead-of-time loop, and the default run uses it")
     ns = ap.parse_args()
     RODJIT = Path(sys.executable).parent / "rodjit"
     work = ns.workdir.resolve()
@@ -57,6 +59,20 @@ def main() -> None:
     if ns.expect_site:
         inside = Path(rodjit.__file__).resolve().is_relative_to(Path(sys.prefix).resolve())
         check(inside, f"rodjit imported from the environment {sys.prefix}")
+
+    from rodjit.driver.run import Run
+    from rodjit.stepping import aot
+
+    uses_aot = Run(rodjit.Config())._aot is not None
+    print(f"ahead-of-time loop: {'used' if uses_aot else 'not used'} (record "
+          f"{aot.extension_record() is not None and 'present' or 'absent'})", flush=True)
+    if ns.expect_aot:
+        check(uses_aot, "the default run uses the ahead-of-time loop built at install")
+        t0 = time.perf_counter()
+        sh("run", "--t-end", "0.01", "-o", "first.h5", "--overwrite", "--quiet", cwd=work)
+        first = time.perf_counter() - t0
+        check(first < 10.0, f"the default run's process took {first:.1f} s (< 10 s: "
+                            f"nothing compiled)")
 
     sh("presets", cwd=work)
     sh("run", "paper-mu0", "-o", "mu0.h5", "--overwrite", "--quiet", "--t-end", "1", cwd=work)

@@ -4,7 +4,10 @@ integrator, and which compiled functions the cold compile spends its time in.
 Per integrator (``time.integrator`` of the default run, data/paper_mu0.toml): a fresh
 process runs ``rodjit run paper-mu0 --t-end 0.01`` with NUMBA_CACHE_DIR an empty temporary
 directory (cold), then twice more with the cache it filled (warm); the process wall time is
-measured from outside.  A second cold process per integrator records Numba's compile events
+measured from outside.  Where the install built the loop ahead of time
+(``rodjit.stepping.aot``: the default integrator, ``energy``), its runs use it and compile
+nothing; ``energy/jit`` runs the same integrator on the JIT (``RODJIT_AOT=0``), which is
+what every other integrator does.  The table says which loop each run used.  A second cold process per integrator records Numba's compile events
 (``numba.core.event``, "numba:compile"): each compiled function's inclusive time, and its
 exclusive time (inclusive minus the compiles nested inside it, i.e. of the functions it
 calls), so the table shows where the time goes.
@@ -57,19 +60,34 @@ RECORD = textwrap.dedent("""
               "--set", "time.integrator=" + sys.argv[1]], standalone_mode=False)
     except SystemExit:
         pass
-    print(json.dumps({"total": time.perf_counter() - t0, "rows": rows}))
+    total = time.perf_counter() - t0
+    from rodjit.driver.run import Run
+    from rodjit.presets import load_preset
+    cfg = load_preset("paper-mu0").override({"time.integrator": sys.argv[1]})
+    print(json.dumps({"total": total, "rows": rows, "aot": Run(cfg)._aot is not None}))
 """)
 
 
-def _compiling_env(cache: Path) -> dict:
-    """This process's environment for a child that compiles into the cache ``cache``."""
+def _split(case: str) -> tuple[str, bool]:
+    """``(integrator, jit_only)`` of a case name (``energy/jit``: on the JIT)."""
+    name, _, how = case.partition("/")
+    return name, how == "jit"
+
+
+def _compiling_env(cache: Path, jit_only: bool = False) -> dict:
+    """This process's environment for a child that compiles into the cache ``cache``
+    (``jit_only``: with the ahead-of-time loop turned off)."""
     env = dict(os.environ, NUMBA_CACHE_DIR=str(cache))
     env.pop("NUMBA_DISABLE_JIT", None)
+    env.pop("RODJIT_AOT", None)
+    if jit_only:
+        env["RODJIT_AOT"] = "0"
     return env
 
 
-def cli_run(cache: Path, integrator: str, out: Path) -> float:
-    env = _compiling_env(cache)
+def cli_run(cache: Path, case: str, out: Path) -> float:
+    integrator, jit_only = _split(case)
+    env = _compiling_env(cache, jit_only)
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "rodjit", "run", "paper-mu0", "--t-end", "0.01",
                     "-q", "--overwrite", "-o", str(out), "--set",
@@ -107,8 +125,9 @@ def has_scipy() -> bool:
     return p.returncode == 0
 
 
-def recorded(cache: Path, integrator: str, out: Path) -> dict:
-    env = _compiling_env(cache)
+def recorded(cache: Path, case: str, out: Path) -> dict:
+    integrator, jit_only = _split(case)
+    env = _compiling_env(cache, jit_only)
     p = subprocess.run([sys.executable, "-c", RECORD, integrator, str(out)], env=env,
                        check=True, timeout=3600, capture_output=True, text=True)
     return json.loads(p.stdout.strip().splitlines()[-1])
@@ -116,7 +135,9 @@ def recorded(cache: Path, integrator: str, out: Path) -> dict:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--integrators", default="verlet,semi-implicit,energy")
+    ap.add_argument("--integrators", default="energy,energy/jit,verlet,semi-implicit",
+                    help="integrators (NAME/jit: on the JIT even where the install built "
+                         "the ahead-of-time loop)")
     ap.add_argument("--top", type=int, default=12)
     ap.add_argument("--out", default="cold_start",
                     help="name of the results file (results/<out>.json)")
@@ -138,15 +159,18 @@ def main(argv=None):
             rec = recorded(Path(tmp) / "cache", integ, Path(tmp) / "a.h5")
         rows = sorted(rec["rows"].items(), key=lambda kv: -kv[1][1])
         compiled = sum(r[1] for _, r in rows)
-        print(f"\n   {integ}: cold {cold:.1f} s, warm {min(warm):.2f}–{max(warm):.2f} s "
+        print(f"\n   {integ} ({'ahead-of-time loop' if rec['aot'] else 'JIT'}): cold "
+              f"{cold:.1f} s, warm {min(warm):.2f}–{max(warm):.2f} s "
               f"({min(warm) / base:.2f}–{max(warm) / base:.2f}× the Numba floor); "
               f"recorded process {rec['total']:.1f} s, {len(rows)} functions compiled, "
               f"{compiled:.1f} s in Numba compiles")
-        print("   " + _util.table([[n.replace("rodjit.", ""), r[1], r[0], r[2]]
-                                   for n, r in rows[:args.top]],
-                                  ["function", "exclusive s", "inclusive s", "compiles"])
-              .replace("\n", "\n   "))
-        results[integ] = {"cold_seconds": cold, "warm_seconds": warm,
+        if rows:
+            print("   " + _util.table([[n.replace("rodjit.", ""), r[1], r[0], r[2]]
+                                       for n, r in rows[:args.top]],
+                                      ["function", "exclusive s", "inclusive s", "compiles"])
+                  .replace("\n", "\n   "))
+        results[integ] = {"loop": "aot" if rec["aot"] else "jit",
+                          "cold_seconds": cold, "warm_seconds": warm,
                           "recorded_total_seconds": rec["total"],
                           "compile_seconds": compiled,
                           "functions": {n: {"exclusive": r[1], "inclusive": r[0],

@@ -103,6 +103,18 @@ def kernel(func):
     return _kernel(func)
 
 
+def python_function(compiled):
+    """The Python function a kernel was compiled from (itself where Numba is off).
+
+    For a few scalars evaluated from Python (a law's value at one point, a record of a
+    dozen copies): a compiled call's dispatch costs more than that arithmetic, and the
+    first compiled call of a process loads Numba's typing and target machinery (about a
+    second), which a run of the ahead-of-time loop (``stepping.aot``) never needs.  The
+    Python function computes the same IEEE operations, but without the fused multiply-adds
+    the kernel may use, so a value can differ from the kernel's in its last bit."""
+    return getattr(compiled, "py_func", compiled)
+
+
 # no fused multiply-adds (module docstring): the banded solvers' elimination recurrences
 exact_kernel = numba.njit(**{**JIT_OPTIONS, "fastmath": False})
 
@@ -140,18 +152,29 @@ def _cache_dirs(root: Path) -> list[Path]:
     return dirs
 
 
-def _guard_cache() -> None:
-    root = Path(__file__).resolve().parent
+def _sources_digest(root: Path) -> str:
+    """SHA-1 of Numba's version and of every module that holds compiled code (its path and
+    bytes): what compiled machine code was made from."""
     digest = hashlib.sha1(numba.__version__.encode())
     compiled = [root / "_jit.py"] + [p for d in COMPILED_PACKAGES for p in (root / d).rglob("*.py")]
     for p in sorted(compiled):
         digest.update(p.relative_to(root).as_posix().encode())
         digest.update(p.read_bytes())
+    return digest.hexdigest()
+
+
+# of this install's sources: the disk cache below and the ahead-of-time loop
+# (``stepping.aot``) are used only for code made from these
+SOURCES_DIGEST = _sources_digest(Path(__file__).resolve().parent)
+
+
+def _guard_cache() -> None:
+    root = Path(__file__).resolve().parent
     stamp_dir = (Path(numba.config.CACHE_DIR) / root.relative_to(root.anchor)
                  if numba.config.CACHE_DIR else root / "__pycache__")
     stamp = stamp_dir / "rodjit-sources.sha1"
     try:
-        if stamp.read_text() == digest.hexdigest():
+        if stamp.read_text() == SOURCES_DIGEST:
             return
     except OSError:
         pass
@@ -164,7 +187,7 @@ def _guard_cache() -> None:
     try:
         stamp_dir.mkdir(parents=True, exist_ok=True)
         tmp = stamp.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(digest.hexdigest())
+        tmp.write_text(SOURCES_DIGEST)
         os.replace(tmp, stamp)
     except OSError:
         pass  # read-only install: Numba falls back to its user-wide cache

@@ -96,24 +96,25 @@ def _command_line(verb: str, config, options, flags) -> str:
     return shlex.join(words)
 
 
-def _Progress():
+def _Progress(cold=None):
     """The run bar on stderr (``driver.progress.RunBar``)."""
     from .driver.progress import RunBar
 
-    return RunBar(file=sys.stderr)
+    return RunBar(file=sys.stderr, cold=cold)
 
 
-def _progress(flag: bool | None, quiet: bool, bar):
+def _progress(flag: bool | None, quiet: bool, bar, config=None):
     """The CLI's bar (``driver.progress``): on a terminal unless --no-progress or --quiet;
-    says once when the kernels are being compiled."""
+    says once when the kernels are being compiled (for ``config``'s run, if given)."""
     show = (sys.stderr.isatty() if flag is None else flag) and not quiet
     if not show:
         return None
     from .driver.progress import COMPILING, kernels_cold
 
-    if kernels_cold():
+    cold = kernels_cold(config)
+    if cold:
         click.echo(COMPILING, err=True)
-    return bar()
+    return bar(cold)
 
 
 @main.command("run")
@@ -176,9 +177,10 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         "run", config, [("-o", output), ("--set", sets),
                         ("--t-end", repr(t_end) if t_end is not None else None)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
-    progress = _progress(show_progress, quiet, _Progress)
+    progress = None
     try:
         if resume:
+            progress = _progress(show_progress, quiet, _Progress)
             if sets:
                 raise ValueError("--set cannot be used with --resume: the configuration is in "
                                  "the file (only --t-end can change)")
@@ -198,6 +200,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             overrides = _overrides(sets)
             if overrides:
                 cfg = cfg.override(overrides)
+            progress = _progress(show_progress, quiet, _Progress, cfg)
             from .output.estimate import parse_size
 
             with warnings.catch_warnings():   # said below as one line each on stderr
@@ -259,11 +262,11 @@ def _close(progress) -> None:
 
 
 # ---- rodjit sweep -------------------------------------------------------------------------
-def _SweepProgress():
+def _SweepProgress(cold=None):
     """The sweep bar on stderr (``driver.progress.SweepBar``)."""
     from .driver.progress import SweepBar
 
-    return SweepBar(file=sys.stderr)
+    return SweepBar(file=sys.stderr, cold=cold)
 
 
 @main.command("sweep")

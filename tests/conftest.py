@@ -1,9 +1,15 @@
 """Shared helpers: small configurations, a subprocess runner for the CLI, file comparison."""
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
+
+# the suite runs on the JIT, in this process and in the processes it starts; the loop
+# compiled ahead of time is tested against it (tests/test_stepping_aot.py).  RODJIT_AOT=1
+# runs the suite on the ahead-of-time loop where it applies.
+os.environ.setdefault("RODJIT_AOT", "0")
 
 import h5py
 import numpy as np

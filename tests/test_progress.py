@@ -40,7 +40,7 @@ def test_run_to_file_resume_and_sweep_with_bars(tmp_path, capsys):
 
 
 def test_a_cold_cache_is_announced(monkeypatch, capsys):
-    monkeypatch.setattr(P, "kernels_cold", lambda: True)
+    monkeypatch.setattr(P, "kernels_cold", lambda config=None: True)
     bar = P.RunBar()
     bar.bar.refresh()
     assert P.COMPILING in capsys.readouterr().err
@@ -60,9 +60,13 @@ def test_cli_progress_flags(tmp_path, monkeypatch):
     assert "run: 100%" in r.stderr
     r = runner.invoke(main, ["run", "--set", "time.t_end=0.3", "-o", "b.h5", "--no-progress"])
     assert r.exit_code == 0 and "100%" not in r.stderr
-    monkeypatch.setattr(P, "kernels_cold", lambda: True)
+    asked = []
+    monkeypatch.setattr(P, "kernels_cold", lambda config=None: asked.append(config) or True)
     r = runner.invoke(main, ["run", "--set", "time.t_end=0.3", "-o", "c.h5", "--progress"])
     assert r.stderr.startswith(P.COMPILING + "\n")
+    # asked about the run's own configuration (a run on the loop compiled ahead of time
+    # has nothing to compile: tests/test_stepping_aot.py)
+    assert asked[0].time.t_end == 0.3
     r = runner.invoke(main, ["sweep", "--set", "time.t_end=0.3", "--grid", "rod.mu=0,1",
                              "--scheduler", "inline", "-o", "s.h5", "--progress"])
     assert r.exit_code == 0, r.output

@@ -14,11 +14,17 @@ __all__ = ["COMPILING", "kernels_cold", "RunBar", "SweepBar", "run_progress",
 COMPILING = "compiling kernels (first run of an integrator only, about half a minute)…"
 
 
-def kernels_cold() -> bool:
+def kernels_cold(config=None) -> bool:
     """Whether the compiled time loop is not yet in Numba's disk cache (a fresh install):
-    the first run then compiles for a while.  False when it cannot tell."""
+    the first run then compiles for a while.  False for a ``config`` that runs on the loop
+    the install compiled ahead of time (``stepping.aot``: nothing to compile), and when it
+    cannot tell."""
     try:
-        from ..stepping import loop
+        from ..stepping import aot, loop
+        from .run import parameters
+
+        if config is not None and aot.loop_for(parameters(config)) is not None:
+            return False
 
         return not os.path.exists(loop.advance._cache._cache_file._index_path)
     except Exception:          # a Numba without these internals: say nothing
@@ -34,8 +40,9 @@ def _tqdm():
 class RunBar:
     """A bar over simulated time, with the bounces and the compiled loop's step rate."""
 
-    def __init__(self, file=None, leave: bool = True):
-        self.bar = _tqdm()(total=1.0, desc=COMPILING if kernels_cold() else "run",
+    def __init__(self, file=None, leave: bool = True, cold: bool | None = None):
+        cold = kernels_cold() if cold is None else cold
+        self.bar = _tqdm()(total=1.0, desc=COMPILING if cold else "run",
                            unit="", file=file, leave=leave,
                            bar_format="{desc}{percentage:3.0f}%|{bar}|{postfix}")
         self.started = False
@@ -58,8 +65,9 @@ class RunBar:
 class SweepBar:
     """A bar over a sweep's points, with the failures so far."""
 
-    def __init__(self, file=None, leave: bool = True):
-        self.bar = _tqdm()(total=None, desc=COMPILING if kernels_cold() else "sweep",
+    def __init__(self, file=None, leave: bool = True, cold: bool | None = None):
+        cold = kernels_cold() if cold is None else cold
+        self.bar = _tqdm()(total=None, desc=COMPILING if cold else "sweep",
                            file=file, leave=leave,
                            bar_format="{desc}{n_fmt}/{total_fmt} points |{bar}| "
                                       "{percentage:3.0f}%{postfix}")

@@ -18,19 +18,20 @@ import warnings
 
 import numpy as np
 
+from .._jit import python_function
 from ..config import ModelWarning
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
 from ..records.sink import Sink
 from ..records.stats import run_stats
-from ..stepping import control
+from ..stepping import aot, control
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
 
-__all__ = ["Block", "Run", "SimulationError", "Sink"]
+__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters"]
 
 # node-steps per compiled call: long enough that returning to Python costs nothing, short
 # enough that signals, progress and checkpoints are seen promptly
@@ -74,6 +75,8 @@ def _rows_needed(interval: float, span: float) -> int:
     return int(min(2**31, span / interval)) + 2 if interval > 0 else 1
 
 
+_WRITE_BOUNCE = python_function(write_bounce)
+
 _BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
 
 
@@ -90,6 +93,16 @@ class Block:
         self.episodes = run.episodes[:int(c[L.N_EP])]
         self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
         self.finite = bool(np.isfinite(self.diagnostics).all())
+
+
+def parameters(config) -> tuple:
+    """``(scheme, control, system, rod law, floor law)``: the parameter tuples the compiled
+    loop takes for ``config`` (``Run._args``)."""
+    system, rod, floor = build_system(config)
+    scheme = make_scheme(config.time)
+    ctrl = control.build(config.time, scheme, config.output.interpolate,
+                         snapshot_rows=_capacity(config.rod.N + 1))
+    return scheme, ctrl, system, rod, floor
 
 
 def warn_config(config, stacklevel: int = 3) -> None:
@@ -110,12 +123,9 @@ class Run:
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
         self.config = config
-        self.system, self.rod, self.floor = build_system(config)
-        self.scheme = make_scheme(config.time)
+        self.scheme, self.ctrl, self.system, self.rod, self.floor = parameters(config)
         tc = config.time
         n1 = config.rod.N + 1
-        self.ctrl = control.build(tc, self.scheme, config.output.interpolate,
-                                  snapshot_rows=_capacity(n1))
         u, v = initial_state(config, u0, v0)
         check_admissible(u, self.rod, self.floor, "u0" if u0 is not None else "initial state")
         self.state = np.zeros((3, n1))
@@ -152,6 +162,9 @@ class Run:
         self.compile_time = 0.0
         self.run_time = 0.0
         self._warm = False
+        self._key = aot.key(self._args())
+        # the loop compiled at install for the default run's types, or None: the JIT
+        self._aot = aot.loop_for(self._args(), self._key)
 
     def _buffers(self) -> tuple[np.ndarray, ...]:
         """A set of empty output buffers, in the order of ``_BUFFERS``."""
@@ -236,8 +249,10 @@ class Run:
                 self.warm_up()
             return
         t0 = time.perf_counter()
-        code = start(*self._args(), self.state, self.work, self.clock, self.count, self.ev,
-                     self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.fail)
+        arrays = (self.state, self.work, self.clock, self.count, self.ev, self.snap_t,
+                  self.snap_step, self.snap_u, self.snap_v, self.diag, self.fail)
+        code = (self._aot.start(*arrays) if self._aot is not None
+                else start(*self._args(), *arrays))
         t1 = time.perf_counter()
         self.compile_time += t1 - t0
         self.warm_up()
@@ -251,7 +266,10 @@ class Run:
 
         Once per process and argument types (``_compiled_key``): a later run of the same
         types skips the call, one dispatch of two dozen arguments (a few µs, which a
-        sweep of short rods pays at every point)."""
+        sweep of short rods pays at every point).  The ahead-of-time loop needs none."""
+        if self._aot is not None:
+            self._warm = True
+            return
         key = self._compiled_key()
         if key not in _COMPILED:
             t0 = time.perf_counter()
@@ -261,16 +279,17 @@ class Run:
         self._warm = True
 
     def _compiled_key(self) -> tuple:
-        """What Numba's signature of ``advance`` depends on beyond the fixed array types:
-        the parameter tuples' classes and the Python types of their fields (each field a
-        scalar, whose type fixes its Numba type)."""
-        return tuple((type(p), tuple(map(type, p))) for p in self._args())
+        """What Numba's signature of ``advance`` depends on beyond the fixed array types
+        (``stepping.aot.key``: the parameter tuples' classes and their fields' types)."""
+        return self._key
 
     def _call(self, max_steps):
-        return advance(*self._args(), self.state, self.trial, self.work, self.interp,
-                       self.sstats, self.clock, self.count, self.ev, self.snap_t,
-                       self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
-                       self.bounces, self.fail, max_steps)
+        arrays = (self.state, self.trial, self.work, self.interp, self.sstats, self.clock,
+                  self.count, self.ev, self.snap_t, self.snap_step, self.snap_u, self.snap_v,
+                  self.diag, self.episodes, self.bounces, self.fail, max_steps)
+        if self._aot is not None:
+            return self._aot.advance(*arrays)
+        return advance(*self._args(), *arrays)
 
     def advance(self, sink: Sink, max_steps: int | None = None) -> int:
         """One compiled call (up to ``max_steps`` steps), then drain into ``sink``.
@@ -344,7 +363,8 @@ class Run:
             return None
         row = np.zeros(len(L.BOUNCE_COLUMNS))
         is_open = bool(self.ev[L.IN_CONTACT])
-        write_bounce(row, self.ev, is_open)
+        # copies and one division: the kernel's Python function (``_jit.python_function``)
+        _WRITE_BOUNCE(row, self.ev, is_open)
         return row, is_open
 
     def stats(self) -> dict:

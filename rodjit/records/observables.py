@@ -21,6 +21,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._jit import python_function
+
 __all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values",
            "IMPACT_COLUMNS", "impact_line", "wave_speed", "lift_energy", "energy_vibration",
            "merge_episodes", "macroscopic_contacts", "FirstImpact", "first_impact",
@@ -100,7 +102,7 @@ def wave_speed(config) -> float:
     from ..model.laws import get_law
 
     law = get_law("rod", config.rod.law)
-    return math.sqrt(float(law.deriv(0.0, law.from_config(config.rod))))
+    return math.sqrt(float(python_function(law.deriv)(0.0, law.from_config(config.rod))))
 
 
 def lift_energy(config) -> float:
@@ -130,6 +132,7 @@ def lift_energy(config) -> float:
         return 0.0
     law = get_law("rod", config.rod.law)
     p = law.from_config(config.rod)
+    value, primitive = python_function(law.value), python_function(law.primitive)
     n = config.rod.N
     m = masses(n)
     load = g * (1.0 - np.cumsum(m))[:-1]        # g · (mass above segment j), j = 0..N-1
@@ -144,14 +147,14 @@ def lift_energy(config) -> float:
             mid = 0.5 * (a + b)
             if mid in (a, b):
                 break
-            if law.value(mid, p) < s:
+            if value(mid, p) < s:
                 a = mid
             else:
                 b = mid
         eps[j] = 0.5 * (a + b)
     h = 1.0 / n
     u = np.concatenate([[0.0], np.cumsum(h * (1.0 + eps))])
-    stretch = sum(h * float(law.primitive(e, p)) for e in eps)
+    stretch = sum(h * float(primitive(e, p)) for e in eps)
     return stretch - g * float(m @ u)
 
 

@@ -14,7 +14,7 @@ from typing import Any, Callable
 from numba.extending import overload
 
 from . import registered
-from ..._jit import STEP_JIT_OPTIONS
+from ..._jit import STEP_JIT_OPTIONS, python_function
 
 __all__ = ["Law", "register", "law_of", "law_for_numba_type", "get_law", "law_names", "value",
            "deriv", "primitive", "lower", "max_deriv"]
@@ -281,11 +281,9 @@ def lower(p):
     float
         −1 for the Aiki–Kosugi rod, −β for the floor.
     """
-    # from Python, the law's own Python function: a closed form of the parameters, for
-    # which a compiled call would cost more than the arithmetic (compiled code calls the
-    # kernel, through the overload below)
-    fn = _BY_TYPE[type(p)].lower
-    return float(getattr(fn, "py_func", fn)(p))
+    # from Python, the law's own Python function (``_jit.python_function``); compiled
+    # code calls the kernel, through the overload below
+    return float(python_function(_BY_TYPE[type(p)].lower)(p))
 
 
 def max_deriv(u, ih, lo, hi, p):

@@ -1,0 +1,224 @@
+"""The compiled loop of the built-in default run, compiled ahead of time at install.
+
+Numba compiles ``loop.start`` and ``loop.advance`` the first time a process calls them:
+about half a minute for the default integrator on a fresh install, and a later process,
+which loads them from Numba's disk cache, still pays Numba's own start-up (its typing and
+target machinery, about a second here) before its first step.  So ``pip install``
+builds, where it can, an extension module ``rodjit.stepping._aot_loop``: the two functions
+compiled by Numba's ahead-of-time compiler (``numba.pycc``) for the argument types of the
+built-in default run (the ``energy`` integrator, the Aiki–Kosugi laws; ``build`` takes
+them from the default Config).  A run whose parameters have those types (``key``: their classes and
+the Python types of their fields, whatever the values) calls the extension instead of the
+JIT, and its first step needs no compiling.  Every other run uses the JIT as before.
+
+Why not the JIT cache: it cannot be filled at install (its files are keyed by the source
+files' paths and times, which an install changes), and loading from it is what costs the
+second above.  Why ``numba.pycc``, which Numba has marked for deprecation: it is the only
+ahead-of-time compiler of Numba code, and it compiles the same kernels with the same
+options as the JIT (``_jit.JIT_OPTIONS``: fused multiply-adds, no reference counting),
+for the host CPU as the JIT does, so both paths give the same bits
+(tests/test_stepping_aot.py).  Its exported functions take arrays and scalars only, so a
+run's five parameter tuples travel as one float64 and one int64 array (``pack``) and the
+generated wrappers (``wrapper_source``) rebuild them inside compiled code; the wrappers
+release the GIL around the loop, as a JIT call does (``nogil``), so a writer thread and
+signal handlers keep running while it computes.
+
+It is used only where its record (``_aot_loop.json``, beside it) matches the process:
+the digest of the compiled sources (``_jit.SOURCES_DIGEST``: an edited checkout falls
+back to the JIT), Numba's and llvmlite's versions, and the CPU's name and features (an
+environment copied to another machine falls back too).  ``RODJIT_AOT=0`` turns it off.
+An install that cannot build it (no C compiler, a failed compile) goes on without it.
+"""
+from __future__ import annotations
+
+import json
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from .._jit import SOURCES_DIGEST
+from .loop import advance, start
+
+__all__ = ["EXTENSION", "AotLoop", "key", "pack", "wrapper_source", "build", "loop_for",
+           "extension_record"]
+
+EXTENSION = "_aot_loop"                  # the module rodjit.stepping._aot_loop
+RECORD = EXTENSION + ".json"
+_OFF = ("0", "false", "no", "off")
+
+# the two entry points: name, the loop function, the arguments after the parameter tuples
+# (as the driver passes them: ``driver.run.Run``) with their types, and the result type
+_F2, _F1, _I1 = "f8[:,::1]", "f8[::1]", "i8[::1]"
+ENTRIES = {
+    "start": (start, (("state", _F2), ("work", _F2), ("clock", _F1), ("count", _I1),
+                      ("ev", _F1), ("snap_t", _F1), ("snap_step", _I1), ("snap_u", _F2),
+                      ("snap_v", _F2), ("diag", _F2), ("fail", _F1))),
+    "advance": (advance, (("state", _F2), ("trial", _F2), ("work", _F2), ("interp", _F2),
+                          ("sstats", _I1), ("clock", _F1), ("count", _I1), ("ev", _F1),
+                          ("snap_t", _F1), ("snap_step", _I1), ("snap_u", _F2),
+                          ("snap_v", _F2), ("diag", _F2), ("episodes", _F2),
+                          ("bounces", _F2), ("fail", _F1), ("max_steps", "i8"))),
+}
+
+
+def _kind(value) -> str:
+    """How a parameter field travels: in the float array (f), the int array (i) or as an
+    int that is a bool (b)."""
+    t = type(value)
+    if t is bool:
+        return "b"
+    if t is int:
+        return "i"
+    if t is float:
+        return "f"
+    raise TypeError(f"a parameter field of type {t.__name__} has no ahead-of-time form")
+
+
+def key(args) -> tuple:
+    """What the compiled loop's signature depends on in the parameter tuples ``args``
+    (scheme, control, system, rod law, floor law) beyond the fixed array types: each one's
+    class and its fields' Python types (each field a scalar, whose type fixes its Numba
+    type), as names, so that a record can hold it."""
+    return tuple((f"{type(p).__module__}.{type(p).__qualname__}",
+                  tuple(type(x).__name__ for x in p)) for p in args)
+
+
+def pack(args) -> tuple[np.ndarray, np.ndarray]:
+    """The fields of ``args`` in order: the floats in one float64 array, the ints and bools
+    in one int64 array (what the wrappers of ``wrapper_source`` unpack)."""
+    floats, ints = [], []
+    for p in args:
+        for x in p:
+            (floats if _kind(x) == "f" else ints).append(x)
+    return np.array(floats, dtype=np.float64), np.array(ints, dtype=np.int64)
+
+
+def wrapper_source(args) -> tuple[str, dict]:
+    """Python source of the exported functions for parameter tuples of the types of
+    ``args``, and the globals it needs: each rebuilds the tuples from ``(p, ip)``
+    (``pack``), releases the GIL, calls the loop function and takes the GIL back."""
+    glob = {"_start": start, "_advance": advance}
+    fields, nf, ni = [], 0, 0
+    for j, p in enumerate(args):
+        glob[f"_P{j}"] = type(p)
+        items = []
+        for x in p:
+            kind = _kind(x)
+            if kind == "f":
+                items.append(f"p[{nf}]")
+                nf += 1
+            else:
+                items.append(f"ip[{ni}] != 0" if kind == "b" else f"ip[{ni}]")
+                ni += 1
+        fields.append(f"_P{j}({', '.join(items)})")
+    lines = []
+    for name, (_, extra) in ENTRIES.items():
+        names = [a for a, _ in extra]
+        lines += [f"def {name}(p, ip, {', '.join(names)}):",
+                  f"    a0, a1, a2, a3, a4 = {', '.join(fields)}",
+                  "    ts = _save_thread()",
+                  f"    code = _{name}(a0, a1, a2, a3, a4, {', '.join(names)})",
+                  "    _restore_thread(ts)",
+                  "    return code", ""]
+    return "\n".join(lines), glob
+
+
+def _signature(name: str) -> str:
+    return f"i8(f8[::1], i8[::1], {', '.join(t for _, t in ENTRIES[name][1])})"
+
+
+def _host() -> dict:
+    """What the compiled code is tied to besides its sources."""
+    import llvmlite
+    import llvmlite.binding as ll
+    import numba
+    return {"numba": numba.__version__, "llvmlite": llvmlite.__version__,
+            "cpu": ll.get_host_cpu_name(), "features": ll.get_host_cpu_features().flatten(),
+            "python": f"{sys.implementation.cache_tag}"}
+
+
+def build(directory: Path, args) -> Path:
+    """Compile the extension for parameter tuples of the types of ``args`` into
+    ``directory`` (its record beside it) and return its path.  Needs a C compiler."""
+    from numba import types
+    from numba.pycc import CC
+
+    directory = Path(directory)
+    source, glob = wrapper_source(args)
+    glob["_save_thread"] = types.ExternalFunction("PyEval_SaveThread", types.voidptr())
+    glob["_restore_thread"] = types.ExternalFunction("PyEval_RestoreThread",
+                                                     types.void(types.voidptr))
+    exec(compile(source, f"<rodjit.{EXTENSION} wrappers>", "exec"), glob)
+    cc = CC(EXTENSION)
+    cc.output_dir = str(directory)
+    cc.target_cpu = "host"
+    cc.verbose = False
+    for name in ENTRIES:
+        cc.export(name, _signature(name))(glob[name])
+    record = directory / RECORD
+    record.unlink(missing_ok=True)       # no record, no use: a failed build leaves none
+    cc.compile()
+    tmp = record.with_suffix(f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps({"key": key(args), "sources": SOURCES_DIGEST, **_host()},
+                              indent=1))
+    os.replace(tmp, record)
+    return directory / cc.output_file
+
+
+def extension_record(directory: Path | None = None) -> dict | None:
+    """The record of the built extension in ``directory`` (this module's by default), or
+    None if there is none."""
+    directory = Path(__file__).resolve().parent if directory is None else directory
+    try:
+        return json.loads((Path(directory) / RECORD).read_text())
+    except (OSError, ValueError):
+        return None
+
+
+def _usable(record: dict | None) -> bool:
+    return (record is not None and record.get("sources") == SOURCES_DIGEST
+            and all(record.get(k) == v for k, v in _host().items()))
+
+
+_EXT: list = []      # [(module, key)] once looked up (module None: not usable)
+
+
+def _extension():
+    if not _EXT:
+        module, k = None, None
+        record = extension_record()
+        if os.environ.get("RODJIT_AOT", "1").strip().lower() not in _OFF and _usable(record):
+            try:
+                from . import _aot_loop as module   # noqa: F811
+            except ImportError:
+                module = None
+            k = tuple((c, tuple(t)) for c, t in record["key"])
+        _EXT.append((module, k))
+    return _EXT[0]
+
+
+class AotLoop:
+    """``start`` and ``advance`` of the extension for one run's parameter tuples: the
+    driver's calls, with the tuples' fields packed once."""
+
+    def __init__(self, module, args):
+        self._start, self._advance = module.start, module.advance
+        self.p, self.ip = pack(args)
+
+    def start(self, *arrays):
+        return self._start(self.p, self.ip, *arrays)
+
+    def advance(self, *arrays_and_max_steps):
+        return self._advance(self.p, self.ip, *arrays_and_max_steps)
+
+
+def loop_for(args, args_key: tuple | None = None) -> AotLoop | None:
+    """The ahead-of-time loop for parameter tuples ``args`` (whose ``key`` the caller may
+    already have), or None (the JIT's turn): no usable extension, or one built for other
+    types."""
+    module, k = _extension()
+    if module is None or (key(args) if args_key is None else args_key) != k:
+        return None
+    return AotLoop(module, args)

@@ -1,0 +1,264 @@
+"""The loop compiled ahead of time (``stepping.aot``): the same bits as the JIT, resumable
+across the two, used only where its record matches, and releasing the GIL.
+
+The suite runs on the JIT (conftest sets ``RODJIT_AOT=0``); these tests build the
+extension into a temporary directory and point the loader at it."""
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+from conftest import assert_same_files
+
+import rodjit
+from rodjit.driver import run as run_module
+from rodjit.driver.run import Run
+from rodjit.records.result import MemorySink
+from rodjit.stepping import aot
+from rodjit.stepping import layout as L
+from rodjit.stepping.registry import NAMES
+
+# the default run for a simulated second and a half: flight, contact, one bounce
+SHORT = {"time.t_end": 1.5}
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    """``(module, key, directory)`` of an extension built for the default run's types."""
+    directory = tmp_path_factory.mktemp("aot")
+    path = aot.build(directory, Run(rodjit.Config())._args())
+    spec = importlib.util.spec_from_file_location(aot.EXTENSION, path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    record = aot.extension_record(directory)
+    return module, tuple((c, tuple(t)) for c, t in record["key"]), directory
+
+
+@pytest.fixture
+def use(monkeypatch):
+    """``use(built)`` makes runs find that extension; ``use(None)``: none (the JIT)."""
+    def _use(ext):
+        monkeypatch.setattr(aot, "_EXT", [ext[:2] if ext is not None else (None, None)])
+    return _use
+
+
+def _assert_same_results(a, b):
+    for name in ("t", "u", "v", "u_final", "v_final"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    for table in ("diagnostics", "episodes", "bounces"):
+        ta, tb = getattr(a, table), getattr(b, table)
+        assert sorted(ta) == sorted(tb)
+        for col in tb:
+            assert np.array_equal(ta[col], tb[col], equal_nan=True), (table, col)
+    assert (a.t_final, a.energy0, a.dissipated) == (b.t_final, b.energy0, b.dissipated)
+    assert a.stats["steps"] == b.stats["steps"] and a.stats["rejected_steps"] == b.stats[
+        "rejected_steps"]
+
+
+# ---- the parts that need no compiler -----------------------------------------------------
+
+@pytest.mark.parametrize("integrator", sorted(NAMES))
+def test_the_wrappers_rebuild_every_schemes_parameters(integrator):
+    """``pack`` and the generated wrappers round-trip each parameter tuple: same classes,
+    same field values, same Python field types (what fixes the compiled signature)."""
+    args = Run(rodjit.Config().override({"time.integrator": integrator}))._args()
+    source, glob = aot.wrapper_source(args)
+    seen = {}
+    glob.update(_save_thread=lambda: "token", _restore_thread=lambda ts: seen.setdefault(
+        "restored", ts))
+    for name in aot.ENTRIES:
+        glob[f"_{name}"] = lambda *a, _n=name: seen.setdefault(_n, a[:5]) and 7
+    exec(source, glob)
+    p, ip = aot.pack(args)
+    assert p.dtype == np.float64 and ip.dtype == np.int64
+    for name, (_, extra) in aot.ENTRIES.items():
+        assert glob[name](p, ip, *range(len(extra))) == 7
+        rebuilt = seen[name]
+        for a, b in zip(rebuilt, args):
+            assert type(a) is type(b)
+            # ints and bools come back as NumPy scalars here (compiled code gives them
+            # their Numba types); the values must be the same
+            assert tuple(a) == tuple(b)
+    assert seen["restored"] == "token"
+
+
+def test_the_key_is_made_of_types_not_values():
+    run = Run(rodjit.Config())
+    assert aot.key(run._args()) == tuple(
+        (f"{type(p).__module__}.{type(p).__qualname__}", tuple(type(x).__name__ for x in p))
+        for p in run._args())
+    assert run._compiled_key() == aot.key(run._args())
+    other = Run(rodjit.Config().override({"time.integrator": "dp54"}))
+    assert aot.key(other._args()) != aot.key(run._args())
+    # values do not matter, types do
+    assert aot.key(Run(rodjit.load_preset("paper-mu100"))._args()) == aot.key(run._args())
+
+
+def test_a_field_without_a_compiled_form_is_refused():
+    run = Run(rodjit.Config())
+    scheme, *rest = run._args()
+    odd = scheme._replace(rtol=np.float32(1e-6))
+    with pytest.raises(TypeError, match="float32"):
+        aot.pack((odd, *rest))
+
+
+def test_the_record_decides_its_use(monkeypatch):
+    record = {"key": [], "sources": aot.SOURCES_DIGEST, **aot._host()}
+    assert aot._usable(record)
+    for field, other in (("sources", "0" * 40), ("numba", "0.0"), ("llvmlite", "0.0"),
+                         ("cpu", "i486"), ("features", "+nothing"), ("python", "cpython-20")):
+        assert not aot._usable({**record, field: other}), field
+    assert not aot._usable(None)
+
+
+def test_no_record_no_extension_and_the_switch(monkeypatch, tmp_path):
+    monkeypatch.setattr(aot, "_EXT", [])
+    monkeypatch.setattr(aot, "extension_record", lambda directory=None: None)
+    assert aot.loop_for(Run(rodjit.Config())._args()) is None
+    for off in ("0", "off", "False"):
+        monkeypatch.setattr(aot, "_EXT", [])
+        monkeypatch.setenv("RODJIT_AOT", off)
+        monkeypatch.setattr(aot, "extension_record", lambda directory=None: {
+            "key": [], "sources": aot.SOURCES_DIGEST, **aot._host()})
+        assert aot._extension() == (None, None)
+
+
+def test_a_failed_build_leaves_no_record(monkeypatch, tmp_path):
+    from numba.pycc import CC
+
+    def fail(self):
+        raise RuntimeError("no C compiler")
+
+    (tmp_path / aot.RECORD).write_text("{}")         # a record of an earlier build
+    monkeypatch.setattr(CC, "compile", fail)
+    with pytest.raises(RuntimeError, match="no C compiler"):
+        aot.build(tmp_path, Run(rodjit.Config())._args())
+    assert aot.extension_record(tmp_path) is None
+
+
+# ---- the built extension ------------------------------------------------------------------
+
+def test_the_build_records_what_it_is_tied_to(built):
+    _, key, directory = built
+    record = json.loads((directory / aot.RECORD).read_text())
+    assert record["sources"] == aot.SOURCES_DIGEST
+    assert aot._usable(record)
+    assert key == aot.key(Run(rodjit.Config())._args())
+
+
+@pytest.mark.parametrize("cfg", [
+    rodjit.Config().override(SHORT),
+    rodjit.load_preset("paper-mu100").override(SHORT),
+    rodjit.Config().override({**SHORT, "time.dt": 2e-4}),              # fixed steps
+    rodjit.Config().override({**SHORT, "rod.N": 40, "floor.kappa_b": 3e4}),
+], ids=["default", "paper-mu100", "fixed-dt", "N40-stiff-floor"])
+def test_the_ahead_of_time_loop_gives_the_jits_bits(built, use, cfg):
+    use(built)
+    run = Run(cfg)
+    assert run._aot is not None
+    a = rodjit.simulate(cfg)
+    assert a.stats["compile_time"] < 0.5          # nothing compiled
+    use(None)
+    assert Run(cfg)._aot is None
+    b = rodjit.simulate(cfg)
+    _assert_same_results(a, b)
+
+
+def test_other_types_run_on_the_jit(built, use):
+    use(built)
+    for over in ({"time.integrator": "dp54"}, {"time.integrator": "radau5"}):
+        assert Run(rodjit.Config().override(over))._aot is None
+
+
+def test_a_run_paused_on_one_path_resumes_on_the_other_bit_for_bit(built, use):
+    cfg = rodjit.Config().override(SHORT)
+    use(None)
+    whole = rodjit.simulate(cfg)
+    for first, second in ((built, None), (None, built)):
+        use(first)
+        run = Run(cfg)
+        sink = MemorySink()
+        run.start(sink)
+        run.advance(sink, max_steps=1500)
+        assert not np.isclose(run.t, cfg.time.t_end)
+        ck = run.checkpoint()
+        use(second)
+        resumed = Run.from_checkpoint(cfg, ck)
+        assert (resumed._aot is None) == (second is None)
+        while resumed.advance(sink) != L.DONE:
+            pass
+        np.testing.assert_array_equal(resumed.state[:2], np.stack([whole.u_final,
+                                                                   whole.v_final]))
+        assert resumed.steps == whole.stats["steps"]
+        assert resumed.dissipated == whole.dissipated
+
+
+def test_the_loop_releases_the_gil_while_it_computes(built, use, monkeypatch):
+    """A Python thread keeps running during a long call (as with the JIT's ``nogil``): it
+    wakes from 10 ms sleeps throughout the call, which it could not while the GIL is held
+    (each wake-up needs it)."""
+    use(built)
+    monkeypatch.setattr(run_module, "NODE_STEPS_PER_CALL", 10**12)
+    run = Run(rodjit.Config().override({"time.t_end": 200.0, "output.snapshot_interval": 0.0,
+                                        "output.diagnostics_interval": 0.0}))
+    assert run._aot is not None
+    run.start(None)
+    worker = threading.Thread(target=run.compute)
+    wakes = 0
+    t0 = time.perf_counter()
+    worker.start()
+    while worker.is_alive():
+        time.sleep(0.01)
+        wakes += 1
+    worker.join()
+    took = time.perf_counter() - t0
+    assert run.t > 50.0 and took > 0.2, (run.t, took)   # (until the event buffers fill)
+    # with the GIL held through the call: one or two wake-ups, whatever its length
+    assert wakes > 0.2 * took / 0.01, (wakes, took)
+
+
+def test_the_default_command_needs_no_numba_machinery(built, tmp_path):
+    """``rodjit run`` of the default on the extension: no kernel is compiled or loaded
+    (Numba's typing and target contexts are never set up), and the file is the JIT's, bit
+    for bit."""
+    module, key, directory = built
+    code = (
+        "import importlib.util, sys\n"
+        "import numba.core.base\n"
+        "def refuse(self):\n"
+        "    raise SystemExit('a compiled kernel was loaded')\n"
+        "numba.core.base.BaseContext.refresh = refuse\n"
+        "from rodjit.stepping import aot\n"
+        f"spec = importlib.util.spec_from_file_location(aot.EXTENSION, {str(module.__file__)!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
+        f"aot._EXT[:] = [(m, {key!r})]\n"
+        "sys.argv = ['rodjit', 'run', '--t-end', '1.5', '-o', 'aot.h5']\n"
+        "from rodjit.entry import main\n"
+        "main()\n")
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path,
+                          env={**os.environ, "RODJIT_AOT": "1"},
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    jit = subprocess.run([sys.executable, "-m", "rodjit", "run", "--t-end", "1.5", "-o",
+                          "jit.h5"], cwd=tmp_path, env={**os.environ, "RODJIT_AOT": "0"},
+                         capture_output=True, text=True, timeout=600)
+    assert jit.returncode == 0, jit.stderr
+    assert_same_files(tmp_path / "aot.h5", tmp_path / "jit.h5")
+
+
+def test_a_run_on_the_ahead_of_time_loop_gets_no_compiling_notice(built, use):
+    from rodjit.driver.progress import kernels_cold
+
+    use(built)
+    assert kernels_cold(rodjit.Config()) is False
+    assert kernels_cold(rodjit.load_preset("paper-mu100")) is False
+    # any other run: the disk cache decides, as without a configuration
+    assert kernels_cold(rodjit.Config().override({"time.integrator": "dp54"})) == \
+        kernels_cold()
