@@ -6,7 +6,9 @@ process imports rodjit, builds a run and takes its first step; it reports the im
 the time to the first step, ``Run.compile_time`` and the Numba cache hits and misses of the
 compiled entry points (``start`` and ``advance``, which contain every other kernel).  The
 process wall time (interpreter start-up included) is measured from outside.  A warm start
-must show no cache misses.
+must show no cache misses.  The processes run on the JIT (``RODJIT_AOT=0``): the loop the
+install compiles ahead of time for the default run uses no disk cache at all
+(``cold_start.py`` measures it).
 
     python benchmarks/bench_cache.py [--repeat 3]
 """
@@ -54,7 +56,7 @@ CASES = {"paper-mu0 (the default run)": "paper-mu0",
 def probe(cache_dir: Path, preset: str, overrides: dict | None = None) -> dict:
     """One fresh process on ``preset`` (with configuration ``overrides``, e.g. another
     integrator) and the cache directory ``cache_dir``."""
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(cache_dir), RODJIT_AOT="0")
     env.pop("NUMBA_DISABLE_JIT", None)
     t0 = time.perf_counter()
     out = subprocess.run([sys.executable, "-c", PROBE, preset, json.dumps(overrides or {})],

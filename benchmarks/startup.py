@@ -1,6 +1,8 @@
 """Start-up time of ``rodjit run`` on the default configuration, as a user sees it: a fresh
 interpreter, import, kernels loaded from the Numba cache (warm) or compiled (cold, empty
-``NUMBA_CACHE_DIR``), the run, the file and the summary.  Target: warm under 2 s.
+``NUMBA_CACHE_DIR``), the run, the file and the summary.  Where the install built the
+default run's loop ahead of time (``rodjit.stepping.aot``), neither: cold and warm differ
+only by the cache directory.  Target: warm under 2 s.
 
 The baseline is a bare ``python -c pass`` measured in the same session.
 
