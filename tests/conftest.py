@@ -29,6 +29,15 @@ def quiet(**over):
 
 
 @pytest.fixture
+def jit_only(monkeypatch):
+    """Runs on the JIT even under RODJIT_AOT=1: for tests of the JIT's own warm-up and
+    disk cache, which the loop compiled ahead of time does not use."""
+    from rodjit.stepping import aot
+
+    monkeypatch.setattr(aot, "_EXT", [(None, None)])
+
+
+@pytest.fixture
 def rng():
     return np.random.default_rng(20261122)
 

@@ -145,7 +145,7 @@ def test_a_step_loop_that_stops_advancing_time_fails_in_one_line():
     assert run.t == 1e20 and run.steps == 50
 
 
-def test_a_later_run_of_the_same_types_skips_the_warm_up_call(monkeypatch):
+def test_a_later_run_of_the_same_types_skips_the_warm_up_call(monkeypatch, jit_only):
     """The warm-up call (``advance`` for no step, to time the compile apart) runs once per
     process and argument types: a later run of other values but the same types skips it,
     a run of other types makes it, and the results are the same bit for bit either way."""

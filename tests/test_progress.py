@@ -47,7 +47,7 @@ def test_a_cold_cache_is_announced(monkeypatch, capsys):
     bar.close()
 
 
-def test_kernels_cold_reads_the_numba_cache():
+def test_kernels_cold_reads_the_numba_cache(jit_only):
     rodjit.simulate(CFG)                 # compiled and cached by now
     assert P.kernels_cold() is False
 
