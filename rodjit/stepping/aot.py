@@ -99,7 +99,7 @@ def wrapper_source(args) -> tuple[str, dict]:
     """Python source of the exported functions for parameter tuples of the types of
     ``args``, and the globals it needs: each rebuilds the tuples from ``(p, ip)``
     (``pack``), releases the GIL, calls the loop function and takes the GIL back."""
-    glob = {"_start": start, "_advance": advance}
+    glob = {f"_{name}": function for name, (function, _) in ENTRIES.items()}
     fields, nf, ni = [], 0, 0
     for j, p in enumerate(args):
         glob[f"_P{j}"] = type(p)
