@@ -6,7 +6,7 @@ exits 0 and that the files it wrote hold physically sensible results (energy con
 mu = 0, energy balance at mu > 0, the semi-implicit and energy integrators agreeing, bounces
 found). ``--expect-site`` also checks that rodjit is imported from that environment (a wheel
 install, not a source tree); ``--expect-aot`` that the install built the default run's loop
-ahead of time and that the default run uses it. Used by ``.ci/run`` for the minimum-versions and the wheel
+ahead of time and that the default run uses it, without importing Numba. Used by ``.ci/run`` for the minimum-versions and the wheel
 environments; short runs, so the time goes mostly into compiling the kernels.
 """
 from __future__ import annotations
@@ -74,6 +74,12 @@ def main() -> None:
         first = time.perf_counter() - t0
         check(first < 10.0, f"the default run's process took {first:.1f} s (< 10 s: "
                             f"nothing compiled)")
+        probe = subprocess.run(
+            [sys.executable, "-c", "import sys, rodjit; rodjit.simulate(rodjit.Config()"
+             ".override({'time.t_end': 0.01})); print('numba' in sys.modules)"],
+            cwd=work, capture_output=True, text=True)
+        check(probe.returncode == 0 and probe.stdout.split()[-1:] == ["False"],
+              "the default run never imports Numba")
 
     sh("presets", cwd=work)
     # the presets run on energy; these two runs name their integrators, as the checks do

@@ -36,7 +36,8 @@ from rodjit.stepping import kdk as verlet  # noqa: E402  (the Verlet row of the 
 from rodjit.stepping.kdk import Verlet  # noqa: E402
 
 try:      # rodjit's own options (no reference counting), without the disk cache
-    from rodjit._jit import JIT_OPTIONS
+    from rodjit._jit import JIT_OPTIONS, load_numba
+    load_numba()
     _BARE_OPTIONS = {k: v for k, v in JIT_OPTIONS.items() if k != "cache"}
 except ImportError:
     _BARE_OPTIONS = {}

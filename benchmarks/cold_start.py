@@ -15,6 +15,8 @@ calls), so the table shows where the time goes.
 The baseline, measured in the same run: the *Numba floor*, a process that imports Numba and
 calls one cached one-line kernel (warm: loaded from the cache), the least any Numba program
 pays here before its first compiled call.  Warm starts are printed as ratios against it.
+Also the *import floor*, a process that imports NumPy and h5py only (what a run on the
+ahead-of-time loop, which never imports Numba, cannot go below).
 Numba imports SciPy's linear algebra (``numba.np.linalg.ensure_blas``) the first time any
 compiled function is used, whenever SciPy is installed, so the floor and the warm starts
 depend on whether it is; the header says which (rodjit itself does not need SciPy).
@@ -120,6 +122,17 @@ def numba_floor(tmp: Path, repeats: int = 3) -> list[float]:
     return times
 
 
+def import_floor(repeats: int = 3) -> list[float]:
+    """Wall times of ``repeats`` processes that import NumPy and h5py only: what any
+    program that writes an HDF5 file from NumPy arrays pays here before its first line."""
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import numpy, h5py"], check=True, timeout=600)
+        times.append(time.perf_counter() - t0)
+    return times
+
+
 def has_scipy() -> bool:
     p = subprocess.run([sys.executable, "-c", "import scipy"], capture_output=True)
     return p.returncode == 0
@@ -147,8 +160,10 @@ def main(argv=None):
     with tempfile.TemporaryDirectory(prefix="rodjit-floor-") as tmp:
         floor = numba_floor(Path(tmp))
     base = sorted(floor)[len(floor) // 2]
+    imports = import_floor()
     print(f"   SciPy installed: {'yes' if scipy else 'no'}; Numba floor (a cached one-line "
-          f"kernel, warm process): {min(floor):.2f}–{max(floor):.2f} s")
+          f"kernel, warm process): {min(floor):.2f}–{max(floor):.2f} s; import floor "
+          f"(NumPy and h5py): {min(imports):.2f}–{max(imports):.2f} s")
     results = {}
     for integ in args.integrators.split(","):
         with tempfile.TemporaryDirectory(prefix="rodjit-cold-") as tmp:
@@ -164,6 +179,8 @@ def main(argv=None):
               f"({min(warm) / base:.2f}–{max(warm) / base:.2f}× the Numba floor); "
               f"recorded process {rec['total']:.1f} s, {len(rows)} functions compiled, "
               f"{compiled:.1f} s in Numba compiles")
+        print(f"   targets: first step < 5 s cold {'✔' if cold < 5.0 else '✘'}, "
+              f"< 1 s warm {'✔' if max(warm) < 1.0 else '✘'}")
         if rows:
             print("   " + _util.table([[n.replace("rodjit.", ""), r[1], r[0], r[2]]
                                        for n, r in rows[:args.top]],
@@ -177,7 +194,7 @@ def main(argv=None):
                                             "compiles": r[2]} for n, r in rows}}
         sys.stdout.flush()
     path = _util.save(args.out, {"scipy_installed": scipy, "numba_floor_seconds": floor,
-                                     "integrators": results})
+                                 "import_floor_seconds": imports, "integrators": results})
     print(f"\nwrote {path}")
 
 

@@ -57,6 +57,13 @@ are two different passes, and one compile of both behind a run-time flag, inline
 makes the step several per cent slower.  tests/test_cache.py checks that a run compiles
 every other kernel once.
 
+Numba is imported only where something is compiled: a kernel is a ``Kernel``, which makes
+its Numba dispatcher on first use, and the overloads and intrinsics of the compiled layers
+are registered with Numba when it loads (``overload``, ``when_loaded``, ``load_numba``).  A
+process that calls no kernel (a run on the loop compiled ahead of time, ``stepping.aot``;
+reading a run file; ``rodjit --help``) never imports Numba, which is a third of such a
+process's start-up.
+
 Numba invalidates a cached function only when *its own* file changes, not when a function
 it calls does (a law, an event helper): ``_guard_cache`` drops rodjit's cache files whenever
 any source of the compiled layers differs from the last process that compiled them.
@@ -64,31 +71,184 @@ any source of the compiled layers differs from the last process that compiled th
 from __future__ import annotations
 
 import errno
+import functools
 import hashlib
+import importlib
+import importlib.abc
+import importlib.util
 import os
+import sys
+import threading
 from pathlib import Path
+from typing import Callable
 
-import numba
-from numba.core import caching
-from numba.core.cpu import CPUTargetOptions
-
-# ``_nrt`` is an option of Numba's CPU target (Numba compiles its own allocation-free
-# helpers with it); a Numba without it compiles the kernels with reference counting
-_CAN_DISABLE_NRT = hasattr(CPUTargetOptions, "_nrt")
-_CAN_SKIP_CFUNC = hasattr(CPUTargetOptions, "no_cfunc_wrapper")
-JIT_OPTIONS = {"cache": True, "error_model": "numpy", "nogil": True,
-               "fastmath": {"contract"}, **({"_nrt": False} if _CAN_DISABLE_NRT else {}),
-               **({"no_cfunc_wrapper": True} if _CAN_SKIP_CFUNC else {})}
-
-_kernel = numba.njit(**JIT_OPTIONS)
+# Filled in by ``load_numba`` from what the installed Numba's CPU target offers (module
+# docstring); read them through this module (``_jit.JIT_OPTIONS``) once Numba is loaded.
+JIT_OPTIONS: dict = {}
+STEP_JIT_OPTIONS: dict = {}
+_CAN_DISABLE_NRT = _CAN_SKIP_CFUNC = _CAN_FORCE_INLINE = False
 
 
-def kernel(func):
+def _options(numba_core_cpu) -> None:
+    """Set the option sets of the four kinds of kernel for this Numba."""
+    global _CAN_DISABLE_NRT, _CAN_SKIP_CFUNC, _CAN_FORCE_INLINE
+    target = numba_core_cpu.CPUTargetOptions
+    # ``_nrt`` is an option of Numba's CPU target (Numba compiles its own allocation-free
+    # helpers with it); a Numba without it compiles the kernels with reference counting
+    _CAN_DISABLE_NRT = hasattr(target, "_nrt")
+    _CAN_SKIP_CFUNC = hasattr(target, "no_cfunc_wrapper")
+    # Kernels called on every step of the time loop (the step, its forces and sub-steps,
+    # the event and step-size helpers, the stress laws) are also marked for inlining into
+    # the loop (LLVM alwaysinline), and so are the overloads that dispatch to them (the
+    # scheme's step, the law functions): a step then makes no calls and passes no arrays,
+    # which matters for short rods, where the work per step is a few dozen flops and the
+    # calls would cost more than the arithmetic (benchmarks/bench_scipy.py).  A call also
+    # makes every live floating-point register spill (all are caller-saved).  Numba
+    # without the option compiles them as plain kernels.
+    _CAN_FORCE_INLINE = hasattr(target, "forceinline")
+    JIT_OPTIONS.update({"cache": True, "error_model": "numpy", "nogil": True,
+                        "fastmath": {"contract"},
+                        **({"_nrt": False} if _CAN_DISABLE_NRT else {}),
+                        **({"no_cfunc_wrapper": True} if _CAN_SKIP_CFUNC else {})})
+    STEP_JIT_OPTIONS.update({**JIT_OPTIONS,
+                             **({"forceinline": True} if _CAN_FORCE_INLINE else {})})
+    # no fused multiply-adds (module docstring): the banded solvers' recurrences
+    _KIND_OPTIONS.update({"plain": JIT_OPTIONS, "step": STEP_JIT_OPTIONS,
+                          "exact": {**JIT_OPTIONS, "fastmath": False},
+                          "exact_step": {**STEP_JIT_OPTIONS, "fastmath": False}})
+
+
+_KIND_OPTIONS: dict[str, dict] = {}
+_LOCK = threading.RLock()
+_WHEN_LOADED: list[Callable[[], None]] = []
+_STATE = {"loaded": False, "loading": False}
+
+
+def load_numba():
+    """Import Numba and make ready what rodjit compiles with it, once per process; return
+    the ``numba`` module.
+
+    Ready means: the option sets read from this Numba, the disk-cache guards installed
+    (``_guard_cache``, ``_tolerate_refused_cache_writes``), and every registration that
+    waits for Numba (``when_loaded``: the overloads and intrinsics of the compiled layers)
+    made.  It runs when a kernel is first compiled or inspected, and when anything in the
+    process imports Numba (``_AfterNumba``), so Numba code of a user's own that calls
+    rodjit's generic functions (``rodjit.laws.value``) finds them registered."""
+    if _STATE["loaded"]:
+        return sys.modules["numba"]
+    with _LOCK:
+        if not (_STATE["loaded"] or _STATE["loading"]):
+            _STATE["loading"] = True
+            try:
+                import numba
+                import numba.core.cpu
+
+                _options(numba.core.cpu)
+                _guard_cache(numba)
+                _tolerate_refused_cache_writes()
+                while _WHEN_LOADED:
+                    _WHEN_LOADED.pop(0)()
+                _STATE["loaded"] = True
+            finally:
+                _STATE["loading"] = False
+    return sys.modules["numba"]
+
+
+def when_loaded(register: Callable[[], None]) -> None:
+    """Call ``register`` once Numba is loaded (now, if it is): for what a module must tell
+    Numba before anything is compiled (an overload, an intrinsic) but that would otherwise
+    import Numba with the module."""
+    with _LOCK:
+        if _STATE["loaded"]:
+            register()
+        else:
+            _WHEN_LOADED.append(register)
+
+
+def overload(func, *, kind: str = "step", python_wrapper: bool = False, **kwargs):
+    """``numba.extending.overload(func, ...)``, registered when Numba loads: the decorated
+    implementation is compiled with the options of ``kind`` (``"step"``: inlined into the
+    loop, as the kernels it dispatches to; ``"plain"``), plus Numba's Python entry wrapper
+    if ``python_wrapper`` (which overloads leave out by default).  Other keywords go to
+    Numba's ``overload``.  Returns the implementation unchanged."""
+    def decorate(impl):
+        def register():
+            from numba.extending import overload as numba_overload
+
+            options = dict(_KIND_OPTIONS[kind])
+            if python_wrapper:
+                options["no_cpython_wrapper"] = False
+            numba_overload(func, jit_options=options, **kwargs)(impl)
+
+        when_loaded(register)
+        return impl
+
+    return decorate
+
+
+class Kernel:
+    """A rodjit kernel: a Python function and the kind of Numba options it compiles with,
+    turned into Numba's dispatcher (``numba.njit``) the first time it is called, compiled
+    into another kernel or asked for a dispatcher's attribute (``signatures``, ``stats``).
+
+    Why not ``numba.njit`` at import: importing Numba takes a third of a second, and a run
+    on the loop compiled ahead of time (``stepping.aot``) calls no kernel; with the
+    dispatchers made on demand, such a run never imports Numba.  Compiled code sees the
+    dispatcher itself: Numba types a kernel by its ``_numba_type_``, so a kernel called
+    from another compiles, inlines and caches as a dispatcher would."""
+
+    def __init__(self, func, kind: str):
+        functools.update_wrapper(self, func)
+        self.py_func = func
+        self._kind = kind
+        self._dispatcher = None
+
+    @property
+    def dispatcher(self):
+        """Numba's dispatcher of this kernel (made, and Numba loaded, on first use)."""
+        if self._dispatcher is None:
+            numba = load_numba()
+            with _LOCK:
+                if self._dispatcher is None:
+                    self._dispatcher = numba.njit(**_KIND_OPTIONS[self._kind])(self.py_func)
+        return self._dispatcher
+
+    @property
+    def _numba_type_(self):
+        from numba.core import types
+
+        return types.Dispatcher(self.dispatcher)
+
+    def __call__(self, *args):
+        return self.dispatcher(*args)
+
+    def __getattr__(self, name):
+        # only names this object lacks reach here; dunder lookups (pickle, copy) must not
+        # load Numba
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.dispatcher, name)
+
+    def __reduce__(self):
+        return _kernel_named, (self.__module__, self.__qualname__)
+
+    def __repr__(self):
+        return f"<rodjit kernel {self.__module__}.{self.__qualname__}>"
+
+
+def _kernel_named(module: str, qualname: str) -> Kernel:
+    obj = importlib.import_module(module)
+    for part in qualname.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def kernel(func) -> Kernel:
     """Compile ``func`` as a rodjit kernel (``rodjit.laws.law_kernel``).
 
     The options every rodjit kernel has (``JIT_OPTIONS``): cached on disk, NumPy's error
     model, the GIL released, fused multiply-adds and, where Numba allows, no reference
-    counting, so a kernel must not allocate.
+    counting, so a kernel must not allocate.  Compiled on first use (``Kernel``).
 
     Parameters
     ----------
@@ -97,10 +257,25 @@ def kernel(func):
 
     Returns
     -------
-    numba.core.registry.CPUDispatcher
-        The compiled function, callable from Python and from other kernels.
+    Kernel
+        The kernel, callable from Python and from other kernels and from any Numba code.
     """
-    return _kernel(func)
+    return Kernel(func, "plain")
+
+
+def step_kernel(func) -> Kernel:
+    """A kernel called on every step, inlined into the loop (``STEP_JIT_OPTIONS``)."""
+    return Kernel(func, "step")
+
+
+def exact_kernel(func) -> Kernel:
+    """A kernel compiled without fused multiply-adds (module docstring)."""
+    return Kernel(func, "exact")
+
+
+def exact_step_kernel(func) -> Kernel:
+    """A step kernel compiled without fused multiply-adds."""
+    return Kernel(func, "exact_step")
 
 
 def python_function(compiled):
@@ -108,28 +283,35 @@ def python_function(compiled):
 
     For a few scalars evaluated from Python (a law's value at one point, a record of a
     dozen copies): a compiled call's dispatch costs more than that arithmetic, and the
-    first compiled call of a process loads Numba's typing and target machinery (about a
-    second), which a run of the ahead-of-time loop (``stepping.aot``) never needs.  The
-    Python function computes the same IEEE operations, but without the fused multiply-adds
-    the kernel may use, so a value can differ from the kernel's in its last bit."""
+    first compiled call of a process loads Numba (about a second, with its typing and
+    target machinery), which a run of the ahead-of-time loop (``stepping.aot``) never
+    needs.  The Python function computes the same IEEE operations, but without the fused
+    multiply-adds the kernel may use, so a value can differ from the kernel's in its last
+    bit."""
     return getattr(compiled, "py_func", compiled)
 
 
-# no fused multiply-adds (module docstring): the banded solvers' elimination recurrences
-exact_kernel = numba.njit(**{**JIT_OPTIONS, "fastmath": False})
+class _AfterNumba(importlib.abc.MetaPathFinder):
+    """Makes ``load_numba`` follow the import of Numba by anyone in the process: rodjit's
+    overloads must be registered before Numba types code that calls them, whoever
+    compiles it."""
 
-# Kernels called on every step of the time loop (the step, its forces and sub-steps, the
-# event and step-size helpers, the stress laws) are also marked for inlining into the loop
-# (LLVM alwaysinline), and so are the overloads that dispatch to them (``STEP_JIT_OPTIONS``:
-# the scheme's step, the law functions): a step then makes no calls and passes no arrays,
-# which matters for short rods, where the work per step is a few dozen flops and the calls
-# would cost more than the arithmetic (benchmarks/bench_scipy.py).  A call also makes every live
-# floating-point register spill (all are caller-saved).  Numba without the option compiles
-# them as plain kernels.
-_CAN_FORCE_INLINE = hasattr(CPUTargetOptions, "forceinline")
-STEP_JIT_OPTIONS = {**JIT_OPTIONS, **({"forceinline": True} if _CAN_FORCE_INLINE else {})}
-step_kernel = numba.njit(**STEP_JIT_OPTIONS)
-exact_step_kernel = numba.njit(**{**STEP_JIT_OPTIONS, "fastmath": False})
+    def find_spec(self, name, path=None, target=None):
+        if name != "numba":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.loader is None or not hasattr(spec.loader, "exec_module"):
+            return spec
+        exec_numba = spec.loader.exec_module
+
+        def exec_module(module):
+            exec_numba(module)
+            load_numba()
+
+        spec.loader.exec_module = exec_module
+        return spec
+
 
 # the packages whose modules hold compiled code (a change anywhere here may change a kernel)
 COMPILED_PACKAGES = ("model/laws", "kernels", "stepping")
@@ -139,9 +321,11 @@ def _source_dirs(root: Path) -> list[Path]:
     return sorted({p.parent for p in root.rglob("*.py")})
 
 
-def _cache_dirs(root: Path) -> list[Path]:
+def _cache_dirs(root: Path, numba) -> list[Path]:
     """Where Numba keeps rodjit's cache files: next to the sources, or in NUMBA_CACHE_DIR
     one directory per source directory, named by Numba as ``<name>_<sha1 of its path>``."""
+    from numba.core import caching
+
     dirs = [p for p in root.rglob("__pycache__") if p.is_dir()]
     if numba.config.CACHE_DIR:
         for d in _source_dirs(root):
@@ -153,9 +337,10 @@ def _cache_dirs(root: Path) -> list[Path]:
 
 
 def _sources_digest(root: Path) -> str:
-    """SHA-1 of Numba's version and of every module that holds compiled code (its path and
-    bytes): what compiled machine code was made from."""
-    digest = hashlib.sha1(numba.__version__.encode())
+    """SHA-1 of every module that holds compiled code (its path and bytes): what compiled
+    machine code was made from, besides the compiler (Numba's version is checked apart:
+    ``_guard_cache``, ``stepping.aot``)."""
+    digest = hashlib.sha1()
     compiled = [root / "_jit.py"] + [p for d in COMPILED_PACKAGES for p in (root / d).rglob("*.py")]
     for p in sorted(compiled):
         digest.update(p.relative_to(root).as_posix().encode())
@@ -168,17 +353,20 @@ def _sources_digest(root: Path) -> str:
 SOURCES_DIGEST = _sources_digest(Path(__file__).resolve().parent)
 
 
-def _guard_cache() -> None:
+def _guard_cache(numba) -> None:
+    """Drop rodjit's cache files if the compiled sources or Numba changed since the last
+    process that compiled them (module docstring)."""
     root = Path(__file__).resolve().parent
+    made_from = f"{SOURCES_DIGEST} numba {numba.__version__}"
     stamp_dir = (Path(numba.config.CACHE_DIR) / root.relative_to(root.anchor)
                  if numba.config.CACHE_DIR else root / "__pycache__")
     stamp = stamp_dir / "rodjit-sources.sha1"
     try:
-        if stamp.read_text() == SOURCES_DIGEST:
+        if stamp.read_text() == made_from:
             return
     except OSError:
         pass
-    for d in _cache_dirs(root):
+    for d in _cache_dirs(root, numba):
         for f in list(d.rglob("*.nbi")) + list(d.rglob("*.nbc")):
             try:
                 f.unlink()
@@ -187,13 +375,11 @@ def _guard_cache() -> None:
     try:
         stamp_dir.mkdir(parents=True, exist_ok=True)
         tmp = stamp.with_suffix(f".{os.getpid()}.tmp")
-        tmp.write_text(SOURCES_DIGEST)
+        tmp.write_text(made_from)
         os.replace(tmp, stamp)
     except OSError:
         pass  # read-only install: Numba falls back to its user-wide cache
 
-
-_guard_cache()
 
 # What a disk says when it refuses a cache file: full, a file-size limit or quota, read-only,
 # not ours, an I/O error.
@@ -210,6 +396,8 @@ def _tolerate_refused_cache_writes() -> None:
     save is skipped instead, silently (a line on stderr would break the one-line report of
     the command that hit the full disk); the only cost is compiling again in the next
     process.  Other errors of the save are Numba's to report."""
+    from numba.core import caching
+
     original = caching.Cache.save_overload
     if getattr(original, "rodjit_tolerant", False):
         return
@@ -226,4 +414,8 @@ def _tolerate_refused_cache_writes() -> None:
     caching.Cache.save_overload = save_overload
 
 
-_tolerate_refused_cache_writes()
+# Numba already imported (by the user, before rodjit): ready it now; otherwise when it is
+if "numba" in sys.modules:
+    load_numba()
+else:
+    sys.meta_path.insert(0, _AfterNumba())

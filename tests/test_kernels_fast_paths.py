@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit._jit import _CAN_DISABLE_NRT, JIT_OPTIONS, kernel
+from rodjit import _jit
+from rodjit._jit import kernel
 from rodjit.kernels.forces import BAD_STRAIN, NON_FINITE, OK, accel, momentum
 from rodjit.kernels.reduce import nan_max, nan_min
 from rodjit.model.laws import AikiKosugiFloor, AikiKosugiRod, Law, aiki_kosugi, register
@@ -147,7 +148,7 @@ def _alternating_views(state, trial, work, steps):
     return e
 
 
-@pytest.mark.skipif(not _CAN_DISABLE_NRT, reason="this Numba cannot disable reference counting")
+@pytest.mark.skipif(not (_jit.load_numba() and _jit._CAN_DISABLE_NRT), reason="this Numba cannot disable reference counting")
 def test_kernels_count_no_references(rng):
     """Compiled with rodjit's options (rodjit._jit), views and array arguments make no
     NRT_incref/NRT_decref calls, where Numba's defaults make them; the results and the
@@ -157,7 +158,7 @@ def test_kernels_count_no_references(rng):
     trial = rng.normal(size=(3, n + 1))
     want = [_weighted_sum(x[0], x[1]) for x in (state, trial, state)]
     ir = {}
-    for name, opts in (("rodjit", {k: v for k, v in JIT_OPTIONS.items() if k != "cache"}),
+    for name, opts in (("rodjit", {k: v for k, v in _jit.JIT_OPTIONS.items() if k != "cache"}),
                        ("default", {})):
         f = numba.njit(**opts)(_alternating_views)
         work = np.zeros((3, n + 1))

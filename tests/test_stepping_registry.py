@@ -113,7 +113,8 @@ def test_the_loop_compiles_each_scheme_kernel_itself_not_a_wrapper(monkeypatch):
     step options, so the loop's dispatch compiles their own source (no wrapper optimised
     again with the whole step inlined into it, benchmarks/cold_start.py); a scheme kernel
     compiled otherwise (the toy scheme's plain-kernel step) is called through a wrapper."""
-    from rodjit._jit import JIT_OPTIONS
+    from rodjit._jit import JIT_OPTIONS, load_numba
+    load_numba()
     for entry in registry.SCHEMES:
         module, _ = registry.load(entry)
         scheme = registry.make_scheme(rodjit.Config().override(

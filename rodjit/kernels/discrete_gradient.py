@@ -35,11 +35,10 @@ accurate there (see above), so the quadrature never integrates across the kink.
 """
 
 import numpy as np
-from numba.extending import overload
 
 from ..model.laws import deriv, law_of, lower, primitive, value
 from ..model.laws import law_for_numba_type
-from .._jit import STEP_JIT_OPTIONS, step_kernel
+from .._jit import overload, step_kernel
 
 TAU = 0.02      # 4 points up to here, the exact quotient beyond
 TAU3 = 1e-3     # 3 points up to here
@@ -136,7 +135,7 @@ def difference(a, b, p):
     return _by_evaluations(a, b, p)
 
 
-@overload(difference, jit_options=STEP_JIT_OPTIONS)
+@overload(difference)
 def _difference_ov(a, b, p):
     impl = law_for_numba_type(p).difference
     if impl is None:

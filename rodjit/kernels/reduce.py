@@ -10,11 +10,7 @@ values shows up in the result, so a single finiteness test of the result covers 
 """
 import math
 
-from llvmlite import ir
-from numba import types
-from numba.extending import intrinsic, overload
-
-from .._jit import STEP_JIT_OPTIONS
+from .._jit import overload, when_loaded
 
 __all__ = ["nan_min", "nan_max"]
 
@@ -38,6 +34,10 @@ def nan_max(a, b):
 
 
 def _llvm_binary(name):
+    from llvmlite import ir
+    from numba import types
+    from numba.extending import intrinsic
+
     @intrinsic
     def call(typingctx, a, b):
         sig = types.float64(types.float64, types.float64)
@@ -54,17 +54,28 @@ def _llvm_binary(name):
     return call
 
 
-_minimum = _llvm_binary("llvm.minimum")
-_maximum = _llvm_binary("llvm.maximum")
+def _make_intrinsics():
+    global _minimum, _maximum
+    _minimum = _llvm_binary("llvm.minimum")
+    _maximum = _llvm_binary("llvm.maximum")
 
 
-@overload(nan_min, jit_options=STEP_JIT_OPTIONS)
+when_loaded(_make_intrinsics)
+
+
+def _floats(a, b) -> bool:
+    from numba import types
+
+    return isinstance(a, types.Float) and isinstance(b, types.Float)
+
+
+@overload(nan_min)
 def _nan_min_ov(a, b):
-    if isinstance(a, types.Float) and isinstance(b, types.Float):
+    if _floats(a, b):
         return lambda a, b: _minimum(a, b)
 
 
-@overload(nan_max, jit_options=STEP_JIT_OPTIONS)
+@overload(nan_max)
 def _nan_max_ov(a, b):
-    if isinstance(a, types.Float) and isinstance(b, types.Float):
+    if _floats(a, b):
         return lambda a, b: _maximum(a, b)

@@ -2,14 +2,15 @@
 
 Numba compiles ``loop.start`` and ``loop.advance`` the first time a process calls them:
 about half a minute for the default integrator on a fresh install, and a later process,
-which loads them from Numba's disk cache, still pays Numba's own start-up (its typing and
-target machinery, about a second here) before its first step.  So ``pip install``
+which loads them from Numba's disk cache, still pays Numba's own start-up (its import,
+typing and target machinery, about a second here) before its first step.  So ``pip install``
 builds, where it can, an extension module ``rodjit.stepping._aot_loop``: the two functions
 compiled by Numba's ahead-of-time compiler (``numba.pycc``) for the argument types of the
 built-in default run (the ``energy`` integrator, the Aiki–Kosugi laws; ``build`` takes
 them from the default Config).  A run whose parameters have those types (``key``: their classes and
 the Python types of their fields, whatever the values) calls the extension instead of the
-JIT, and its first step needs no compiling.  Every other run uses the JIT as before.
+JIT: its first step needs no compiling, and the process never imports Numba (its
+kernels are made on first use, ``_jit.Kernel``).  Every other run uses the JIT as before.
 
 Why not the JIT cache: it cannot be filled at install (its files are keyed by the source
 files' paths and times, which an install changes), and loading from it is what costs the
@@ -25,12 +26,14 @@ signal handlers keep running while it computes.
 
 It is used only where its record (``_aot_loop.json``, beside it) matches the process:
 the digest of the compiled sources (``_jit.SOURCES_DIGEST``: an edited checkout falls
-back to the JIT), Numba's and llvmlite's versions, and the CPU's name and features (an
+back to the JIT), Numba's and llvmlite's versions, and the CPU, its model and feature flags (an
 environment copied to another machine falls back too).  ``RODJIT_AOT=0`` turns it off.
 An install that cannot build it (no C compiler, a failed compile) goes on without it.
 """
 from __future__ import annotations
 
+import hashlib
+import importlib.metadata
 import json
 import os
 import sys
@@ -129,13 +132,40 @@ def _signature(name: str) -> str:
     return f"i8(f8[::1], i8[::1], {', '.join(t for _, t in ENTRIES[name][1])})"
 
 
-def _host() -> dict:
-    """What the compiled code is tied to besides its sources."""
-    import llvmlite
+def _cpu() -> str:
+    """The CPU the code is compiled for, told without loading LLVM where the system says
+    it (Linux: the first processor of /proc/cpuinfo, its model and feature flags);
+    elsewhere LLVM's host CPU name and features."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
+            first = []
+            for line in f:
+                if not line.strip():
+                    break
+                first.append(line)
+    except OSError:
+        first = []
+    wanted = ("vendor_id", "cpu family", "model", "model name", "flags", "Features",
+              "CPU implementer", "CPU architecture", "CPU variant", "CPU part")
+    fields = {k.strip(): v.strip() for k, _, v in (ln.partition(":") for ln in first)}
+    told = [f"{k}={fields[k]}" for k in wanted if k in fields]
+    if told:
+        return hashlib.sha1("\n".join(told).encode()).hexdigest()
     import llvmlite.binding as ll
-    import numba
-    return {"numba": numba.__version__, "llvmlite": llvmlite.__version__,
-            "cpu": ll.get_host_cpu_name(), "features": ll.get_host_cpu_features().flatten(),
+    return f"{ll.get_host_cpu_name()} {ll.get_host_cpu_features().flatten()}"
+
+
+def _version(dist: str) -> str | None:
+    try:
+        return importlib.metadata.version(dist)
+    except importlib.metadata.PackageNotFoundError:
+        return None
+
+
+def _host() -> dict:
+    """What the compiled code is tied to besides its sources (told without importing
+    Numba, which a run on this loop never needs)."""
+    return {"numba": _version("numba"), "llvmlite": _version("llvmlite"), "cpu": _cpu(),
             "python": f"{sys.implementation.cache_tag}"}
 
 

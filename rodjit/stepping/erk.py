@@ -76,12 +76,11 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba.extending import overload
 
 from ..kernels.forces import INACCURATE, NON_FINITE, OK, momentum
 from .energy import full_accel
 from .step_result import StepResult
-from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
+from .._jit import overload, kernel, step_kernel
 
 __all__ = ["DP54", "DOP853", "TABLEAUS", "DENSE", "tableau", "dense_tableau", "initial",
            "step", "dense_setup", "dense", "dense_dissipated", "work_rows", "dense_amplification",
@@ -378,7 +377,7 @@ def step_caps(scheme):
     return STABILITY_CAP[type(scheme)], VISCOUS_CAP[type(scheme)]
 
 
-@overload(step_caps, jit_options=STEP_JIT_OPTIONS)
+@overload(step_caps)
 def _step_caps_ov(scheme):
     caps = STABILITY_CAP[scheme.instance_class], VISCOUS_CAP[scheme.instance_class]
     return lambda scheme: caps
@@ -396,7 +395,7 @@ def _capped(scheme, system, dt, om2):
     return dt
 
 
-@overload(tableau, jit_options=STEP_JIT_OPTIONS)
+@overload(tableau)
 def _tableau_ov(scheme):
     t = TABLEAUS[scheme.instance_class]
     a, b, e, e3, combined, q = t.a, t.b, t.e, t.e3, t.combined, t.q
@@ -408,7 +407,7 @@ def dense_tableau(scheme):
     return t.ax, t.d
 
 
-@overload(dense_tableau, jit_options=STEP_JIT_OPTIONS)
+@overload(dense_tableau)
 def _dense_tableau_ov(scheme):
     t = DENSE[scheme.instance_class]
     ax, d = t.ax, t.d

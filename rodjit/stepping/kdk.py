@@ -50,7 +50,6 @@ parameter class and one more row (plus its line in ``registry``).
 import math
 from typing import NamedTuple
 
-from numba.extending import overload
 
 from ..kernels.banded import tridiag_solve
 from ..kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
@@ -62,7 +61,7 @@ from .energy import FAC_MIN, SAFETY, _step_factor
 from .stability import explicit_dt
 from .step_result import StepResult
 from .viscous import _factored, viscous_cn, viscous_sdirk2
-from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
+from .._jit import overload, kernel, step_kernel
 
 __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "step"]
 
@@ -116,7 +115,7 @@ def stages(scheme) -> Stages:
     return STAGES[type(scheme)]
 
 
-@overload(stages, jit_options=STEP_JIT_OPTIONS)
+@overload(stages)
 def _stages_ov(scheme):
     row = STAGES[scheme.instance_class]
     return lambda scheme: row
@@ -207,7 +206,7 @@ def _for_rows(uses, kernel):
     def operator(scheme, *args):
         return kernel(*args)
 
-    @overload(operator, jit_options=STEP_JIT_OPTIONS)
+    @overload(operator)
     def _operator_ov(scheme, *args):
         if uses(STAGES[scheme.instance_class]):
             return lambda scheme, *args: kernel(*args)

@@ -34,7 +34,6 @@ large) is retried at the scheme's ``dt_suggest``, and under fixed steps accepted
 ``control``.
 """
 import numpy as np
-from numba.extending import overload
 
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
 from ..model.laws import lower, value
@@ -43,7 +42,7 @@ from . import layout as L
 from .events import crossing, open_contact, track
 from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
                       step)
-from .._jit import STEP_JIT_OPTIONS, kernel, step_kernel
+from .._jit import overload, kernel, step_kernel
 
 
 @step_kernel
@@ -195,7 +194,7 @@ def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count
                      diag)
 
 
-@overload(_emit_dense, jit_options=STEP_JIT_OPTIONS)
+@overload(_emit_dense)
 def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
                    t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
                    diag):

@@ -24,12 +24,12 @@ code and NaN rows, so a call by mistake cannot pass unnoticed.
 from __future__ import annotations
 
 import numpy as np
-from numba.extending import overload
 
 from . import registry
 from .registry import SCHEME_STATS, make_scheme
 from ..kernels.forces import NON_FINITE
-from .._jit import JIT_OPTIONS, STEP_JIT_OPTIONS
+from .. import _jit
+from .._jit import overload
 
 __all__ = ["make_scheme", "initial", "step", "dense_setup", "dense", "dense_dissipated",
            "has_dense", "has_dense_type", "gap_control", "work_rows", "SCHEME_STATS"]
@@ -68,20 +68,20 @@ def _compiled_with(impl, options) -> bool:
     return own == {k: v for k, v in options.items() if k != "cache"}
 
 
-@overload(initial, jit_options={**JIT_OPTIONS, "no_cpython_wrapper": False}, strict=False)
+@overload(initial, kind="plain", python_wrapper=True, strict=False)
 def _initial_ov(scheme, system, rod, floor, u, v, a, work):
     impl = _module_for(scheme).initial
-    if _compiled_with(impl, JIT_OPTIONS):
+    if _compiled_with(impl, _jit.JIT_OPTIONS):
         return impl.py_func
     return lambda scheme, system, rod, floor, u, v, a, work: impl(
         scheme, system, rod, floor, u, v, a, work)
 
 
 # inlined into the loop, like the step
-@overload(step, jit_options={**STEP_JIT_OPTIONS, "no_cpython_wrapper": False}, strict=False)
+@overload(step, python_wrapper=True, strict=False)
 def _step_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     impl = _module_for(scheme).step
-    if _compiled_with(impl, STEP_JIT_OPTIONS):
+    if _compiled_with(impl, _jit.STEP_JIT_OPTIONS):
         return impl.py_func
     return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt: impl(
         scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt)
@@ -96,7 +96,7 @@ def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
     return _module(type(scheme)).dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)
 
 
-@overload(dense_setup, jit_options=STEP_JIT_OPTIONS)
+@overload(dense_setup)
 def _dense_setup_ov(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
     if not has_dense_type(scheme):
         return lambda scheme, system, rod, floor, u, v, a, u2, v2, a2, work, dt: (
@@ -112,7 +112,7 @@ def _no_dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
         vo[i] = np.nan
 
 
-@overload(dense, jit_options=STEP_JIT_OPTIONS)
+@overload(dense)
 def _dense_ov(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
     if not has_dense_type(scheme):
         return _no_dense
@@ -125,7 +125,7 @@ def dense_dissipated(scheme, system, v, v2, work, dt, theta):
     return _module(type(scheme)).dense_dissipated(scheme, system, v, v2, work, dt, theta)
 
 
-@overload(dense_dissipated, jit_options=STEP_JIT_OPTIONS)
+@overload(dense_dissipated)
 def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
     if not has_dense_type(scheme):
         return lambda scheme, system, v, v2, work, dt, theta: np.nan
@@ -142,7 +142,7 @@ def has_dense(scheme) -> bool:
     return registry.entry_of(type(scheme)).dense
 
 
-@overload(has_dense, jit_options=STEP_JIT_OPTIONS)
+@overload(has_dense)
 def _has_dense_ov(scheme):
     if has_dense_type(scheme):
         return lambda scheme: True

@@ -11,10 +11,9 @@ import hashlib
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from numba.extending import overload
 
 from . import registered
-from ..._jit import STEP_JIT_OPTIONS, python_function
+from ..._jit import overload, python_function
 
 __all__ = ["Law", "register", "law_of", "law_for_numba_type", "get_law", "law_names", "value",
            "deriv", "primitive", "lower", "max_deriv"]
@@ -298,31 +297,31 @@ def max_deriv(u, ih, lo, hi, p):
     return m
 
 
-@overload(value, jit_options=STEP_JIT_OPTIONS)
+@overload(value)
 def _value_ov(x, p):
     impl = law_for_numba_type(p).value
     return lambda x, p: impl(x, p)
 
 
-@overload(deriv, jit_options=STEP_JIT_OPTIONS)
+@overload(deriv)
 def _deriv_ov(x, p):
     impl = law_for_numba_type(p).deriv
     return lambda x, p: impl(x, p)
 
 
-@overload(primitive, jit_options=STEP_JIT_OPTIONS)
+@overload(primitive)
 def _primitive_ov(x, p):
     impl = law_for_numba_type(p).primitive
     return lambda x, p: impl(x, p)
 
 
-@overload(lower, jit_options=STEP_JIT_OPTIONS)
+@overload(lower)
 def _lower_ov(p):
     impl = law_for_numba_type(p).lower
     return lambda p: impl(p)
 
 
-@overload(max_deriv, jit_options=STEP_JIT_OPTIONS)
+@overload(max_deriv)
 def _max_deriv_ov(u, ih, lo, hi, p):
     law = law_for_numba_type(p)
     if law.deriv_max is not None:
