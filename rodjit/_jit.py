@@ -144,7 +144,7 @@ def load_numba():
                 import numba.core.cpu
 
                 _options(numba.core.cpu)
-                _guard_cache(numba)
+                _guard_cache()
                 _tolerate_refused_cache_writes()
                 while _WHEN_LOADED:
                     _WHEN_LOADED.pop(0)()
@@ -321,9 +321,10 @@ def _source_dirs(root: Path) -> list[Path]:
     return sorted({p.parent for p in root.rglob("*.py")})
 
 
-def _cache_dirs(root: Path, numba) -> list[Path]:
+def _cache_dirs(root: Path) -> list[Path]:
     """Where Numba keeps rodjit's cache files: next to the sources, or in NUMBA_CACHE_DIR
     one directory per source directory, named by Numba as ``<name>_<sha1 of its path>``."""
+    import numba
     from numba.core import caching
 
     dirs = [p for p in root.rglob("__pycache__") if p.is_dir()]
@@ -353,9 +354,11 @@ def _sources_digest(root: Path) -> str:
 SOURCES_DIGEST = _sources_digest(Path(__file__).resolve().parent)
 
 
-def _guard_cache(numba) -> None:
+def _guard_cache() -> None:
     """Drop rodjit's cache files if the compiled sources or Numba changed since the last
     process that compiled them (module docstring)."""
+    import numba
+
     root = Path(__file__).resolve().parent
     made_from = f"{SOURCES_DIGEST} numba {numba.__version__}"
     stamp_dir = (Path(numba.config.CACHE_DIR) / root.relative_to(root.anchor)
@@ -366,7 +369,7 @@ def _guard_cache(numba) -> None:
             return
     except OSError:
         pass
-    for d in _cache_dirs(root, numba):
+    for d in _cache_dirs(root):
         for f in list(d.rglob("*.nbi")) + list(d.rglob("*.nbc")):
             try:
                 f.unlink()

@@ -2,6 +2,10 @@
 callables keep working; the first compile is announced."""
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import pytest
 from click.testing import CliRunner
 
@@ -47,9 +51,26 @@ def test_a_cold_cache_is_announced(monkeypatch, capsys):
     bar.close()
 
 
-def test_kernels_cold_reads_the_numba_cache(jit_only):
-    rodjit.simulate(CFG)                 # compiled and cached by now
-    assert P.kernels_cold() is False
+def test_kernels_cold_reads_the_numba_cache(tmp_path):
+    """Cold where Numba's cache is empty, not once a run has compiled into it: fresh
+    interpreters with a cache of their own, which no other test can fill or refuse to
+    write (this process's kernels may have been compiled while a test refused the cache
+    writes)."""
+    probe = ("import sys, rodjit\n"
+             "from rodjit.driver import progress as P\n"
+             "print(P.kernels_cold())\n"
+             "if sys.argv[1] == 'run':\n"
+             "    rodjit.simulate(rodjit.Config().override({'time.t_end': 0.05,\n"
+             "                    'time.integrator': 'verlet', 'time.control': 'cfl'}))\n")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path), "RODJIT_AOT": "0"}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    said = []
+    for what in ("run", "ask"):
+        done = subprocess.run([sys.executable, "-c", probe, what], env=env,
+                              capture_output=True, text=True, timeout=900)
+        assert done.returncode == 0, done.stderr[-3000:]
+        said.append(done.stdout.split()[-1])
+    assert said == ["True", "False"]
 
 
 def test_cli_progress_flags(tmp_path, monkeypatch):

@@ -80,7 +80,7 @@ import numpy as np
 from ..kernels.forces import INACCURATE, NON_FINITE, OK, momentum
 from .energy import full_accel
 from .step_result import StepResult
-from .._jit import overload, kernel, step_kernel
+from .._jit import kernel, overload, step_kernel
 
 __all__ = ["DP54", "DOP853", "TABLEAUS", "DENSE", "tableau", "dense_tableau", "initial",
            "step", "dense_setup", "dense", "dense_dissipated", "work_rows", "dense_amplification",

@@ -50,7 +50,6 @@ parameter class and one more row (plus its line in ``registry``).
 import math
 from typing import NamedTuple
 
-
 from ..kernels.banded import tridiag_solve
 from ..kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
 from ..kernels.mass import node_mass
@@ -61,7 +60,7 @@ from .energy import FAC_MIN, SAFETY, _step_factor
 from .stability import explicit_dt
 from .step_result import StepResult
 from .viscous import _factored, viscous_cn, viscous_sdirk2
-from .._jit import overload, kernel, step_kernel
+from .._jit import kernel, overload, step_kernel
 
 __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "step"]
 

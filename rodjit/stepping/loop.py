@@ -42,7 +42,7 @@ from . import layout as L
 from .events import crossing, open_contact, track
 from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
                       step)
-from .._jit import overload, kernel, step_kernel
+from .._jit import kernel, overload, step_kernel
 
 
 @step_kernel

@@ -11,7 +11,6 @@ import hashlib
 from dataclasses import dataclass
 from typing import Any, Callable
 
-
 from . import registered
 from ..._jit import overload, python_function
 
