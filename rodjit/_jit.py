@@ -222,6 +222,24 @@ class Kernel:
     def __call__(self, *args):
         return self.dispatcher(*args)
 
+    def entry_point(self, args):
+        """The compiled function for the types of ``args``, compiled (or loaded from the
+        disk cache) if it is not yet: Numba's C entry, which unboxes the arguments and
+        runs the machine code, releasing the GIL as the dispatcher's call does.
+
+        Why: the dispatcher types every argument of every call, about 5 µs for the time
+        loop's two dozen arguments (five parameter tuples), which a short rod's whole run
+        of a few hundred steps pays twice; the entry costs under 1 µs.  It does not check
+        its arguments, so a caller must pass only arguments of exactly these types (the
+        driver keeps one per ``stepping.aot.key`` of a run, whose arrays it allocates
+        itself).  Where Numba is off, the Python function."""
+        dispatcher = self.dispatcher
+        if not hasattr(dispatcher, "overloads"):       # NUMBA_DISABLE_JIT=1
+            return dispatcher
+        from numba.core.typing.typeof import Purpose, typeof
+
+        return dispatcher.compile(tuple(typeof(a, Purpose.argument) for a in args))
+
     def __getattr__(self, name):
         # only names this object lacks reach here; dunder lookups (pickle, copy) must not
         # load Numba

@@ -145,31 +145,65 @@ def test_a_step_loop_that_stops_advancing_time_fails_in_one_line():
     assert run.t == 1e20 and run.steps == 50
 
 
-def test_a_later_run_of_the_same_types_skips_the_warm_up_call(monkeypatch, jit_only):
-    """The warm-up call (``advance`` for no step, to time the compile apart) runs once per
-    process and argument types: a later run of other values but the same types skips it,
-    a run of other types makes it, and the results are the same bit for bit either way."""
+def test_a_later_run_of_the_same_types_reuses_the_compiled_entries(monkeypatch, jit_only):
+    """The compiled entry points of ``start`` and ``advance`` (``_jit.Kernel.entry_point``)
+    are looked up once per process and argument types: a later run of other values but
+    the same types reuses them, a run of other types gets its own, and the results are
+    the same bit for bit either way."""
     import rodjit.driver.run as run_module
+    from rodjit._jit import Kernel
 
     cfg = rodjit.Config().override({"time.t_end": 0.05, "rod.mu": 2.0})
     rodjit.simulate(cfg)                        # compiled or loaded in this process
-    calls = []
-    original = Run._call
+    looked_up = []
+    original = Kernel.entry_point
 
-    def spy(self, max_steps):
-        calls.append(max_steps)
-        return original(self, max_steps)
+    def spy(self, args):
+        looked_up.append(self.__name__)
+        return original(self, args)
 
-    monkeypatch.setattr(Run, "_call", spy)
+    monkeypatch.setattr(Kernel, "entry_point", spy)
     warm = rodjit.simulate(cfg.override({"rod.mu": 3.0}))
-    assert calls and 0 not in calls
-    calls.clear()
-    monkeypatch.setattr(run_module, "_COMPILED", set())     # as in a fresh process
+    assert looked_up == []
+    monkeypatch.setattr(run_module, "_COMPILED", {})     # as in a fresh process
     cold = rodjit.simulate(cfg.override({"rod.mu": 3.0}))
-    assert calls[0] == 0
+    assert looked_up == ["start", "advance"]
+    assert cold.stats["compile_time"] > warm.stats["compile_time"]
     assert np.array_equal(warm.u, cold.u) and np.array_equal(warm.v, cold.v)
-    calls.clear()
+    assert warm.stats["steps"] == cold.stats["steps"]
+    looked_up.clear()
     rodjit.simulate(cfg.override({"time.integrator": "dp54"}))     # other scheme types
-    assert calls[0] == 0
+    assert looked_up == ["start", "advance"]
     keys = run_module._COMPILED
-    assert len(keys) == 2 and len({k[0][0] for k in keys}) == 2
+    assert len(keys) == 4 and {name for name, _ in keys} == {"start", "advance"}
+    assert len({k[0][0] for _, k in keys}) == 2
+    # a run resumed from a checkpoint compiles ``advance`` only
+    monkeypatch.setattr(run_module, "_COMPILED", {})
+    looked_up.clear()
+    run = Run(cfg)
+    sink = MemorySink()
+    run.start(sink)
+    ck = run.checkpoint()
+    looked_up.clear()
+    run_module._COMPILED.clear()
+    resumed = Run.from_checkpoint(cfg, ck)
+    resumed.start(None)
+    assert looked_up == ["advance"]
+    while resumed.advance(sink) != L.DONE:
+        pass
+    assert np.array_equal(resumed.u, rodjit.simulate(cfg).u_final)
+
+
+def test_a_block_is_finite_exactly_when_every_value_is():
+    """The drain's test of a block's diagnostics (a sum, then each value only where the
+    sum is not finite): finite values whose sum overflows pass, any inf or NaN fails."""
+    from rodjit.driver.run import _all_finite
+
+    assert _all_finite(np.full((3, 4), 1e308)) and _all_finite(np.zeros((0, 9)))
+    for bad in (np.inf, -np.inf, np.nan):
+        rows = np.ones((3, 4))
+        rows[1, 2] = bad
+        assert not _all_finite(rows)
+    rows = np.ones((2, 3))
+    rows[0, 0], rows[1, 1] = np.inf, -np.inf        # a NaN sum
+    assert not _all_finite(rows)

@@ -70,6 +70,19 @@ def test_a_kernel_is_numbas_dispatcher_once_used():
     assert _jit.STEP_JIT_OPTIONS.items() >= _jit.JIT_OPTIONS.items()
 
 
+def test_a_kernels_entry_point_is_the_compiled_function_for_those_types():
+    """``Kernel.entry_point``: the same values as the dispatcher's call, one compiled
+    function per argument types (compiled on demand), kept by the dispatcher."""
+    v = np.linspace(0.0, 1.0, 6)
+    entry = forces.momentum.entry_point((v, 0.2))
+    assert entry is forces.momentum.entry_point((v.copy(), 0.7))   # types, not values
+    assert entry(v, 0.2) == forces.momentum(v, 0.2)
+    assert entry is not forces.momentum.dispatcher
+    v32 = v.astype(np.float32)
+    other = forces.momentum.entry_point((v32, 0.2))               # compiled now
+    assert other is not entry and other(v32, 0.2) == forces.momentum(v32, 0.2)
+
+
 def test_a_kernel_pickles_by_name_without_loading_numba():
     assert pickle.loads(pickle.dumps(forces.accel)) is forces.accel
     done = _python("""
@@ -89,6 +102,7 @@ def test_kernels_run_as_python_with_the_jit_disabled():
         from rodjit.laws import AikiKosugiRod, value
         v = np.linspace(0.0, 1.0, 6)
         assert forces.momentum.dispatcher is forces.momentum.py_func
+        assert forces.momentum.entry_point((v, 0.2)) is forces.momentum.py_func
         print(forces.momentum(v, 0.2) == forces.momentum.py_func(v, 0.2),
               value(-0.2, AikiKosugiRod(100.0)) < 0)
         """, NUMBA_DISABLE_JIT="1")

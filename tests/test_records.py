@@ -101,6 +101,10 @@ def test_run_stats_fields():
                      scheme_counts=())["node_steps_per_second"] == 0.0
     from rodjit.stepping.schemes import SCHEME_STATS
     assert [s[name] for name in SCHEME_STATS] == [7, 1][:len(SCHEME_STATS)]
+    # the counters are Python ints whether they come as an int64 array or a list
+    listed = run_stats(steps=10, rejected=2, compile_time=1.5, run_time=0.5, nodes=4,
+                       scheme_counts=[7, 1])
+    assert listed == s and all(type(s[name]) is int for name in SCHEME_STATS)
 
 
 def test_a_one_row_table_owns_its_arrays_too():

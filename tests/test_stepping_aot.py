@@ -99,6 +99,12 @@ def test_the_key_is_made_of_types_not_values():
     assert aot.key(other._args()) != aot.key(run._args())
     # values do not matter, types do
     assert aot.key(Run(rodjit.load_preset("paper-mu100"))._args()) == aot.key(run._args())
+    # a field of another type makes another key, also after the first was seen
+    args = run._args()
+    field = args[0]._fields[0]
+    retyped = (args[0]._replace(**{field: int(getattr(args[0], field) > 0)}),) + args[1:]
+    assert aot.key(retyped) != aot.key(args)
+    assert aot.key(retyped)[0][1][0] == "int" and aot.key(args)[0][1][0] == "float"
 
 
 def test_a_field_without_a_compiled_form_is_refused():

@@ -74,6 +74,15 @@ def test_an_unknown_integrator_is_refused_by_name():
         registry.entry_of(tuple)
 
 
+def test_load_gives_each_schemes_module_and_parameter_class_once_imported():
+    for entry in registry.SCHEMES:
+        first = registry.load(entry)
+        module = importlib.import_module(entry.module)
+        assert first == (module, getattr(module, entry.params))
+        assert registry.load(entry) is first          # kept, not looked up again
+        assert registry.entry_of(first[1]) is entry
+
+
 def test_adding_a_scheme_is_one_module_and_one_registry_line(monkeypatch):
     line = registry.Scheme("toy", "toy_scheme", "Toy", lambda tc, P: P(float(tc.cfl)),
                            workspace.WORK_ROWS, counters=("newton_iterations",))

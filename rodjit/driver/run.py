@@ -39,9 +39,10 @@ NODE_STEPS_PER_CALL = 20_000_000
 NO_PROGRESS = 100    # the driver's own failure code: steps were taken, t did not move
 
 
-# ``Run._compiled_key`` of every run whose ``advance`` this process has compiled (or
-# loaded from the disk cache)
-_COMPILED: set[tuple] = set()
+# the compiled entry points (``_jit.Kernel.entry_point``) of the loop's ``start`` and
+# ``advance`` this process has compiled or loaded from the disk cache, by the function's
+# name and the run's ``_compiled_key`` (which fixes every argument's type)
+_COMPILED: dict[tuple[str, tuple], object] = {}
 
 
 class SimulationError(RuntimeError):
@@ -92,7 +93,15 @@ class Block:
         self.diagnostics = run.diag[:int(c[L.N_DIAG])]
         self.episodes = run.episodes[:int(c[L.N_EP])]
         self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
-        self.finite = bool(np.isfinite(self.diagnostics).all())
+        self.finite = _all_finite(self.diagnostics)
+
+
+def _all_finite(rows: np.ndarray) -> bool:
+    """Whether every value of ``rows`` is finite.  A finite sum says so (an inf or a NaN
+    makes the sum inf or NaN) in one pass without a temporary; only a sum that is not
+    finite (a non-finite value, or finite ones whose sum overflows) needs the test of
+    each value."""
+    return math.isfinite(rows.sum()) or bool(np.isfinite(rows).all())
 
 
 def parameters(config) -> tuple:
@@ -162,6 +171,7 @@ class Run:
         self.compile_time = 0.0
         self.run_time = 0.0
         self._warm = False
+        self._advance = None        # the compiled entry of ``advance`` (``warm_up``)
         self._key = aot.key(self._args())
         # the loop compiled at install for the default run's types, or None: the JIT
         self._aot = aot.loop_for(self._args(), self._key)
@@ -251,8 +261,11 @@ class Run:
         t0 = time.perf_counter()
         arrays = (self.state, self.work, self.clock, self.count, self.ev, self.snap_t,
                   self.snap_step, self.snap_u, self.snap_v, self.diag, self.fail)
-        code = (self._aot.start(*arrays) if self._aot is not None
-                else start(*self._args(), *arrays))
+        if self._aot is not None:
+            code = self._aot.start(*arrays)
+        else:
+            args = (*self._args(), *arrays)
+            code = self._entry("start", start, args)(*args)
         t1 = time.perf_counter()
         self.compile_time += t1 - t0
         self.warm_up()
@@ -265,31 +278,43 @@ class Run:
         """Compile ``advance`` without stepping, so its compile time is measured apart.
 
         Once per process and argument types (``_compiled_key``): a later run of the same
-        types skips the call, one dispatch of two dozen arguments (a few µs, which a
-        sweep of short rods pays at every point).  The ahead-of-time loop needs none."""
-        if self._aot is not None:
-            self._warm = True
-            return
-        key = self._compiled_key()
-        if key not in _COMPILED:
-            t0 = time.perf_counter()
-            self._call(0)
-            self.compile_time += time.perf_counter() - t0
-            _COMPILED.add(key)
+        types takes the compiled entry point kept then (``_jit.Kernel.entry_point``),
+        whose calls skip the dispatcher's typing of two dozen arguments, which a sweep of
+        short rods would pay at every point.  The ahead-of-time loop needs none."""
+        if self._aot is None:
+            self._advance = self._entry("advance", advance, (*self._args(),
+                                                             *self._advance_arrays(0)))
         self._warm = True
+
+    def _entry(self, name: str, function, args: tuple):
+        """The compiled entry of the loop's ``function`` for this run's argument types
+        ``args``, from ``_COMPILED`` or compiled now (its time added to ``compile_time``)."""
+        k = (name, self._compiled_key())
+        entry = _COMPILED.get(k)
+        if entry is None:
+            t0 = time.perf_counter()
+            entry = _COMPILED[k] = function.entry_point(args)
+            self.compile_time += time.perf_counter() - t0
+        return entry
 
     def _compiled_key(self) -> tuple:
         """What Numba's signature of ``advance`` depends on beyond the fixed array types
         (``stepping.aot.key``: the parameter tuples' classes and their fields' types)."""
         return self._key
 
+    def _advance_arrays(self, max_steps: int) -> tuple:
+        """The arguments of ``advance`` after the parameter tuples.  Always arrays the run
+        allocated itself (``_buffers``; the state, work and counter arrays of ``__init__``)
+        and an int: the compiled entry point relies on these types."""
+        return (self.state, self.trial, self.work, self.interp, self.sstats, self.clock,
+                self.count, self.ev, self.snap_t, self.snap_step, self.snap_u, self.snap_v,
+                self.diag, self.episodes, self.bounces, self.fail, int(max_steps))
+
     def _call(self, max_steps):
-        arrays = (self.state, self.trial, self.work, self.interp, self.sstats, self.clock,
-                  self.count, self.ev, self.snap_t, self.snap_step, self.snap_u, self.snap_v,
-                  self.diag, self.episodes, self.bounces, self.fail, max_steps)
+        arrays = self._advance_arrays(max_steps)
         if self._aot is not None:
             return self._aot.advance(*arrays)
-        return advance(*self._args(), *arrays)
+        return self._advance(*self._args(), *arrays)
 
     def advance(self, sink: Sink, max_steps: int | None = None) -> int:
         """One compiled call (up to ``max_steps`` steps), then drain into ``sink``.

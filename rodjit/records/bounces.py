@@ -17,16 +17,16 @@ def bounce_table(blocks, pending=None) -> dict[str, np.ndarray]:
     """Columns (``BOUNCE_COLUMNS`` order) of the bounce rows in ``blocks`` (arrays of shape
     (rows, len(BOUNCE_ROW_COLUMNS)), closed bounces) followed by ``pending``, the
     ``(row, open)`` of ``Run.pending_bounce`` or None.  The columns are new arrays."""
-    rows = list(blocks)
-    is_open = [np.zeros(len(r), bool) for r in rows]
+    rows = [r for r in blocks if len(r)]
     if pending is not None:
         rows.append(np.asarray(pending[0])[None, :])
-        is_open.append(np.array([bool(pending[1])]))
     b = (rows[0] if len(rows) == 1 else np.concatenate(rows)) if rows \
         else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
     out = columns_of(b, BOUNCE_ROW_COLUMNS)
     out["n_episodes"] = out["n_episodes"].astype(np.int64)
-    out["open"] = np.concatenate(is_open) if is_open else np.zeros(0, bool)
+    out["open"] = is_open = np.zeros(len(b), bool)
+    if pending is not None and pending[1]:
+        is_open[-1] = True           # only the pending bounce can be open
     return out
 
 

@@ -2,6 +2,8 @@
 built from a live run or from a checkpoint by the same function."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..stepping.registry import SCHEME_STATS
 
 __all__ = ["run_stats", "node_steps_per_second"]
@@ -21,5 +23,7 @@ def run_stats(*, steps: int, rejected: int, compile_time: float, run_time: float
              "wall_time": compile_time + run_time, "compile_time": compile_time,
              "run_time": run_time,
              "node_steps_per_second": node_steps_per_second(steps, nodes, run_time)}
+    if isinstance(scheme_counts, np.ndarray):
+        scheme_counts = scheme_counts.tolist()   # Python ints in one call, not one per entry
     stats.update({name: int(v) for name, v in zip(SCHEME_STATS, scheme_counts)})
     return stats

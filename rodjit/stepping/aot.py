@@ -37,6 +37,7 @@ import importlib.metadata
 import json
 import os
 import sys
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -84,8 +85,18 @@ def key(args) -> tuple:
     (scheme, control, system, rod law, floor law) beyond the fixed array types: each one's
     class and its fields' Python types (each field a scalar, whose type fixes its Numba
     type), as names, so that a record can hold it."""
-    return tuple((f"{type(p).__module__}.{type(p).__qualname__}",
-                  tuple(type(x).__name__ for x in p)) for p in args)
+    # the classes, then every field's type: unambiguous, a class fixing its field count
+    types = (*map(type, args), *map(type, chain.from_iterable(args)))
+    k = _KEYS.get(types)
+    if k is None:
+        k = _KEYS[types] = tuple((f"{type(p).__module__}.{type(p).__qualname__}",
+                                  tuple(type(x).__name__ for x in p)) for p in args)
+    return k
+
+
+# ``key`` of each combination of types seen: the names once per process, since every
+# compiled call of a run needs its key (a sweep of short rods makes thousands of runs)
+_KEYS: dict[tuple, tuple] = {}
 
 
 def pack(args) -> tuple[np.ndarray, np.ndarray]:

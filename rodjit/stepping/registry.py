@@ -95,14 +95,21 @@ def get(name: str) -> Scheme:
 
 
 _LOADED: dict[type, Scheme] = {}
+# ``load``'s answer by module and class name: every run asks, and the import machinery's
+# lookup of a module already imported costs more than the rest of building the scheme
+_MODULES: dict[tuple[str, str], tuple] = {}
 
 
 def load(scheme: Scheme):
     """``(module, parameter class)`` of a scheme, importing its module on first use."""
-    module = importlib.import_module(scheme.module)
-    params = getattr(module, scheme.params)
-    _LOADED.setdefault(params, scheme)
-    return module, params
+    k = (scheme.module, scheme.params)
+    found = _MODULES.get(k)
+    if found is None:
+        module = importlib.import_module(scheme.module)
+        params = getattr(module, scheme.params)
+        _LOADED.setdefault(params, scheme)
+        found = _MODULES[k] = (module, params)
+    return found
 
 
 def entry_of(params_type: type) -> Scheme:
