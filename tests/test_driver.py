@@ -165,10 +165,12 @@ def test_a_later_run_of_the_same_types_reuses_the_compiled_entries(monkeypatch, 
     monkeypatch.setattr(Kernel, "entry_point", spy)
     warm = rodjit.simulate(cfg.override({"rod.mu": 3.0}))
     assert looked_up == []
+    kept = dict(run_module._COMPILED)
     monkeypatch.setattr(run_module, "_COMPILED", {})     # as in a fresh process
     cold = rodjit.simulate(cfg.override({"rod.mu": 3.0}))
     assert looked_up == ["start", "advance"]
-    assert cold.stats["compile_time"] > warm.stats["compile_time"]
+    # looked up again, the entries are the compiled functions Numba already held
+    assert run_module._COMPILED and all(e is kept[k] for k, e in run_module._COMPILED.items())
     assert np.array_equal(warm.u, cold.u) and np.array_equal(warm.v, cold.v)
     assert warm.stats["steps"] == cold.stats["steps"]
     looked_up.clear()
