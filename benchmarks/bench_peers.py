@@ -40,6 +40,10 @@ method and setting) and each keeps its best time.  A method's cost at accuracy E
 interpolated in log-log along its cost–error Pareto front (the cheapest measured cost
 among settings with error ≤ E, interpolated towards the next cheaper, less accurate one);
 the ratio printed is peer cost / rodjit's best cost (the cheapest rodjit integrator at E).
+For that integrator a second table splits its call into the compiled loop (its front of
+``stats['run_time']``) and the rest, and prints the peer's cost over the loop alone and
+the rest a call could have and still meet the target: where the target is missed, it says
+whether the steps or the call around them stand in the way.
 
     python benchmarks/bench_peers.py [--quick] [--repeat 3] [--settings paper-mu0,...] [--out NAME]
 """
@@ -64,6 +68,7 @@ from rodjit.model.system import initial_state  # noqa: E402
 from rodjit.presets import load_preset  # noqa: E402
 
 TARGETS = (1e-2, 1e-3, 1e-4, 1e-5, 1e-6)
+TARGET_RATIO = 2.0    # the goal: rodjit's best at least this much faster than the fastest peer
 T_END = 1.0
 SNAPSHOT = 0.005
 TOLS = tuple(10.0 ** (-k / 2) for k in range(4, 27))       # 1e-2 … 1e-13
@@ -345,6 +350,15 @@ def cost_at(fr, target):
     return fr[-1][1]
 
 
+def breakdown(points, target):
+    """``(call, loop)``: a rodjit method's cost at accuracy ``target`` interpolated along
+    its front of whole ``simulate`` calls and along the front of its compiled loop alone
+    (``stats['run_time']``); None where the method does not reach ``target``.  Their
+    difference is what a call costs besides stepping: the run's setup and checks, the
+    glue around the compiled calls and the Result."""
+    return cost_at(front(points), target), cost_at(front(points, "run_time"), target)
+
+
 def run_setting(name, quick, rounds, budget):
     pb = Problem(name)
     _util.header(f"{name}: N = {pb.cfg.rod.N}, μ = {pb.cfg.rod.mu}, κ_b = "
@@ -389,7 +403,8 @@ def run_setting(name, quick, rounds, budget):
     print("\n   cost (ms) at accuracy, interpolated along each method's front:")
     print("   " + _util.table(rows, ["method"] + [f"{e:.0e}" for e in targets])
           .replace("\n", "\n   "))
-    ratio_rows = []
+    ratio_rows, parts_rows = [], []
+    points = {m.label: m.points for m in methods}
     for e in targets:
         rj = [(costs[l][e], l) for l in rod_labels if costs[l][e] is not None]
         pe = [(costs[l][e], l) for l in peer_labels if costs[l][e] is not None]
@@ -406,9 +421,28 @@ def run_setting(name, quick, rounds, budget):
         ratio_rows.append([f"{e:.0e}", best_rj[1] if best_rj else "—",
                            best_pe[1] if best_pe else "—",
                            "—" if ratio is None else ratio])
-    print("\n   peer / rodjit-best (< 1: the peer is faster; target ≥ 2):")
+        if best_rj and best_pe:
+            call, loop = breakdown(points[best_rj[1]], e)
+            if loop is not None:
+                rest_allowed = best_pe[0] / TARGET_RATIO - loop
+                summary[f"{e:.0e}"].update({
+                    "rodjit_loop_seconds": loop, "rodjit_rest_seconds": call - loop,
+                    "ratio_fastest_peer_over_rodjit_loop": best_pe[0] / loop,
+                    "rest_allowed_for_target_seconds": rest_allowed})
+                parts_rows.append([f"{e:.0e}", best_rj[1], call * 1e3, loop * 1e3,
+                                   (call - loop) * 1e3, best_pe[0] / loop,
+                                   rest_allowed * 1e3])
+    print(f"\n   peer / rodjit-best (< 1: the peer is faster; target ≥ {TARGET_RATIO:g}):")
     print("   " + _util.table(ratio_rows, ["accuracy", "rodjit best", "fastest peer",
                                            "ratio"]).replace("\n", "\n   "))
+    if parts_rows:
+        print(f"\n   where rodjit's best call goes (ms): its compiled loop and the rest of the "
+              f"call; the fastest peer's\n   whole call over the loop alone; the rest a call "
+              f"could have and still be {TARGET_RATIO:g}× the peer (< 0: the loop alone "
+              f"misses):")
+        print("   " + _util.table(parts_rows, ["accuracy", "rodjit best", "call", "loop",
+                                               "rest", "peer / loop",
+                                               "rest allowed"]).replace("\n", "\n   "))
     for s in skipped:
         print(f"   skipped: {s}")
     spreads = [p["spread"] for m in methods for p in m.points if p.get("spread")

@@ -172,3 +172,29 @@ def test_prototype_pairs_meet_tolerance_and_land_on_outputs(name):
         _, y, info = method.run(pb, tol)
         assert pb.error(y, ref) < 30 * tol, (tol, pb.error(y, ref))
     assert info["steps"] >= pb.t_eval.size - 1          # at least one step per output
+
+
+# ---- the benchmark's bookkeeping -------------------------------------------------------
+def test_breakdown_splits_a_call_into_its_loop_and_the_rest():
+    """``breakdown`` interpolates the whole calls and the loops on their own fronts: at a
+    measured accuracy it returns that point's call and loop, between two points the
+    log-log interpolation of each, and None where no point is accurate enough; a dominated
+    point (slower and less accurate) is not on either front."""
+    import bench_peers
+
+    def point(error, best, loop):
+        return {"error": error, "times": [best], "best": best, "run_time": loop}
+
+    pts = [point(1e-3, 4e-4, 2e-4), point(1e-2, 3e-4, 1e-4),
+           point(2e-2, 5e-4, 3e-4)]                       # dominated by the 1e-2 point
+    assert bench_peers.breakdown(pts, 1e-2) == pytest.approx((3e-4, 1e-4), rel=1e-12)
+    assert bench_peers.breakdown(pts, 1e-3) == pytest.approx((4e-4, 2e-4), rel=1e-12)
+    # beyond the least accurate point on the front: that point, never the dominated one
+    assert bench_peers.breakdown(pts, 5e-2) == pytest.approx((3e-4, 1e-4), rel=1e-12)
+    call, loop = bench_peers.breakdown(pts, 10 ** -2.5)  # halfway in log error
+    assert call == pytest.approx(np.sqrt(4e-4 * 3e-4), rel=1e-12)
+    assert loop == pytest.approx(np.sqrt(2e-4 * 1e-4), rel=1e-12)
+    assert bench_peers.breakdown(pts, 1e-4) == (None, None)
+    # a point timed without its loop (a peer's) leaves the loop front empty
+    call, loop = bench_peers.breakdown([point(1e-3, 4e-4, None)], 1e-2)
+    assert call == pytest.approx(4e-4, rel=1e-12) and loop is None
