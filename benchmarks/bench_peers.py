@@ -43,7 +43,10 @@ the ratio printed is peer cost / rodjit's best cost (the cheapest rodjit integra
 For that integrator a second table splits its call into the compiled loop (its front of
 ``stats['run_time']``) and the rest, and prints the peer's cost over the loop alone and
 the rest a call could have and still meet the target: where the target is missed, it says
-whether the steps or the call around them stand in the way.
+whether the steps or the call around them stand in the way.  A third table gives, for
+rodjit's best and the fastest peer at each accuracy, the steps of the cheapest measured call
+that reaches it and the cost of one (``work_at``): whether the steps are too many or too
+dear.
 
     python benchmarks/bench_peers.py [--quick] [--repeat 3] [--settings paper-mu0,...] [--out NAME]
 """
@@ -254,7 +257,8 @@ def run_rodjit(pb, integrator, value):
     if not np.allclose(res.t, pb.t_eval, rtol=0, atol=1e-12):
         raise RuntimeError("rodjit's snapshot times differ from the peers'")
     return elapsed, np.vstack([res.u.T, res.v.T]), {
-        "steps": int(res.stats["steps"]), "run_time": float(res.stats["run_time"])}
+        "steps": int(res.stats["steps"]), "rejected": int(res.stats["rejected_steps"]),
+        "run_time": float(res.stats["run_time"])}
 
 
 RUNNERS = {"cyrk": run_cyrk, "cvode": run_cvode, "scipy": run_scipy}
@@ -359,6 +363,24 @@ def breakdown(points, target):
     return cost_at(front(points), target), cost_at(front(points, "run_time"), target)
 
 
+def work_at(points, target):
+    """The measured point a method's cost at accuracy ``target`` comes from: the cheapest
+    whole call with error ≤ ``target`` (None if none is that accurate), as
+    ``{"error", "best", "trials", "per_trial"}``: the step trials of the call (accepted and
+    rejected where the method reports both; a peer's step count as its library gives it)
+    and the cost of one, the compiled loop over its trials for rodjit (``run_time``), the
+    whole call over its steps for a peer.  It tells whether a miss comes from the number
+    of steps or from what each costs."""
+    ok = [p for p in points if p["times"] and p.get("best") is not None
+          and p["error"] <= target and p.get("steps")]
+    if not ok:
+        return None
+    p = min(ok, key=lambda q: q["best"])
+    trials = p["steps"] + p.get("rejected", 0)
+    per = p.get("run_time", p["best"]) / trials
+    return {"error": p["error"], "best": p["best"], "trials": trials, "per_trial": per}
+
+
 def run_setting(name, quick, rounds, budget):
     pb = Problem(name)
     _util.header(f"{name}: N = {pb.cfg.rod.N}, μ = {pb.cfg.rod.mu}, κ_b = "
@@ -403,7 +425,7 @@ def run_setting(name, quick, rounds, budget):
     print("\n   cost (ms) at accuracy, interpolated along each method's front:")
     print("   " + _util.table(rows, ["method"] + [f"{e:.0e}" for e in targets])
           .replace("\n", "\n   "))
-    ratio_rows, parts_rows = [], []
+    ratio_rows, parts_rows, work_rows = [], [], []
     points = {m.label: m.points for m in methods}
     for e in targets:
         rj = [(costs[l][e], l) for l in rod_labels if costs[l][e] is not None]
@@ -432,6 +454,12 @@ def run_setting(name, quick, rounds, budget):
                 parts_rows.append([f"{e:.0e}", best_rj[1], call * 1e3, loop * 1e3,
                                    (call - loop) * 1e3, best_pe[0] / loop,
                                    rest_allowed * 1e3])
+            w_rj, w_pe = work_at(points[best_rj[1]], e), work_at(points[best_pe[1]], e)
+            if w_rj and w_pe:
+                summary[f"{e:.0e}"].update({"rodjit_work": w_rj, "fastest_peer_work": w_pe})
+                work_rows.append([f"{e:.0e}", best_rj[1], w_rj["trials"],
+                                  w_rj["per_trial"] * 1e6, best_pe[1], w_pe["trials"],
+                                  w_pe["per_trial"] * 1e6])
     print(f"\n   peer / rodjit-best (< 1: the peer is faster; target ≥ {TARGET_RATIO:g}):")
     print("   " + _util.table(ratio_rows, ["accuracy", "rodjit best", "fastest peer",
                                            "ratio"]).replace("\n", "\n   "))
@@ -443,6 +471,13 @@ def run_setting(name, quick, rounds, budget):
         print("   " + _util.table(parts_rows, ["accuracy", "rodjit best", "call", "loop",
                                                "rest", "peer / loop",
                                                "rest allowed"]).replace("\n", "\n   "))
+    if work_rows:
+        print("\n   the steps behind it (each method's cheapest measured call at the accuracy):"
+              " rodjit's step trials\n   (accepted + rejected) and its loop per trial, the "
+              "peer's steps and its whole call per step (µs):")
+        print("   " + _util.table(work_rows, ["accuracy", "rodjit best", "trials",
+                                              "µs/trial", "fastest peer", "steps",
+                                              "µs/step"]).replace("\n", "\n   "))
     for s in skipped:
         print(f"   skipped: {s}")
     spreads = [p["spread"] for m in methods for p in m.points if p.get("spread")

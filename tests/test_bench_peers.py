@@ -198,3 +198,32 @@ def test_breakdown_splits_a_call_into_its_loop_and_the_rest():
     # a point timed without its loop (a peer's) leaves the loop front empty
     call, loop = bench_peers.breakdown([point(1e-3, 4e-4, None)], 1e-2)
     assert call == pytest.approx(4e-4, rel=1e-12) and loop is None
+
+
+def test_work_at_takes_the_cheapest_accurate_call_and_its_cost_per_step():
+    """``work_at`` picks the cheapest measured call whose error meets the accuracy, counts
+    rodjit's rejected trials with its accepted steps and divides its loop time by them; a
+    peer's whole call is divided by its steps; None where no call is accurate enough."""
+    import bench_peers
+
+    rodjit_pts = [
+        {"error": 1e-3, "times": [5e-4], "best": 5e-4, "steps": 80, "rejected": 20,
+         "run_time": 4e-4},
+        {"error": 1e-4, "times": [9e-4], "best": 9e-4, "steps": 150, "rejected": 50,
+         "run_time": 8e-4},
+        {"error": 2e-3, "times": [3e-4], "best": 3e-4, "steps": 40, "rejected": 0,
+         "run_time": 2e-4},
+    ]
+    w = bench_peers.work_at(rodjit_pts, 1e-3)
+    assert w["trials"] == 100 and w["best"] == 5e-4
+    assert w["per_trial"] == pytest.approx(4e-6, rel=1e-12)
+    w = bench_peers.work_at(rodjit_pts, 1e-4)
+    assert w["trials"] == 200 and w["per_trial"] == pytest.approx(4e-6, rel=1e-12)
+    assert bench_peers.work_at(rodjit_pts, 1e-5) is None
+    peer_pts = [{"error": 5e-4, "times": [6e-4], "best": 6e-4, "steps": 120},
+                {"error": 1e-2, "times": [], "best": None}]       # a failed setting
+    w = bench_peers.work_at(peer_pts, 1e-3)
+    assert w["trials"] == 120 and w["per_trial"] == pytest.approx(5e-6, rel=1e-12)
+    # a library that reports no step count (SciPy, CVODE give right-hand sides) is skipped
+    assert bench_peers.work_at([{"error": 1e-4, "times": [1e-3], "best": 1e-3,
+                                 "nfev": 900}], 1e-3) is None
