@@ -54,6 +54,54 @@ def crossing(ua, va, ub, vb, dt):
     return release(ua, ub, vb, dt)
 
 
+EXIT_SAMPLES = 16
+
+
+@kernel
+def _quintic(s, ua, b1, b2, c3, c4, c5):
+    return ua + s * (b1 + s * (b2 + s * (c3 + s * (c4 + s * c5))))
+
+
+@kernel
+def hermite_exit(ua, va, aa, ub, vb, ab, dt, free):
+    """Fraction of the step where u_0 first leaves its side along the quintic Hermite
+    interpolant of both ends (height, velocity and acceleration at each; ``free``: the side
+    u_0 ≥ 0, else u_0 < 0), or 2.0 if it stays on it: the exits of a step whose force is
+    smooth (a floor law held to one side), an excursion inside the step included.  The
+    interpolant is accurate to O(dt⁶); it is sampled at ``EXIT_SAMPLES`` points and the
+    first exit found by bisection."""
+    b1 = dt * va
+    b2 = 0.5 * dt * dt * aa
+    r0 = ub - (ua + b1 + b2)
+    r1 = dt * vb - (b1 + 2.0 * b2)
+    r2 = dt * dt * ab - 2.0 * b2
+    c3 = 10.0 * r0 - 4.0 * r1 + 0.5 * r2
+    c4 = -15.0 * r0 + 7.0 * r1 - r2
+    c5 = 6.0 * r0 - 3.0 * r1 + 0.5 * r2
+    first = 2.0
+    for k in range(1, EXIT_SAMPLES + 1):
+        s = k / EXIT_SAMPLES
+        if k == EXIT_SAMPLES:
+            ps = ub
+        else:
+            ps = _quintic(s, ua, b1, b2, c3, c4, c5)
+        if (ps < 0.0) if free else (ps >= 0.0):
+            first = s
+            break
+    if first > 1.0:
+        return 2.0
+    lo = first - 1.0 / EXIT_SAMPLES
+    hi = first
+    for _ in range(50):
+        s = 0.5 * (lo + hi)
+        ps = _quintic(s, ua, b1, b2, c3, c4, c5)
+        if (ps < 0.0) if free else (ps >= 0.0):
+            hi = s
+        else:
+            lo = s
+    return 0.5 * (lo + hi)
+
+
 @kernel
 def _update_extremes(ev, u0, ff, emin):
     ev[L.CUR_MIN_U0] = min(ev[L.CUR_MIN_U0], u0)

@@ -37,9 +37,12 @@ import numpy as np
 
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
 from ..model.laws import lower, value
+from ..model.laws.base import BOTH, CONTACT, FREE, Sided, has_extension
 from . import control as C
 from . import layout as L
-from .events import crossing, open_contact, track
+from . import registry
+from .energy import full_accel
+from .events import crossing, hermite_exit, open_contact, track
 from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
                       step)
 from .._jit import kernel, overload, step_kernel
@@ -205,6 +208,38 @@ def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, co
     return _emit_dense
 
 
+def _holds_sides(scheme_cls, floor_cls) -> bool:
+    """Whether the loop holds the floor law to one side per trial step (``laws.Sided``):
+    for the embedded pairs (``control`` rules ``pair-*``), whose error estimate assumes a
+    smooth force, with a floor law that continues its contact branch (``Law.extension``)."""
+    return (registry.entry_of(scheme_cls).step_rules.startswith("pair")
+            and has_extension(floor_cls))
+
+
+def _trial_floor(scheme, floor, side):
+    """The floor law a trial step takes: ``Sided(floor, side)`` where the loop holds sides
+    (``_holds_sides``), else ``floor`` itself (a compile-time choice)."""
+    return Sided(floor, side) if _holds_sides(type(scheme), type(floor)) else floor
+
+
+@overload(_trial_floor)
+def _trial_floor_ov(scheme, floor, side):
+    if _holds_sides(scheme.instance_class, floor.instance_class):
+        return lambda scheme, floor, side: Sided(floor, side)
+    return lambda scheme, floor, side: floor
+
+
+def _sides(scheme, floor):
+    """``_holds_sides`` of the run's types; a constant in compiled code."""
+    return _holds_sides(type(scheme), type(floor))
+
+
+@overload(_sides)
+def _sides_ov(scheme, floor):
+    on = _holds_sides(scheme.instance_class, floor.instance_class)
+    return lambda scheme, floor: on
+
+
 @kernel
 def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
           snap_t, snap_step, snap_u, snap_v, diag, fail):
@@ -255,6 +290,8 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
     diss = clock[L.DISSIPATED]
     w = clock[L.W]
     refined = False
+    sides = _sides(scheme, floor)
+    forced = 0      # 1: the trial takes the side it is moving into; 2: the law itself
     # no break can come between a rejection and the next acceptance; a run-time flag
     # (rodjit._jit: literal flags)
     after_reject = bool(False)
@@ -293,13 +330,48 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         v = cur[1]
         u2 = nxt[0]
         v2 = nxt[1]
-        r = step(scheme, system, rod, floor, u, v, cur[2], u2, v2, nxt[2], work, sstats, dt)
+        side = BOTH
+        if sides and not fixed:
+            # The pairs step with the floor law of the side of u_0 = 0 the trial starts on
+            # (at 0, the side it moves into): the force along the step is smooth, so the
+            # error estimate holds, and a trial that leaves its side is taken again ending
+            # where it leaves (below).  A step that ends on a crossing is never stretched
+            # to an output time.
+            if refined and dt > dtp:
+                dt = dtp
+                land = False
+            into = u[0] > 0.0 or (u[0] == 0.0 and v[0] >= 0.0)
+            if forced == 1:
+                into = not into
+            side = FREE if into else CONTACT
+            if forced == 2:
+                side = BOTH
+        tfloor = _trial_floor(scheme, floor, side)
+        if sides and forced > 0:
+            # the start's derivative under the law the trial takes (it differs from the
+            # law at the start by the floor stress across the switch)
+            full_accel(system, rod, tfloor, u, v, cur[2], work[0], work[1], bool(False))
+        r = step(scheme, system, rod, tfloor, u, v, cur[2], u2, v2, nxt[2], work, sstats, dt)
         status = r.status
         val = r.value
         emin = r.min_strain
         if status == INACCURATE and fixed:
             status = OK   # fixed steps: the state is valid; the error estimate is not asked
-        if (status == OK and not fixed and not refined
+        if sides and status == OK and not fixed and side != BOTH:
+            # where u_0 first leaves the trial's side, an excursion inside the step included
+            sc = hermite_exit(u[0], v[0], cur[2][0], u2[0], v2[0], nxt[2][0], dt, side == FREE)
+            if sc <= 1.0 and not refined:
+                if sc > C.EVENT_MIN and sc * dt >= ctrl.dt_min:
+                    dtp = sc * dt
+                    refined = True
+                    continue
+                # it leaves its side at once: the same step on the other side, and if it
+                # leaves that too, with the law itself
+                forced += 1
+                dtp = dt
+                count[L.REJECTED] += 1
+                continue
+        elif (status == OK and not fixed and not refined
                 and (u[0] < 0.0) != (u2[0] < 0.0)):
             # σ_b has a kink at u_0 = 0 (its stiffness jumps from 0 to 3κ_b/β): a step that
             # straddles it makes an O(dt²) energy error, and one sized for flight that ends
@@ -328,7 +400,7 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
             if inside:
                 # the extra stages of the continuous extension, once for every output of
                 # the step; one outside the admissible set retries the step shorter
-                status, val = dense_setup(scheme, system, rod, floor, u, v, cur[2], u2, v2,
+                status, val = dense_setup(scheme, system, rod, tfloor, u, v, cur[2], u2, v2,
                                           nxt[2], work, dt)
         if status != OK:
             count[L.REJECTED] += 1
@@ -344,6 +416,12 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
             dtp = retry
             after_reject = True
             continue
+        if sides and side != BOTH and (side == FREE) != (u2[0] >= 0.0):
+            # the step ended a sliver across the switch: the new state's derivative
+            # under the law itself, so the next step starts consistent
+            full_accel(system, rod, _trial_floor(scheme, floor, BOTH), u2, v2, nxt[2],
+                       work[0], work[1], bool(False))
+        forced = 0
         t_new = target if land else t + dt
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
               w, r.w, r.floor_force, emin)

@@ -108,6 +108,22 @@ def floor_value(h, p):
 
 
 @step_kernel
+def floor_extension(h, p):
+    # the contact branch for any h > −β: smooth through 0, where it meets the free side
+    inv = 1.0 / (h + p.beta)
+    r = p.beta * inv
+    return -p.kappa_b * (h * inv) * (r * r + r + 1.0)
+
+
+@step_kernel
+def floor_extension_deriv(h, p):
+    s = h + p.beta
+    s2 = s * s
+    b = p.beta
+    return -3.0 * p.kappa_b * (b * b * b) / (s2 * s2)
+
+
+@step_kernel
 def floor_deriv(h, p):
     if h > 0.0:
         return 0.0
@@ -189,6 +205,8 @@ FLOOR = register(
         primitive=floor_primitive,
         lower=floor_lower,
         difference=floor_difference,
+        extension=floor_extension,
+        extension_deriv=floor_extension_deriv,
         description="σ_b(h) = κ_b (β³/(h+β)³ − 1) for h ≤ 0, singular as h ↓ −β",
     )
 )

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, NamedTuple
 
 from . import registered
 from ..._jit import overload, python_function
@@ -62,6 +62,12 @@ class Law:
     difference : callable, optional
         Compiled ``(a, b, params)`` -> (divided difference of the primitive, its slope in
         b, the stress at b).
+    extension, extension_deriv : callable, optional
+        Floor laws only: compiled ``(x, params)`` -> the contact branch (x ≤ 0) continued
+        smoothly past 0, and its derivative.  With both, the embedded pairs take each trial
+        step with the law of the side of the contact switch the step starts on
+        (``Sided``) and end the step where it leaves that side, so no step integrates
+        across the switch's kink; without them the pairs step with the law itself.
     """
 
     name: str
@@ -75,6 +81,37 @@ class Law:
     description: str = ""
     deriv_max: Callable | None = None
     difference: Callable | None = None
+    extension: Callable | None = None
+    extension_deriv: Callable | None = None
+
+
+class Sided(NamedTuple):
+    """A floor law held to one side of its contact switch at x = 0 (``side``): ``FREE``
+    (σ_b ≡ 0, the law above the floor continued below it), ``CONTACT`` (the contact branch
+    continued above 0, ``Law.extension``), or ``BOTH`` (the law itself).  An explicit pair
+    takes each trial step with the side its start is on, so the force along the step is
+    smooth and the pair's error estimate holds; the loop ends a step that leaves its side
+    on the crossing."""
+
+    law: Any
+    side: int
+
+
+BOTH = 0
+FREE = 1
+CONTACT = 2
+
+
+def is_sided_type(numba_type) -> bool:
+    """Whether a Numba type is that of ``Sided`` parameters."""
+    return getattr(numba_type, "instance_class", None) is Sided
+
+
+def has_extension(params_cls) -> bool:
+    """Whether the law of the parameter class ``params_cls`` continues its contact branch
+    past 0 (``Law.extension`` and ``Law.extension_deriv``)."""
+    law = _BY_TYPE.get(params_cls)
+    return law is not None and law.extension is not None and law.extension_deriv is not None
 
 
 _BY_TYPE: dict[type, Law] = {}
@@ -127,7 +164,8 @@ def _fingerprint(law: Law) -> str:
     h = hashlib.sha1()
     parts = [law.params] + [getattr(f, "py_func", f) for f in
                             (law.value, law.deriv, law.primitive, law.lower, law.deriv_max,
-                             law.difference) if f is not None]
+                             law.difference, law.extension, law.extension_deriv)
+                            if f is not None]
     for obj in parts:
         h.update(f"{obj.__module__}.{obj.__qualname__}".encode())
         code = getattr(obj, "__code__", None)
@@ -229,7 +267,21 @@ def value(x, p):
     float
         The stress [N].
     """
+    if type(p) is Sided:
+        return _sided_python(x, p, "value")
     return _BY_TYPE[type(p)].value(x, p)
+
+
+def _sided_python(x, p, which):
+    """``value`` or ``deriv`` of ``Sided`` parameters, from Python (the overloads below
+    are the compiled ones)."""
+    law = _BY_TYPE[type(p.law)]
+    ext = law.extension if which == "value" else law.extension_deriv
+    if p.side == FREE and ext is not None:
+        return 0.0
+    if p.side == CONTACT and ext is not None:
+        return python_function(ext)(x, p.law)
+    return python_function(getattr(law, which))(x, p.law)
 
 
 def deriv(x, p):
@@ -246,6 +298,8 @@ def deriv(x, p):
     -------
     float
     """
+    if type(p) is Sided:
+        return _sided_python(x, p, "deriv")
     return _BY_TYPE[type(p)].deriv(x, p)
 
 
@@ -296,26 +350,55 @@ def max_deriv(u, ih, lo, hi, p):
     return m
 
 
+def _sided(which):
+    """The compiled ``which`` ("value" or "deriv") of a ``Sided`` law's numba type."""
+    def make(p):
+        law = law_for_numba_type(p.types[0])
+        impl = getattr(law, which)
+        ext = getattr(law, "extension" if which == "value" else "extension_deriv")
+        if ext is None:
+            return lambda x, p: impl(x, p.law)
+
+        def sided(x, p):
+            if p.side == FREE:
+                return 0.0
+            if p.side == CONTACT:
+                return ext(x, p.law)
+            return impl(x, p.law)
+        return sided
+    return make
+
+
 @overload(value)
 def _value_ov(x, p):
+    if is_sided_type(p):
+        return _sided("value")(p)
     impl = law_for_numba_type(p).value
     return lambda x, p: impl(x, p)
 
 
 @overload(deriv)
 def _deriv_ov(x, p):
+    if is_sided_type(p):
+        return _sided("deriv")(p)
     impl = law_for_numba_type(p).deriv
     return lambda x, p: impl(x, p)
 
 
 @overload(primitive)
 def _primitive_ov(x, p):
+    if is_sided_type(p):
+        impl = law_for_numba_type(p.types[0]).primitive
+        return lambda x, p: impl(x, p.law)
     impl = law_for_numba_type(p).primitive
     return lambda x, p: impl(x, p)
 
 
 @overload(lower)
 def _lower_ov(p):
+    if is_sided_type(p):
+        impl = law_for_numba_type(p.types[0]).lower
+        return lambda p: impl(p.law)
     impl = law_for_numba_type(p).lower
     return lambda p: impl(p)
 
