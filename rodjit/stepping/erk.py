@@ -21,9 +21,13 @@ for dp54, 7 for dop853); how much it may exceed the previous proposal is the loo
 
 Admissibility: every stage state is checked (ε > −1, u_0 > −β, finite); a stage outside
 returns its failure code and the loop retries a quarter of the step.  The floor force has
-a kink at u_0 = 0 (σ_b' jumps from 0 to 3κ_b/β): the loop ends an adaptive step on each
-crossing (``loop.advance``), so a step straddles it by a sliver at most and the error keeps
-following the tolerance through the bounces (a pair stepping across it stalls near 1e-4).
+a kink at u_0 = 0 (σ_b' jumps from 0 to 3κ_b/β), which the error estimate cannot see: a
+pair stepping across it stalls near 1e-4, and a pair that only ends its accepted steps on
+the crossings rejects trial after trial there.  So the loop (``loop.advance``) gives each
+adaptive trial the floor law of the side its start is on (``laws.Sided``: σ_b ≡ 0, or the
+contact branch continued past 0), a smooth force for which the estimate holds, and takes a
+trial that leaves its side again, ending on the crossing.  The step's stages never see
+the kink, whatever side they reach.
 
 Explicit pairs are stability-bound: dt times every eigenvalue of the linearised system must
 stay inside the pair's stability region (it reaches about −3.3 on the negative real axis for

@@ -32,6 +32,16 @@ one that a scheme rejects for accuracy (status INACCURATE: its error estimate is
 large) is retried at the scheme's ``dt_suggest``, and under fixed steps accepted as it is
 (a scheme then returns a valid state with INACCURATE).  Every step-size rule is in
 ``control``.
+
+Floor crossings (σ_b has a kink at u_0 = 0).  An adaptive step never integrates across the
+kink.  The embedded pairs, with a floor law that has an extension (``_holds_sides``), take
+each trial with the law of the side of u_0 = 0 its start is on (``laws.Sided``), so its
+force is smooth and its error estimate valid; a trial that leaves its side
+(``events.hermite_exit``, an excursion inside the step included) is taken again ending
+where it leaves (never stretched to an output time), one that leaves at once is taken on
+the side it moves into, and a state left a sliver across the switch gets its derivative
+under the law itself, so the next step starts consistent.  The other schemes step with the
+law itself and take an accepted step that crossed again, ending on the crossing.
 """
 import numpy as np
 
