@@ -32,7 +32,9 @@ Numba options of every rodjit kernel, see ``rodjit._jit``: so a law must not all
                  from_config=lambda rod: LnRod(float(rod.kappa)), value=ln_stress,
                  deriv=ln_slope, primitive=ln_energy, lower=ln_lower))
 
-``Law`` documents the two optional shortcuts (``deriv_max``, ``difference``).
+``Law`` documents the two optional shortcuts (``deriv_max``, ``difference``) and, for a floor
+law, the optional continuation of its contact branch past 0 (``extension``,
+``extension_deriv``) with which the embedded pairs step each side of the switch smoothly.
 """
 from ._jit import kernel as law_kernel
 from .model.laws import (AikiKosugiFloor, AikiKosugiRod, Law, deriv, get_law, law_names, law_of,
