@@ -258,7 +258,9 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     u = state[0]
     v = state[1]
     a = state[2]
-    r = initial(scheme, system, rod, floor, u, v, a, work)
+    # the pairs' steps take the floor law as ``Sided`` (``_trial_floor``): the start takes
+    # it too (the law itself), so their kernels compile for one floor type, not two
+    r = initial(scheme, system, rod, _trial_floor(scheme, floor, BOTH), u, v, a, work)
     status = r.status
     if status != OK:
         fail[L.F_CODE] = status
