@@ -60,7 +60,7 @@ def test_sided_law_values_compiled_and_python(h):
 def test_contact_extension_is_smooth_through_the_switch():
     """The extension and its derivative are continuous at 0 and the derivative is the
     extension's slope (so a CONTACT trial sees a smooth force)."""
-    ext, dext = ak.floor_extension.py_func, ak.floor_extension_deriv.py_func
+    ext, dext = ak.floor_contact.py_func, ak.floor_contact_deriv.py_func
     assert ext(0.0, FLOOR) == 0.0
     for h in (-1e-3, 0.0, 1e-3, 0.02):
         eps = 1e-7

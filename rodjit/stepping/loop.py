@@ -359,10 +359,6 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
             if forced == 2:
                 side = BOTH
         tfloor = _trial_floor(scheme, floor, side)
-        if sides and forced > 0:
-            # the start's derivative under the law the trial takes (it differs from the
-            # law at the start by the floor stress across the switch)
-            full_accel(system, rod, tfloor, u, v, cur[2], work[0], work[1], bool(False))
         r = step(scheme, system, rod, tfloor, u, v, cur[2], u2, v2, nxt[2], work, sstats, dt)
         status = r.status
         val = r.value
@@ -378,8 +374,13 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
                     refined = True
                     continue
                 # it leaves its side at once: the same step on the other side, and if it
-                # leaves that too, with the law itself
+                # leaves that too, with the law itself; the start's derivative once under
+                # the law those trials take (it differs from the one at the start by the
+                # floor stress across the switch)
                 forced += 1
+                nside = BOTH if forced == 2 else (CONTACT if side == FREE else FREE)
+                full_accel(system, rod, _trial_floor(scheme, floor, nside), u, v, cur[2],
+                           work[0], work[1], bool(False))
                 dtp = dt
                 count[L.REJECTED] += 1
                 continue

@@ -98,40 +98,35 @@ def rod_lower(p):
 
 
 @step_kernel
-def floor_value(h, p):
-    # κ_b (r³ − 1), r = β/(h+β); r³ − 1 = (r − 1)(r² + r + 1) and r − 1 = −h/(h+β)
-    if h > 0.0:
-        return 0.0
+def floor_contact(h, p):
+    # the contact branch κ_b (r³ − 1), r = β/(h+β), for any h > −β (smooth through 0, where
+    # it meets the free side): r³ − 1 = (r − 1)(r² + r + 1) and r − 1 = −h/(h+β)
     inv = 1.0 / (h + p.beta)     # one division (the floor is evaluated several times a step)
     r = p.beta * inv
     return -p.kappa_b * (h * inv) * (r * r + r + 1.0)
 
 
 @step_kernel
-def floor_extension(h, p):
-    # the contact branch for any h > −β: smooth through 0, where it meets the free side
-    inv = 1.0 / (h + p.beta)
-    r = p.beta * inv
-    return -p.kappa_b * (h * inv) * (r * r + r + 1.0)
-
-
-@step_kernel
-def floor_extension_deriv(h, p):
+def floor_contact_deriv(h, p):
+    # −3κ_b r⁴/β = −3κ_b β³/(h+β)⁴: one division
     s = h + p.beta
     s2 = s * s
     b = p.beta
     return -3.0 * p.kappa_b * (b * b * b) / (s2 * s2)
+
+
+@step_kernel
+def floor_value(h, p):
+    if h > 0.0:
+        return 0.0
+    return floor_contact(h, p)
 
 
 @step_kernel
 def floor_deriv(h, p):
     if h > 0.0:
         return 0.0
-    # −3κ_b r⁴/β = −3κ_b β³/(h+β)⁴: one division
-    s = h + p.beta
-    s2 = s * s
-    b = p.beta
-    return -3.0 * p.kappa_b * (b * b * b) / (s2 * s2)
+    return floor_contact_deriv(h, p)
 
 
 @step_kernel
@@ -205,8 +200,8 @@ FLOOR = register(
         primitive=floor_primitive,
         lower=floor_lower,
         difference=floor_difference,
-        extension=floor_extension,
-        extension_deriv=floor_extension_deriv,
+        extension=floor_contact,
+        extension_deriv=floor_contact_deriv,
         description="σ_b(h) = κ_b (β³/(h+β)³ − 1) for h ≤ 0, singular as h ↓ −β",
     )
 )

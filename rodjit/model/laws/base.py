@@ -272,16 +272,21 @@ def value(x, p):
     return _BY_TYPE[type(p)].value(x, p)
 
 
+def _sided_parts(law: Law, which: str):
+    """``(the law's function, its contact-branch continuation or None)`` for ``which``
+    ("value" or "deriv"): what ``Sided`` parameters choose between, from Python and in
+    compiled code alike."""
+    return getattr(law, which), getattr(law, "extension" if which == "value"
+                                        else "extension_deriv")
+
+
 def _sided_python(x, p, which):
-    """``value`` or ``deriv`` of ``Sided`` parameters, from Python (the overloads below
-    are the compiled ones)."""
-    law = _BY_TYPE[type(p.law)]
-    ext = law.extension if which == "value" else law.extension_deriv
-    if p.side == FREE and ext is not None:
-        return 0.0
-    if p.side == CONTACT and ext is not None:
-        return python_function(ext)(x, p.law)
-    return python_function(getattr(law, which))(x, p.law)
+    """``value`` or ``deriv`` of ``Sided`` parameters, from Python (``_sided`` makes the
+    compiled ones)."""
+    impl, ext = _sided_parts(_BY_TYPE[type(p.law)], which)
+    if ext is None or p.side == BOTH:
+        return python_function(impl)(x, p.law)
+    return 0.0 if p.side == FREE else python_function(ext)(x, p.law)
 
 
 def deriv(x, p):
@@ -353,9 +358,7 @@ def max_deriv(u, ih, lo, hi, p):
 def _sided(which):
     """The compiled ``which`` ("value" or "deriv") of a ``Sided`` law's numba type."""
     def make(p):
-        law = law_for_numba_type(p.types[0])
-        impl = getattr(law, which)
-        ext = getattr(law, "extension" if which == "value" else "extension_deriv")
+        impl, ext = _sided_parts(law_for_numba_type(p.types[0]), which)
         if ext is None:
             return lambda x, p: impl(x, p.law)
 
