@@ -178,8 +178,12 @@ def test_xarray_opens_every_group_of_a_sweep_file(sweep_file):
         assert ds["restitution_mean"].dims == ("point",)
         assert {"rod.mu", "floor.kappa_b"} <= set(ds.coords)      # swept keys: coordinates
         assert ds["rod.mu"].attrs["units"] == rodjit.config.field_spec("rod.mu").unit
+    with xr.open_dataset(sweep_file, group="bounces", engine="h5netcdf") as ds:
+        assert ds["t_impact"].dims == ("bounce",) and ds["t_impact"].size > 0
+        assert ds["point_index"].attrs["instance_dimension"] == "point"
     with h5py.File(sweep_file, "r") as f:
-        b = f["points/0/bounces"]
+        assert f.attrs["format_version"] == 3
+        b = f["bounces"]
         assert b["open"].dtype == np.int8 and b["t_impact"].size > 0
 
 

@@ -6,6 +6,8 @@ from click.testing import CliRunner
 
 import rodjit
 from rodjit import reports
+from rodjit.output import run_layout
+from rodjit.sweeps import sweep_file
 from rodjit.cli import main
 
 
@@ -25,7 +27,9 @@ def test_both_kinds_share_the_layout(files, kind, title):
     path = str(files / f"{kind}.h5")
     text = reports.info(path)
     lines = text.splitlines()
-    assert lines[0].startswith(f"rodjit {kind} file {path} (format 2, written by rodjit ")
+    version = {"run": run_layout.FORMAT_VERSION, "sweep": sweep_file.FORMAT_VERSION}[kind]
+    assert lines[0].startswith(f"rodjit {kind} file {path} (format {version}, written by "
+                               f"rodjit ")
     assert lines[1].startswith("created   ") and lines[2] == f"command   rodjit {kind} test"
     assert lines[3] == "status    completed"
     _, about = reports.about(path)

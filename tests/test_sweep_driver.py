@@ -73,21 +73,29 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
     same_values(loaded, inline_table)
     with h5py.File(path, "r") as f:
         a = f.attrs
-        assert a["rodjit_kind"] == "sweep" and a["format_version"] == 2
+        assert a["rodjit_kind"] == "sweep" and a["format_version"] == 3
         assert a["status"] == "completed" and a["command"] == "test sweep"
         assert rodjit.Config.from_toml_string(a["base_config_toml"]) == BASE
         assert Grid.from_json(a["grid"]) == Grid.from_spec(GRID)
         assert list(a["grid_keys"]) == ["rod.mu", "floor.beta"] and a["n_points"] == 4
         s = f["summary"]
-        assert list(s) == ["point", "rod.mu", "floor.beta", *SUMMARY_COLUMNS]   # dimension, then table order
+        # the dimension, then table order, then where each point's bounce rows are
+        assert list(s) == ["point", "rod.mu", "floor.beta", *SUMMARY_COLUMNS,
+                           "bounce_start", "bounce_count"]
         assert s["rod.mu"].dtype == np.float64 and s["steps"].dtype == np.int64
         assert h5py.check_string_dtype(s["status"].dtype)
         assert all(s[c].shape == (4,) for c in s)
+        assert "points" not in f                # format 3: one bounce table for all points
+        g = f["bounces"]
+        assert list(g) == ["bounce", "point_index", *BOUNCE_COLUMNS]
         for i in range(4):
-            g = f[f"points/{i}/bounces"]
-            assert list(g) == list(BOUNCE_COLUMNS)
+            start, count = int(s["bounce_start"][i]), int(s["bounce_count"][i])
+            assert count == inline_table.bounces(i)["t_impact"].size
+            rows = slice(start, start + count)
+            assert np.all(g["point_index"][rows] == i)
             for name in BOUNCE_COLUMNS:
-                assert np.array_equal(g[name][()], inline_table.bounces(i)[name], equal_nan=True)
+                assert np.array_equal(g[name][rows], inline_table.bounces(i)[name],
+                                      equal_nan=True)
     df = rodjit.load_sweep(path).to_pandas()                # the README's one line
     assert list(df.columns) == list(loaded.columns) and len(df) == 4
     assert df.loc[3, "status"] == "completed" and df["steps"].dtype == np.int64
@@ -186,7 +194,8 @@ def test_resume_reruns_failed_points_only(tmp_path, inline_table):
     with h5py.File(path, "r+") as f:        # as if point 1 had failed
         f["summary/status"][1] = "failed"
         f["summary/steps"][1] = 0
-        del f["points/1"]
+        f["summary/bounce_count"][1] = 0      # a failed point has no bounce rows
+        f["summary/bounce_start"][1] = -1
     walls = rodjit.load_sweep(path)["wall_time"].copy()
     table = rodjit.sweep(BASE, GRID, output=path, resume=True, scheduler="inline")
     assert table.stats["points_run"] == 1

@@ -1,12 +1,20 @@
 """The sweep file: one HDF5 file per sweep, a summary row per grid point (public contract).
 
-Layout (README "Sweeps"), format 2: root attributes (``rodjit_kind = "sweep"``, version,
+Layout (README "Sweeps"), format 3: root attributes (``rodjit_kind = "sweep"``, version,
 base configuration as TOML, the grid as JSON, command, status, the CF ones);
 ``/summary/<column>``, 1-D along the dimension ``/summary/point`` (the point's index), one
 row per point in grid order (the swept keys, which are the data's coordinates, then
-``point.SUMMARY_COLUMNS``); and ``/points/<index>/bounces/<column>``, the bounce table of
-each point that ran, along its ``t_impact``.  Format 1, still read and continued, had no
-``point`` dimension and stored ``open`` as bool.
+``point.SUMMARY_COLUMNS``); and ``/bounces/<column>``, the bounce rows of every point in one
+table along the dimension ``/bounces/bounce``.  The bounce table is a CF *indexed ragged
+array*: ``/bounces/point_index`` (``instance_dimension = "point"``) gives each row's point.
+Rows are appended as points are written, so they are grouped by point (each point's rows
+are contiguous) but not in point order; ``/summary/bounce_start`` and
+``/summary/bounce_count`` locate a point's rows without a search.  The number of HDF5
+objects is fixed by the columns, whatever the number of points.
+
+Format 2, still read and continued in its own layout, kept each point's bounce table in a
+group ``/points/<index>/bounces/<column>`` of its own (ten datasets a point); format 1 had
+no ``point`` dimension either and stored ``open`` as bool.
 
 Every row exists from the start, ``status = "pending"`` until its point reports.  The parent
 process is the only writer; it opens the file for each batch of results and closes it
@@ -40,13 +48,21 @@ from .grid import Grid
 from .point import SUMMARY_COLUMNS, empty_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
-           "read_header", "read_summary", "read_bounces", "check_sweep_file", "key_columns",
+           "read_header", "read_summary", "read_bounces", "read_all_bounces", "join_bounces", "check_sweep_file", "key_columns",
            "open_sweep", "reopen"]
 
 KIND = "sweep"
-FORMAT_VERSION = 2
-READS = (1, 2)          # the formats this version reads and continues
+FORMAT_VERSION = 3
+READS = (1, 2, 3)       # the formats this version reads and continues
 POINT = "point"         # the summary's dimension
+BOUNCES = "bounces"     # format 3: the group of the one bounce table of every point
+ROW = "bounce"          # its dimension (the row number)
+POINT_INDEX = "point_index"     # each bounce row's point
+# the summary datasets that locate each point's bounce rows (format 3); not table columns
+RAGGED = {"bounce_start": "first row of the point's bounces in /bounces (-1: none written)",
+          "bounce_count": "number of the point's rows in /bounces (CF count of the ragged "
+                          "bounce table)"}
+BOUNCE_CHUNK = 4096     # rows per chunk of the bounce table
 STATUSES = ("running", "completed", "interrupted", "failed")
 LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file before failing
 # disk space reserved before a write (bytes): the file grows by less, measured at ~11 KiB a
@@ -160,13 +176,47 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
             if coordinates:
                 ds.attrs["coordinates"] = coordinates
             ds.dims[0].attach_scale(point)
-        p = f.create_group("points")
-        p.attrs["description"] = "per point: its bounce table (the run file's /bounces columns)"
+        for name, text in RAGGED.items():
+            ds = s.create_dataset(name, data=np.full(n, -1 if name == "bounce_start" else 0,
+                                                     np.int64), chunks=chunk)
+            ds.attrs.update(description=text, long_name=text, units="1")
+            ds.dims[0].attach_scale(point)
+        _create_bounces(f)
+
+
+def _create_bounces(f: h5py.File) -> None:
+    """The empty bounce table of a new format-3 file: the run file's ``/bounces`` columns
+    and each row's point, growing along ``bounce``."""
+    g = f.create_group(BOUNCES, track_order=True)
+    g.attrs["description"] = ("the bounce rows of every point (the run file's /bounces "
+                              "columns); point_index gives each row's point; a point's rows "
+                              "are contiguous, the points in the order they were written")
+    g.attrs["rows"] = 0           # rows written; later ones are the remains of a cut write
+    opts = dict(shape=(0,), maxshape=(None,), chunks=(BOUNCE_CHUNK,))
+    row = g.create_dataset(ROW, dtype=np.int64, **opts)
+    row.make_scale(ROW)
+    row.attrs.update(long_name="row of the bounce table", units="1")
+    ds = g.create_dataset(POINT_INDEX, dtype=np.int64, **opts)
+    ds.attrs.update(long_name="index of the grid point of the bounce row", units="1",
+                    instance_dimension=POINT)
+    ds.dims[0].attach_scale(row)
+    empty = empty_bounces()
+    for name in BOUNCE_COLUMNS:
+        dtype = np.asarray(empty[name]).dtype
+        ds = g.create_dataset(name, dtype=cf.BOOL_DTYPE if dtype == bool else dtype, **opts)
+        ds.attrs.update(cf.column_attrs("bounces", name))
+        ds.dims[0].attach_scale(row)
+
+
+def _version(f: h5py.File) -> int:
+    return int(f.attrs.get("format_version", 1))
 
 
 def reopen(path, *, history: str) -> None:
     """Mark a sweep file running again (resume), recording who continues it."""
     with _writing(path, "r+", reserve=RESERVE_BASE) as f:
+        if _version(f) >= 3:
+            _cut_bounces(f)
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         f.attrs["history"] = history_with(f, history)
@@ -187,18 +237,62 @@ def write_results(path, results, wait: float = LOCK_WAIT) -> None:
                 continue      # last: a row counts as done only once all of it is there
             vals = [r.values[name] for r in results]
             s[name][idx] = np.array(vals, dtype=object if kind == "str" else _DTYPES[kind])
-        p = f["points"]
-        for r in results:
-            key = str(r.index)
-            if key in p:
-                del p[key]
-            b = p.create_group(key).create_group("bounces", track_order=True)
-            if "format_version" in f.attrs and int(f.attrs["format_version"]) == 1:
-                for name in BOUNCE_COLUMNS:
-                    b.create_dataset(name, data=np.asarray(r.bounces[name]))
-                continue
-            _bounce_table(b, r.bounces)
+        if _version(f) >= 3:
+            _append_bounces(f, idx, [r.bounces for r in results])
+        else:
+            _point_groups(f, results)
         s["status"][idx] = np.array([r.status for r in results], dtype=object)
+
+
+def _append_bounces(f: h5py.File, idx: np.ndarray, tables) -> None:
+    """Append the bounce rows of the points ``idx`` (increasing) to the one table, and
+    record where each point's rows are."""
+    g, s = f[BOUNCES], f["summary"]
+    n0 = int(g.attrs["rows"])
+    counts = np.array([len(t["t_impact"]) for t in tables], dtype=np.int64)
+    starts = n0 + np.cumsum(counts) - counts
+    n1 = n0 + int(counts.sum())
+    if n1 > n0:
+        names = (ROW, POINT_INDEX) + tuple(BOUNCE_COLUMNS)
+        for name in names:
+            g[name].resize((n1,))
+        g[ROW][n0:n1] = np.arange(n0, n1, dtype=np.int64)
+        g[POINT_INDEX][n0:n1] = np.repeat(idx, counts)
+        for name in BOUNCE_COLUMNS:
+            data = np.concatenate([np.asarray(t[name]) for t in tables])
+            g[name][n0:n1] = data.astype(cf.BOOL_DTYPE) if data.dtype == bool else data
+    s["bounce_count"][idx] = counts
+    s["bounce_start"][idx] = np.where(counts > 0, starts, -1)
+    g.attrs["rows"] = n1
+
+
+def _cut_bounces(f: h5py.File) -> None:
+    """Cut the bounce table to the rows of the points marked done: rows past them are
+    what a write cut short left (their points are pending and run again)."""
+    g, s = f[BOUNCES], f["summary"]
+    done = s["status"].asstr()[()] != "pending"
+    start, count = s["bounce_start"][()], s["bounce_count"][()]
+    ends = (start + count)[done & (count > 0)]
+    rows = int(ends.max()) if ends.size else 0
+    for name in (ROW, POINT_INDEX) + tuple(BOUNCE_COLUMNS):
+        if g[name].shape[0] != rows:
+            g[name].resize((rows,))
+    g.attrs["rows"] = rows
+
+
+def _point_groups(f: h5py.File, results) -> None:
+    """Formats 1 and 2: each point's bounce table in a group of its own."""
+    p = f["points"]
+    for r in results:
+        key = str(r.index)
+        if key in p:
+            del p[key]
+        b = p.create_group(key).create_group("bounces", track_order=True)
+        if _version(f) == 1:
+            for name in BOUNCE_COLUMNS:
+                b.create_dataset(name, data=np.asarray(r.bounces[name]))
+            continue
+        _bounce_table(b, r.bounces)
 
 
 def _batch_bytes(results) -> int:
@@ -255,8 +349,8 @@ def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
     """The summary columns, in file order; text columns as arrays of str."""
     out = {}
     for name, ds in f["summary"].items():
-        if name == POINT and ds.is_scale:
-            continue                      # the dimension, not a column
+        if (name == POINT and ds.is_scale) or name in RAGGED:
+            continue                      # the dimension, the bounce rows' locators
         out[name] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
                      else ds[()])
     return out
@@ -264,11 +358,51 @@ def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
 
 def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
     """Point ``index``'s bounce table (empty columns if the point has not run)."""
+    if _version(f) >= 3:
+        start = int(f["summary/bounce_start"][index])
+        count = int(f["summary/bounce_count"][index])
+        if start < 0 or count == 0:
+            return empty_bounces()
+        g = f[BOUNCES]
+        out = {name: g[name][start:start + count] for name in BOUNCE_COLUMNS}
+        out["open"] = cf.as_bool(out["open"])
+        return out
     g = f["points"].get(str(index))
     if g is None:
         return empty_bounces()
     out = {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
     out["open"] = cf.as_bool(out["open"])
+    return out
+
+
+def read_all_bounces(f: h5py.File) -> dict[str, np.ndarray]:
+    """Every point's bounce rows in one table, ordered by point (then by time), with the
+    column ``point``: each row's grid point.  Any format."""
+    if _version(f) < 3:
+        return join_bounces((i, read_bounces(f, i)) for i in range(int(f.attrs["n_points"])))
+    s, g = f["summary"], f[BOUNCES]
+    done = s["status"].asstr()[()] != "pending"
+    start, count = s["bounce_start"][()], s["bounce_count"][()]
+    points = np.flatnonzero(done & (count > 0))
+    c = count[points]
+    offset = np.cumsum(c) - c               # where each point's rows go in the result
+    take = np.arange(int(c.sum()), dtype=np.int64) + np.repeat(start[points] - offset, c)
+    out = {"point": np.repeat(points, c)}
+    for name in BOUNCE_COLUMNS:
+        out[name] = g[name][()][take]
+    out["open"] = cf.as_bool(out["open"])
+    return out
+
+
+def join_bounces(tables) -> dict[str, np.ndarray]:
+    """One table of ``(point, bounce table)`` pairs, with the column ``point``."""
+    tables = list(tables)
+    empty = empty_bounces()
+    out = {"point": np.concatenate([np.full(len(t["t_impact"]), i, np.int64)
+                                    for i, t in tables] or [np.zeros(0, np.int64)])}
+    for name in BOUNCE_COLUMNS:
+        out[name] = np.concatenate([np.asarray(t[name]) for _, t in tables]
+                                   or [np.asarray(empty[name])])
     return out
 
 

@@ -36,7 +36,8 @@ class SweepTable:
     What ``rodjit.sweep`` returns and ``load_sweep`` reads.  ``table["restitution_first"]``
     is a column; ``len(table)`` the number of points; ``to_pandas()`` a DataFrame indexed by
     point; ``to_xarray()`` a Dataset with one dimension per swept key; ``bounces(i)`` point
-    i's bounce table (read from the file, or kept in memory for a sweep without one).
+    i's bounce table (read from the file, or kept in memory for a sweep without one);
+    ``bounce_rows()`` every point's bounce rows in one table.
 
     Attributes
     ----------
@@ -129,6 +130,21 @@ class SweepTable:
             return empty_bounces()
         with sweep_file.open_sweep(self.path) as f:
             return sweep_file.read_bounces(f, index)
+
+    def bounce_rows(self) -> dict[str, np.ndarray]:
+        """Every point's bounce table in one: the bounce columns and ``point`` (each row's
+        grid point), ordered by point and, within a point, by time.
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            ``point``, then the run file's ``/bounces`` columns (``t_impact``,
+            ``restitution``, ...); the rows of the points that have run.
+        """
+        if self.path is None or self._bounces:
+            return sweep_file.join_bounces(sorted(self._bounces.items()))
+        with sweep_file.open_sweep(self.path) as f:
+            return sweep_file.read_all_bounces(f)
 
     def to_pandas(self):
         """A pandas DataFrame, one row per point (index: the point number)."""
