@@ -721,7 +721,9 @@ class Config:
     def _replaced(self, changes: Mapping[str, Any], *, text: bool) -> "Config":
         """``override``; ``text``: strings for non-text keys are parsed as TOML values (else
         they are an error naming the key, as in a TOML file)."""
-        sections = {name: dataclasses.asdict(getattr(self, name)) for name in _SECTIONS}
+        # only the sections a change touches are rebuilt (and checked again); the others
+        # are the same frozen objects (a sweep builds one configuration per point)
+        sections: dict[str, dict[str, Any]] = {}
         for key, value in changes.items():
             if not isinstance(key, str) or "." not in key:
                 raise _unknown_key_error(str(key))
@@ -732,8 +734,12 @@ class Config:
                 value = parse_value(key, value)
             elif text and isinstance(value, str) and _FIELDS[section][name].kind == "str":
                 value = _strip_quotes(value)
+            if section not in sections:
+                sections[section] = dataclasses.asdict(getattr(self, section))
             sections[section][name] = value
-        return Config(**{name: cls(**sections[name]) for name, cls in _SECTIONS.items()})
+        return Config(**{name: (cls(**sections[name]) if name in sections
+                                else getattr(self, name))
+                         for name, cls in _SECTIONS.items()})
 
     # ---- export -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, dict[str, Any]]:
