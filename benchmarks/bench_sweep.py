@@ -11,6 +11,13 @@ the overhead per point.
    each), 1 job.  Overhead per point = (sweep time − start-up) × jobs / points − the point's
    own stepping time (``run_time``): dispatch, the point's set-up in its worker, the result's
    trip back and its HDF5 row.  Target < 20 ms.
+4. The 2000-point grid μ (200 values in [0, 100]) × κ_b ∈ {1000, 3000} × β (5 values) on
+   paper-mu100 with 2 jobs (``--grid-points`` scales μ): the sweep's wall time against the
+   compiled stepping of its points (the sum of their ``run_time`` over the jobs, the lower
+   bound of any sweep engine calling the same loop); target within 1.3x.  The HDF5 objects
+   of its file (target at most 300).  With ``--baseline CHECKOUT`` the same sweep is run
+   by the rodjit of another checkout (``rodjit sweep`` in a child process with that tree
+   first on ``sys.path``), in turns with this one, and the ratio of the two is printed.
 
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
 start-up (the workers importing rodjit and loading the kernels, until all report ready; a
@@ -19,14 +26,19 @@ points per second measure, and the teardown (stopping the workers or the cluster
 end-to-end ratios are printed too.  Each configuration is timed --repeat times in turns
 (best kept), so the machine's load hits every one alike.
 
-    python benchmarks/bench_sweep.py [--repeat 3] [--quick]
+    python benchmarks/bench_sweep.py [--repeat 3] [--quick] [--baseline CHECKOUT]
 """
 from __future__ import annotations
 
 import argparse
+import os
+import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
+
+import h5py
 
 import numpy as np
 
@@ -40,6 +52,77 @@ GRID = {"rod.mu": [0.0, 1.0, 10.0, 100.0], "floor.kappa_b": "logspace(3, 5, 4)",
         "floor.beta": [0.01, 0.02, 0.03, 0.05]}
 SMALL_GRID = {"rod.mu": "linspace(0, 10, 16)", "floor.beta": "linspace(0.01, 0.05, 16)"}
 TARGET_SCALING, TARGET_DASK, TARGET_OVERHEAD = 1.8, 0.15, 0.020
+TARGET_STEPPING, TARGET_OBJECTS = 1.3, 300
+
+
+def big_grid(mu_values: int) -> dict:
+    """The grid of part 4: μ over ``mu_values`` values × 2 κ_b × 5 β."""
+    return {"rod.mu": f"linspace(0, 100, {mu_values})", "floor.kappa_b": [1000.0, 3000.0],
+            "floor.beta": [0.03, 0.05, 0.08, 0.1, 0.12]}
+
+
+def cli_sweep(tree: str, grid: dict, out: Path, jobs: int) -> float:
+    """Wall time of ``rodjit sweep paper-mu100`` over ``grid`` run by the rodjit of the
+    checkout ``tree`` in a child process."""
+    args = [sys.executable, "-m", "rodjit", "sweep", "paper-mu100", "-o", str(out),
+            "--overwrite", "--jobs", str(jobs), "-q"]
+    for key, values in grid.items():
+        text = values if isinstance(values, str) else ",".join(repr(v) for v in values)
+        args += ["--grid", f"{key}={text}"]
+    env = dict(os.environ, PYTHONPATH=str(Path(tree).resolve()))
+    t0 = time.perf_counter()
+    subprocess.run(args, env=env, check=True, cwd=out.parent, stdout=subprocess.DEVNULL)
+    return time.perf_counter() - t0
+
+
+def objects(path) -> int:
+    names: list[str] = []
+    with h5py.File(path, "r") as f:
+        f.visit(names.append)
+    return len(names)
+
+
+def stepping_bound(base, grid: dict, tmp, repeat: int, baseline: str | None) -> dict:
+    """Part 4: the grid's sweep on 2 jobs against the compiled stepping of its points."""
+    jobs = 2
+    here = str(Path(__file__).resolve().parents[1])
+    runs, ratios, base_walls = [], [], []
+    for _ in range(repeat):
+        r = timed_sweep(base, grid, tmp, jobs=jobs)
+        table = rodjit.load_sweep(Path(tmp) / "bench_sweep.h5")
+        r["stepping"] = float(np.sum(table["run_time"])) / jobs
+        r["objects"] = objects(Path(tmp) / "bench_sweep.h5")
+        runs.append(r)
+        if baseline is not None:   # in turns with the same sweep by both trees' CLI
+            a = cli_sweep(here, grid, Path(tmp) / "cli_here.h5", jobs)
+            b = cli_sweep(baseline, grid, Path(tmp) / "cli_base.h5", jobs)
+            ratios.append(b / a)
+            base_walls.append(b)
+    r = min(runs, key=lambda x: x["wall"])
+    out = {"grid": grid, "jobs": jobs, "points": r["points"], "wall": r["wall"],
+           "steady": r["steady"], "stepping": r["stepping"],
+           "wall_over_stepping": r["wall"] / r["stepping"],
+           "steady_over_stepping": r["steady"] / r["stepping"], "objects": r["objects"]}
+    if ratios:
+        out["baseline"] = baseline
+        out["baseline_wall"] = min(base_walls)
+        out["speedup_over_baseline"] = float(np.median(ratios))
+    return out
+
+
+def print_stepping_bound(b: dict) -> None:
+    rows = [[b["points"], b["jobs"], b["wall"], b["steady"], b["stepping"],
+             b["wall_over_stepping"], b["steady_over_stepping"], b["objects"]]]
+    print(_util.table(rows, ["grid points", "jobs", "wall [s]", "steady [s]",
+                             "stepping/jobs [s]", "wall/stepping", "steady/stepping",
+                             "HDF5 objects"]))
+    ok = b["wall_over_stepping"] <= TARGET_STEPPING
+    print(f"   wall / compiled stepping: {b['wall_over_stepping']:.2f}x (target <= "
+          f"{TARGET_STEPPING}x: {'yes' if ok else 'NO'}); HDF5 objects {b['objects']} "
+          f"(target <= {TARGET_OBJECTS}: {'yes' if b['objects'] <= TARGET_OBJECTS else 'NO'})")
+    if "speedup_over_baseline" in b:
+        print(f"   the same sweep by {b['baseline']}: {b['baseline_wall']:.2f} s; this tree "
+              f"is {b['speedup_over_baseline']:.2f}x faster (median of pairs, CLI end to end)")
 
 
 def timed_sweep(base, grid, tmp, **kwargs) -> dict:
@@ -67,7 +150,13 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--quick", action="store_true", help="one repetition, no Dask")
+    ap.add_argument("--grid-points", type=int, default=2000,
+                    help="points of part 4's grid (a multiple of 10; default 2000)")
+    ap.add_argument("--baseline", default=None,
+                    help="a checkout of another rodjit to run part 4's sweep against")
     args = ap.parse_args(argv)
+    if args.grid_points < 10 or args.grid_points % 10:
+        ap.error("--grid-points must be a positive multiple of 10")
     repeat = 1 if args.quick else args.repeat
     _util.header("parameter sweeps: scaling, Dask, overhead per point")
     base = load_preset("paper-mu100")
@@ -89,6 +178,8 @@ def main(argv=None):
                 results[name].append(timed_sweep(base, GRID, tmp, **kw))
             for name, jobs in (("1 job", 1), ("2 jobs", 2)):
                 small_runs[name].append(timed_sweep(small, SMALL_GRID, tmp, jobs=jobs))
+        bound = stepping_bound(base, big_grid(args.grid_points // 10), tmp, repeat,
+                               args.baseline)
     best = {name: best_of(r) for name, r in results.items()}
     one, two = best["1 job"], best["2 jobs"]
     scaling = two["points_per_second"] / one["points_per_second"]
@@ -137,6 +228,9 @@ def main(argv=None):
           f"{1e3 * TARGET_OVERHEAD:g} ms: {'yes' if over < TARGET_OVERHEAD else 'NO'})")
     out["overhead_per_point"] = over
     out["meets_overhead_target"] = over < TARGET_OVERHEAD
+    print_stepping_bound(bound)
+    out["stepping_bound"] = bound
+    out["meets_stepping_target"] = bound["wall_over_stepping"] <= TARGET_STEPPING
     path = _util.save("sweep", out)
     print(f"   -> {path}")
     return out
