@@ -448,6 +448,10 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
             message = (f"interrupted by {name} after {done0 + ran} of {n} points"
                        + (f"; continue with: rodjit sweep --resume -o {output}" if output
                           else ""))
+        if status == "completed" and n and bool(np.all(cols["status"] == "failed")):
+            status = "failed"       # nothing to show for it: the file says so, with why
+            message = (f"every point of the sweep failed ({n}); the first: "
+                       f"{grid.describe(0)}: {cols['message'][0]}")
         table.status, table.message = status, message
         if output is not None:
             try:
@@ -465,7 +469,6 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         raise SweepInterrupted(f"interrupted by {name} after the last point"
                                + (f"; {str(output)!r} is complete" if output else ""),
                                stop.signum, table)
-    if table.counts["completed"] == 0 and table.counts["failed"] == n:
-        raise SweepFailed(f"every point of the sweep failed ({n}); the first: "
-                          f"{grid.describe(0)}: {cols['message'][0]}", table)
+    if status == "failed":
+        raise SweepFailed(message, table)
     return table
