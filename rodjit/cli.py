@@ -629,8 +629,9 @@ def info_command(file):
               help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
                    "Sweep files: the summary column drawn [default: restitution_impact, the "
                    "first-impact restitution, 0 without lift-off].")
-@click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
-              "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
+@click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis, as "
+              "the key (rod.mu) or its to_xarray dimension name (mu) [restitution: rod.mu "
+              "if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
 @click.option("--at", "at", multiple=True, metavar="KEY=VALUE",
               help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "

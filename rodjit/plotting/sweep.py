@@ -10,7 +10,7 @@ import numpy as np
 from ..config import parse_value
 from ..sweeps.grid import format_value
 from ..sweeps.point import SUMMARY_COLUMNS
-from ..sweeps.sweep_table import SweepTable, load_sweep
+from ..sweeps.sweep_table import SweepTable, dimension_names, load_sweep
 from .mpl import NothingToDraw, new_figure, save
 
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
@@ -40,9 +40,16 @@ def _check_quantity(quantity: str | None) -> str:
 
 
 def _check_key(grid, key: str, what: str) -> str:
-    if key not in grid.keys:
-        raise ValueError(f"{what} {key!r} is not a swept key (swept: {', '.join(grid.keys)})")
-    return key
+    """The swept key ``key`` names: the key itself (``rod.mu``) or its dimension name in
+    ``SweepTable.to_xarray`` (``mu``)."""
+    if key in grid.keys:
+        return key
+    by_dimension = {dim: k for k, dim in dimension_names(grid.keys).items()}
+    if key in by_dimension:
+        return by_dimension[key]
+    raise ValueError(f"{what} {key!r} is not a swept key (swept: "
+                     + ", ".join(f"{k} or {d}" if d != k else k
+                                 for k, d in dimension_names(grid.keys).items()) + ")")
 
 
 def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
@@ -50,7 +57,7 @@ def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
     values), else its first value when ``default_first``; keys left over vary."""
     out = {}
     for key, text in (at or {}).items():
-        _check_key(grid, key, "--at")
+        key = _check_key(grid, key, "--at")
         if key in free:
             raise ValueError(f"--at {key} fixes the key the figure runs along")
         values = grid.values[grid.keys.index(key)]
@@ -105,7 +112,7 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     grid = table.grid
     x = _check_key(grid, x, "--x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
     if panels is not None:             # one panel per value of that key, side by side
-        _check_key(grid, panels, "--panels")
+        panels = _check_key(grid, panels, "--panels")
         if panels == x or panels in (at or {}):
             raise ValueError(f"--panels {panels} is already the x axis or fixed by --at")
         if ax is not None:
@@ -200,13 +207,16 @@ def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=
                  at=None, panels=None, ax=None, figsize=None):
     """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable; with
     ``ax``, drawn into that axes; ``panels`` (restitution): one panel per value of that
-    key.  NothingToDraw if every value shown would be NaN."""
+    key.  ``x``, ``y``, ``panels`` and the keys of ``at`` name swept keys as configuration
+    keys (``rod.mu``) or as the dimension names of ``SweepTable.to_xarray`` (``mu``).
+    NothingToDraw if every value shown would be NaN."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
     if quantity is None and DEFAULT_QUANTITY not in table.columns:
         quantity = "restitution_first"   # a sweep file older than the first-impact columns
     quantity = _check_quantity(quantity)
+    at = {_check_key(table.grid, k, "--at"): v for k, v in (at or {}).items()}
     fig = ax.figure if ax is not None else new_figure(figsize=figsize or (7.5, 4.8),
                                                       layout="constrained")
     if kind == "restitution":
