@@ -78,7 +78,21 @@ def _warnings_as_lines():
             _said = previous
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Commands(click.Group):
+    """The verbs; an optional dependency a verb needs and does not find (``MissingExtra``:
+    the message names the extra to install) is a usage error, exit code 2, like a bad
+    option: nothing ran."""
+
+    def invoke(self, ctx):
+        from ._extras import MissingExtra
+
+        try:
+            return super().invoke(ctx)
+        except MissingExtra as exc:
+            raise UsageError(str(exc)) from None
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="rodjit", prog_name="rodjit")
 @click.pass_context
 def main(ctx):
@@ -548,7 +562,9 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
 
     try:
         written = plot(path, out, kind, **options)
-    except (MissingMatplotlib, WriteFailed) as exc:
+    except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
+        raise UsageError(str(exc)) from None
+    except WriteFailed as exc:
         raise RunFailed(str(exc)) from None
     except NothingToDraw as exc:
         raise RunFailed(str(exc)) from None
@@ -701,7 +717,9 @@ def animate_command(file, output, fps, duration, quantity, dpi):
     out = output or str(Path(file).with_suffix(".gif"))
     try:
         written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
-    except (MissingMatplotlib, MissingWriter, NothingToDraw, WriteFailed) as exc:
+    except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
+        raise UsageError(str(exc)) from None
+    except (MissingWriter, NothingToDraw, WriteFailed) as exc:
         raise RunFailed(str(exc)) from None
     except ValueError as exc:
         raise UsageError(str(exc)) from None

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import errno
 import math
 import numbers
 import tomllib
@@ -26,6 +27,31 @@ CONTROLS = ("tolerance", "cfl")
 # keys that a stored configuration may lack (written before they existed), with the value
 # that reproduces what such a run did
 STORED_DEFAULTS = {"time.control": "cfl", "output.interpolate": False}
+
+
+class MissingFile(ValueError, FileNotFoundError):
+    """A file rodjit was asked to read does not exist: a ``FileNotFoundError`` (what
+    ``open`` raises) that is also a ValueError (a bad argument: one line, exit code 2).
+
+    Parameters
+    ----------
+    path : str or Path
+        The missing file.
+    what : str, optional
+        What the file is, for the message (``"configuration file "``).
+    """
+
+    def __init__(self, path, what: str = ""):
+        message = f"{what}{str(path)!r} does not exist"
+        super().__init__(message)
+        self.errno, self.strerror, self.filename = errno.ENOENT, message, str(path)
+        self._what = what
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+    def __reduce__(self):
+        return type(self), (self.filename, self._what)
 
 
 class ModelWarning(UserWarning):
@@ -49,7 +75,7 @@ VERLET_WARNING = (
     "'semi-implicit'")
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
-           "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning",
+           "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning", "MissingFile",
            "valid_keys", "field_spec", "key_lines", "parse_value", "CROSS_CHECKS"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
@@ -628,7 +654,7 @@ class Config:
             with open(path, "rb") as fh:
                 data = tomllib.load(fh)
         except FileNotFoundError:
-            raise ValueError(f"configuration file {str(path)!r} does not exist") from None
+            raise MissingFile(path, "configuration file ") from None
         except IsADirectoryError:
             raise ValueError(f"configuration file {str(path)!r} is a directory") from None
         except PermissionError:

@@ -179,9 +179,24 @@ def test_plot_without_matplotlib(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
     r = invoke("plot", "default.h5")
-    assert r.exit_code == 1
+    assert r.exit_code == 2          # a usage error (install the extra), not a failed run
     assert r.stderr.strip() == ("Error: plotting needs matplotlib; install it with: "
                                 "pip install 'rodjit[plot]'")
+    r = invoke("animate", "default.h5")
+    assert r.exit_code == 2 and "pip install 'rodjit[plot]'" in r.stderr
+    assert not (tmp_path / "default.gif").exists()
+
+
+def test_any_missing_extra_is_a_usage_error(tmp_path, monkeypatch):
+    """A verb that needs an extra that is not installed exits 2 with the install line."""
+    import rodjit.cli as cli
+    from rodjit._extras import need
+
+    monkeypatch.setattr(cli, "_load_config", lambda source: need("nosuchmodule", "analysis",
+                                                                 "rodjit run"))
+    r = CliRunner().invoke(main, ["run", "--dry-run"])
+    assert r.exit_code == 2, r.output
+    assert "install it with: pip install 'rodjit[analysis]'" in r.output
 
 
 def test_progress_bar_writes_to_stderr(capsys):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..records.datasets import strain_of
-from .mpl import NothingToDraw, discard, new_figure, write_whole
+from .mpl import NothingToDraw, discard, need_matplotlib, new_figure, write_whole
 from .source import RunSource
 
 __all__ = ["animate", "FORMATS", "MissingWriter"]
@@ -66,6 +66,7 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity = {quantity!r} is not allowed (one of "
                          f"{', '.join(QUANTITIES)})")
+    need_matplotlib()
     from matplotlib import animation
     from matplotlib.collections import LineCollection
     from matplotlib.colors import Normalize
