@@ -225,3 +225,26 @@ def test_sweep_coordinates_carry_units_and_meaning(tmp_path):
     for name, var in ds.data_vars.items():
         if var.dtype.kind in "fi":
             assert "units" in var.attrs, name
+
+
+@pytest.mark.parametrize("value, shown", [("0:100:11", "'0:100:11'"),
+                                          ("[0,10,100]", "rod.mu = '[0,10,100]': '[0'")])
+def test_a_bad_grid_value_lists_the_accepted_forms(tmp_path, monkeypatch, value, shown):
+    monkeypatch.chdir(tmp_path)
+    r = invoke("sweep", "--grid", f"rod.mu={value}")
+    assert r.exit_code == 2 and list(tmp_path.iterdir()) == []
+    line = r.stderr.strip()
+    assert line.startswith("Error: grid rod.mu") and f"{shown} is not a number" in line, line
+    for form in ("comma-separated list (rod.mu=0,1,10,100)", "linspace(a,b,n)",
+                 "logspace(a,b,n)"):
+        assert form in line, line
+    r = invoke("sweep", "--grid", "rod.mu=1,2s")     # a unit: the key's own hint
+    assert r.exit_code == 2 and "plain SI numbers without units" in r.stderr
+
+
+def test_set_with_a_unit_says_values_are_si_numbers(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["run", "--set", "time.t_end=2s"])
+    assert r.exit_code == 2 and list(tmp_path.iterdir()) == []
+    assert "values are plain SI numbers without units; write it in s" in r.stderr
+    assert "docs/units.md" in r.stderr
