@@ -3,11 +3,13 @@ the others), and a heatmap over two swept keys with the rest held fixed."""
 from __future__ import annotations
 
 import itertools
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
-from ..config import parse_value
+from ..config import field_spec, parse_value
+from ..output.cf import column_attrs
 from ..sweeps.grid import format_value
 from ..sweeps.point import SUMMARY_COLUMNS
 from ..sweeps.sweep_table import SweepTable, dimension_names, load_sweep
@@ -28,6 +30,32 @@ _SYMBOLS = {"rod.mu": "μ", "rod.kappa": "κ", "rod.gamma": "γ", "floor.kappa_b
 
 def _name(key: str) -> str:
     return _SYMBOLS.get(key, key)
+
+
+def _unit(text: str | None) -> str:
+    """`` [unit]`` for an axis label ('' for a key or column without one: text, flags)."""
+    return f" [{text}]" if text else ""
+
+
+def _key_label(key: str) -> str:
+    """A swept key's axis label: its symbol, the key and its unit (``μ (rod.mu) [N s]``)."""
+    name = _name(key)
+    return (name if name == key else f"{name} ({key})") + _unit(field_spec(key).unit)
+
+
+def _quantity_label(quantity: str) -> str:
+    """A summary column's axis label with its unit, as the sweep file carries it."""
+    return quantity + _unit(column_attrs("summary", quantity).get("units"))
+
+
+def _title(ax, text: str) -> None:
+    """The axes title, wrapped to the axes' width (a long description would run past the
+    figure's edges)."""
+    fig = ax.figure
+    width_in = fig.get_figwidth() * ax.get_position().width
+    chars = max(30, int(width_in * 72 / (9 * 0.6)))     # 9 pt characters, ~0.6 em wide
+    lines = [textwrap.fill(part, chars, break_on_hyphens=False) for part in text.split("\n")]
+    ax.set_title("\n".join(lines), fontsize=9)
 
 
 def _check_quantity(quantity: str | None) -> str:
@@ -147,10 +175,10 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
         ax.plot(xv, yv, MARKERS[j % len(MARKERS)] + "-", ms=5, lw=1.0, color=colors[j],
                 label=label or None)
     _scale(ax.set_xscale, xs)
-    ax.set_xlabel(_name(x) if _name(x) == x else f"{_name(x)} ({x})")
-    ax.set_ylabel(quantity)
+    ax.set_xlabel(_key_label(x))
+    ax.set_ylabel(_quantity_label(quantity))
     title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
-    ax.set_title(_label(quantity) + (f"\n{title}" if title else ""), fontsize=9)
+    _title(ax, _label(quantity) + (f"\n{title}" if title else ""))
     if quantity.startswith("restitution"):
         ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
     if others:
@@ -184,11 +212,11 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
     ax = ax or fig.add_subplot()
     mesh = ax.pcolormesh(np.ma.masked_invalid(z), cmap="viridis", shading="flat")
     ax.set_facecolor("0.85")
-    fig.colorbar(mesh, ax=ax, label=quantity)
+    fig.colorbar(mesh, ax=ax, label=_quantity_label(quantity))
     ax.set_xticks(np.arange(len(xs)) + 0.5, [format_value(v) for v in xs])
     ax.set_yticks(np.arange(len(ys)) + 0.5, [format_value(v) for v in ys])
-    ax.set_xlabel(f"{_name(x)} ({x})" if _name(x) != x else x)
-    ax.set_ylabel(f"{_name(y)} ({y})" if _name(y) != y else y)
+    ax.set_xlabel(_key_label(x))
+    ax.set_ylabel(_key_label(y))
     if len(xs) <= MAX_ANNOTATED and len(ys) <= MAX_ANNOTATED:
         finite = z[np.isfinite(z)]
         mid = (finite.min() + finite.max()) / 2 if finite.size else 0.0
@@ -200,7 +228,7 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
                 ax.text(c + 0.5, r + 0.5, text, ha="center", va="center", fontsize=7,
                         color=color)
     title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
-    ax.set_title(_label(quantity) + (f"\nat {title}" if title else ""), fontsize=9)
+    _title(ax, _label(quantity) + (f"\nat {title}" if title else ""))
 
 
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
