@@ -1,5 +1,5 @@
 """The paper's two figures: heights of the six division points of the rod (N = 5, γ = 0)
-against time, periodic bouncing at μ = 0 and decay to rest at μ = 100.
+against time: a chaotic, energy-conserving motion at μ = 0 and decay to rest at μ = 100.
 
     python examples/paper_figures.py [OUTDIR]        # writes paper_mu0.png, paper_mu100.png
 

@@ -25,7 +25,7 @@ def main():
     rodjit.sweep(base, {"rod.mu": mus}, output=out / "sweep_mu.h5", jobs=1 if QUICK else None,
                  overwrite=True)
 
-    ds = rodjit.load_sweep(out / "sweep_mu.h5").to_xarray()      # dimension: rod.mu
+    ds = rodjit.load_sweep(out / "sweep_mu.h5").to_xarray()      # dimension mu, attrs key rod.mu
     assert (ds["status"] == "completed").all(), ds["message"].values
     print(ds[["restitution_first", "contact_time_first", "min_u0"]].to_dataframe())
 

@@ -10,8 +10,10 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
+import contextlib
 import shlex
 import sys
+import warnings
 from pathlib import Path
 
 import click
@@ -47,10 +49,55 @@ class RunFailed(click.ClickException):
         super().__init__(one_line(message))
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+_said: set[str] | None = None     # the warnings said by the running command
+
+
+def say_warning(text: str) -> None:
+    """One line ``warning: TEXT`` on stderr, once per text while a command runs."""
+    text = one_line(text)
+    if _said is not None:
+        if text in _said:
+            return
+        _said.add(text)
+    click.echo(f"warning: {text}", err=True)
+
+
+@contextlib.contextmanager
+def _warnings_as_lines():
+    """While a command runs, every warning it issues (its own, a library's, a worker's
+    passed on by a sweep) is said by ``say_warning``: one line, once, with neither the file
+    and line that issued it nor its source line."""
+    global _said
+    previous = _said
+    _said = set()
+    with warnings.catch_warnings():
+        warnings.showwarning = lambda message, *_args, **_kw: say_warning(str(message))
+        try:
+            yield
+        finally:
+            _said = previous
+
+
+class _Commands(click.Group):
+    """The verbs; an optional dependency a verb needs and does not find (``MissingExtra``:
+    the message names the extra to install) is a usage error, exit code 2, like a bad
+    option: nothing ran."""
+
+    def invoke(self, ctx):
+        from ._extras import MissingExtra
+
+        try:
+            return super().invoke(ctx)
+        except MissingExtra as exc:
+            raise UsageError(str(exc)) from None
+
+
+@click.group(cls=_Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="rodjit", prog_name="rodjit")
-def main():
+@click.pass_context
+def main(ctx):
     """Simulate an elastic rod bouncing on a floor (Aiki & Kosugi) and inspect the runs."""
+    ctx.with_resource(_warnings_as_lines())
 
 
 # ---- rodjit run ---------------------------------------------------------------------------
@@ -148,8 +195,6 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
     Ctrl-C or SIGTERM stops at once with a checkpoint; 'rodjit run --resume FILE.h5'
     continues exactly where the run stopped.
     """
-    import warnings
-
     from .config import ModelWarning
     from .driver.files import OutputExists, RunInterrupted, plan_run, resume_file, run_to_file
     from .driver.run import SimulationError
@@ -171,7 +216,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             raise UsageError(str(exc)) from None
         click.echo(plan.report())
         for text in plan.config.warnings():   # as the run would say them
-            click.echo(f"warning: {text}", err=True)
+            say_warning(text)
         return
     command = _command_line(
         "run", config, [("-o", output), ("--set", sets),
@@ -213,14 +258,13 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
     except RunInterrupted as exc:
         _close(progress)
-        if not quiet:
-            click.echo(exc.summary.report())
+        _say_run(exc.summary, quiet)
         click.echo(str(exc), err=True)
         sys.exit(128 + exc.signum)
     except SimulationError as exc:
         _close(progress)
-        if not quiet and getattr(exc, "summary", None) is not None:
-            click.echo(exc.summary.report())
+        if getattr(exc, "summary", None) is not None:
+            _say_run(exc.summary, quiet)
         raise RunFailed(str(exc)) from None
     except ValueError as exc:       # configuration, path and file errors: nothing written
         raise UsageError(str(exc)) from None
@@ -228,10 +272,21 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         _close(progress)
         _disk_failed(exc)
     _close(progress)
-    for text in summary.warnings:      # even with --quiet: what the results do not mean
-        click.echo(f"warning: {text}", err=True)
+    _say_run(summary, quiet)
+
+
+def _say_run(summary, quiet: bool) -> None:
+    """A run's warnings on stderr, once each, even with --quiet (what the results do not
+    mean); then, unless quiet, its report on stdout without them (said once)."""
+    for text in summary.warnings:
+        say_warning(text)
     if not quiet:
-        click.echo(summary.report())
+        if not hasattr(summary, "facts"):
+            click.echo(summary.report())
+            return
+        facts = summary.facts()
+        facts.warnings = ()
+        click.echo(facts.report())
 
 
 def one_line(message) -> str:
@@ -507,7 +562,9 @@ def _draw(plot, path: str, output: str | None, kind: str, **options) -> None:
 
     try:
         written = plot(path, out, kind, **options)
-    except (MissingMatplotlib, WriteFailed) as exc:
+    except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
+        raise UsageError(str(exc)) from None
+    except WriteFailed as exc:
         raise RunFailed(str(exc)) from None
     except NothingToDraw as exc:
         raise RunFailed(str(exc)) from None
@@ -588,8 +645,9 @@ def info_command(file):
               help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
                    "Sweep files: the summary column drawn [default: restitution_impact, the "
                    "first-impact restitution, 0 without lift-off].")
-@click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
-              "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
+@click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis, as "
+              "the key (rod.mu) or its to_xarray dimension name (mu) [restitution: rod.mu "
+              "if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")
 @click.option("--at", "at", multiple=True, metavar="KEY=VALUE",
               help="Sweep files: fix another swept key (repeatable) [default for a heatmap: "
@@ -659,7 +717,9 @@ def animate_command(file, output, fps, duration, quantity, dpi):
     out = output or str(Path(file).with_suffix(".gif"))
     try:
         written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
-    except (MissingMatplotlib, MissingWriter, NothingToDraw, WriteFailed) as exc:
+    except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
+        raise UsageError(str(exc)) from None
+    except (MissingWriter, NothingToDraw, WriteFailed) as exc:
         raise RunFailed(str(exc)) from None
     except ValueError as exc:
         raise UsageError(str(exc)) from None

@@ -11,8 +11,10 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import errno
 import math
 import numbers
+import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,6 +28,31 @@ CONTROLS = ("tolerance", "cfl")
 # keys that a stored configuration may lack (written before they existed), with the value
 # that reproduces what such a run did
 STORED_DEFAULTS = {"time.control": "cfl", "output.interpolate": False}
+
+
+class MissingFile(ValueError, FileNotFoundError):
+    """A file rodjit was asked to read does not exist: a ``FileNotFoundError`` (what
+    ``open`` raises) that is also a ValueError (a bad argument: one line, exit code 2).
+
+    Parameters
+    ----------
+    path : str or Path
+        The missing file.
+    what : str, optional
+        What the file is, for the message (``"configuration file "``).
+    """
+
+    def __init__(self, path, what: str = ""):
+        message = f"{what}{str(path)!r} does not exist"
+        super().__init__(message)
+        self.errno, self.strerror, self.filename = errno.ENOENT, message, str(path)
+        self._what = what
+
+    def __str__(self) -> str:
+        return self.args[0]
+
+    def __reduce__(self):
+        return type(self), (self.filename, self._what)
 
 
 class ModelWarning(UserWarning):
@@ -49,7 +76,7 @@ VERLET_WARNING = (
     "'semi-implicit'")
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
-           "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning",
+           "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning", "MissingFile",
            "valid_keys", "field_spec", "key_lines", "parse_value", "CROSS_CHECKS"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
@@ -135,7 +162,34 @@ def _quoted_error(key: str, value: str, spec: "_Spec") -> str:
         return (f"{key} = {value!r} is a quoted number; write {value.strip()} without quotes "
                 f"({spec.describe()})")
     what = "an integer" if spec.kind == "int" else "a number"
+    if number_with_unit(value) is not None:
+        unit = ("; it is dimensionless" if spec.unit == "1" else
+                f"; write it in {spec.unit}, without the unit" if spec.unit else "")
+        return (f"{key} = {value!r} is not {what}: values are plain SI numbers without "
+                f"units{unit} (see docs/units.md; {spec.describe()})")
     return f"{key} = {value!r} is not {what} ({spec.describe()})"
+
+
+_NUMBER_WITH_UNIT = re.compile(
+    r"^\s*([-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)\s*[A-Za-zµμΩ°%][^=,]*$")
+
+
+def number_with_unit(text: str) -> str | None:
+    """The number of ``text`` when it is a number followed by a unit (``"2s"``, ``"1e3 N"``,
+    ``"5 mm"``), else None.
+
+    Parameters
+    ----------
+    text : str
+        A value as typed.
+
+    Returns
+    -------
+    str or None
+        The number as written, without its unit.
+    """
+    m = _NUMBER_WITH_UNIT.match(text)
+    return m.group(1) if m else None
 
 
 def _pos(x):
@@ -269,6 +323,15 @@ def valid_keys() -> list[str]:
     return [f"{s}.{k}" for s, fields in _FIELDS.items() for k in fields]
 
 
+def _unknown_section_error(section: str) -> ValueError:
+    close = difflib.get_close_matches(section, list(_FIELDS), n=1, cutoff=0.5)
+    hint = f"; did you mean [{close[0]}]?" if close else ""
+    exc = ValueError(f"unknown configuration section [{section}]{hint} sections: "
+                     + ", ".join(f"[{name}]" for name in _FIELDS))
+    exc.key = section + "."
+    return exc
+
+
 def _unknown_key_error(key: str) -> ValueError:
     keys = valid_keys()
     name = key.rsplit(".", 1)[-1]
@@ -276,7 +339,9 @@ def _unknown_key_error(key: str) -> ValueError:
     close = [k for k in keys if name and k.rsplit(".", 1)[1] == name][:1]
     close = close or difflib.get_close_matches(key, keys, n=1, cutoff=0.6)
     hint = f"; did you mean '{close[0]}'?" if close else ""
-    return ValueError(f"unknown configuration key '{key}'{hint} valid keys: {', '.join(keys)}")
+    exc = ValueError(f"unknown configuration key '{key}'{hint} valid keys: {', '.join(keys)}")
+    exc.key = key
+    return exc
 
 
 class _Section:
@@ -288,7 +353,12 @@ class _Section:
         for f in dataclasses.fields(self):
             spec = _FIELDS[self.SECTION][f.name]
             key = f"{self.SECTION}.{f.name}"
-            object.__setattr__(self, f.name, spec.coerce(key, getattr(self, f.name)))
+            try:
+                value = spec.coerce(key, getattr(self, f.name))
+            except ValueError as exc:
+                exc.key = key          # for the line of a TOML file that set it
+                raise
+            object.__setattr__(self, f.name, value)
 
 
 @dataclass(frozen=True)
@@ -626,9 +696,10 @@ class Config:
         path = Path(path)
         try:
             with open(path, "rb") as fh:
-                data = tomllib.load(fh)
+                raw = fh.read()
+            data = tomllib.loads(raw.decode("utf-8"))
         except FileNotFoundError:
-            raise ValueError(f"configuration file {str(path)!r} does not exist") from None
+            raise MissingFile(path, "configuration file ") from None
         except IsADirectoryError:
             raise ValueError(f"configuration file {str(path)!r} is a directory") from None
         except PermissionError:
@@ -637,7 +708,15 @@ class Config:
             raise ValueError(f"configuration file {str(path)!r} is not valid TOML: {exc}") from None
         except UnicodeDecodeError:
             raise ValueError(f"configuration file {str(path)!r} is not a text file") from None
-        return cls()._replaced(_flatten(data), text=False)
+        try:
+            return cls()._replaced(_flatten(data), text=False)
+        except ValueError as exc:
+            key = getattr(exc, "key", None)
+            line = _toml_line(raw.decode("utf-8"), key) if key else None
+            where = f"{str(path)}, line {line}" if line else str(path)
+            error = ValueError(f"{where}: {exc}")
+            error.key = key
+            raise error from None
 
     @classmethod
     def from_toml_string(cls, text: str) -> "Config":
@@ -834,6 +913,32 @@ class Config:
         return html_table(*self._overview())
 
 
+_TOML_HEADER = re.compile(r"""^\s*\[\s*(["']?)([^\]"']+)\1\s*\]""")
+_TOML_KEY = re.compile(r"""^\s*([A-Za-z0-9_\-."' ]+?)\s*=""")
+
+
+def _toml_line(text: str, key: str) -> int | None:
+    """The line (from 1) of the TOML ``text`` that sets the dotted ``key``, or that opens
+    the section ``key`` names when it ends with a dot (``"flor."``); None if no line
+    does (a key checked against another, or set in an inline table)."""
+    section, _, name = key.partition(".")
+    current = ""
+    for number, line in enumerate(text.splitlines(), 1):
+        m = _TOML_HEADER.match(line)
+        if m:
+            current = m.group(2).strip()
+            if not name and current == section:
+                return number
+            continue
+        m = _TOML_KEY.match(line)
+        if m:
+            written = "".join(m.group(1).replace('"', "").replace("'", "").split())
+            full = f"{current}.{written}" if current else written
+            if full == key or (not name and full.startswith(section + ".")):
+                return number
+    return None
+
+
 def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in data.items():
@@ -842,7 +947,7 @@ def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
             if prefix:  # sections nest one level only
                 raise _unknown_key_error(full)
             if full not in _FIELDS:
-                raise _unknown_key_error(full + ".")
+                raise _unknown_section_error(full)
             out.update(_flatten(value, full + "."))
         else:
             out[full] = value

@@ -19,3 +19,23 @@ def test_a_huge_initial_height_is_named_with_its_range():
     with pytest.raises(ValueError, match=r"^initial.height = 1000000000000.0 is out of range"):
         rodjit.simulate(SHORT.override({"initial.height": 1e12}))
     assert rodjit.simulate(SHORT.override({"initial.height": 10.0})).t[-1] > 0
+
+
+@pytest.mark.parametrize("read", [rodjit.open_run, rodjit.load_file, rodjit.load_sweep,
+                                  rodjit.Config.from_toml],
+                         ids=["open_run", "load_file", "load_sweep", "Config.from_toml"])
+def test_a_missing_file_is_a_file_not_found_error(read, tmp_path):
+    """What ``open`` raises, and still the ValueError the command line words in one line
+    (exit 2); its errno and filename are those of a FileNotFoundError."""
+    import errno
+    import pickle
+
+    path = tmp_path / "missing.h5"
+    with pytest.raises(FileNotFoundError, match=r"'.*missing\.h5' does not exist$") as info:
+        read(path)
+    exc = info.value
+    assert isinstance(exc, ValueError) and isinstance(exc, rodjit.config.MissingFile)
+    assert exc.errno == errno.ENOENT and exc.filename == str(path)
+    assert str(pickle.loads(pickle.dumps(exc))) == str(exc)
+    if getattr(read, "__self__", None) is not rodjit.Config:      # a file rodjit writes
+        assert isinstance(exc, rodjit.output.hdf5.NotARunFile)

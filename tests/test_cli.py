@@ -44,6 +44,7 @@ def test_readme_command_runs_the_default(tmp_path, monkeypatch):
     # no progress bar off a terminal; the default (μ = γ = 0) says its first bounce has no
     # continuum limit, one line
     assert r.stderr == f"warning: {rodjit.config.SHOCK_WARNING}\n"
+    assert "warning" not in r.stdout            # said once: on stderr, not in the summary too
     res = rodjit.load_file(tmp_path / "default.h5")
     assert res.config == rodjit.Config() and res.status == "completed"
     with h5py.File(tmp_path / "default.h5") as f:
@@ -178,9 +179,24 @@ def test_plot_without_matplotlib(tmp_path, monkeypatch):
     monkeypatch.setitem(sys.modules, "matplotlib", None)
     monkeypatch.setitem(sys.modules, "matplotlib.figure", None)
     r = invoke("plot", "default.h5")
-    assert r.exit_code == 1
+    assert r.exit_code == 2          # a usage error (install the extra), not a failed run
     assert r.stderr.strip() == ("Error: plotting needs matplotlib; install it with: "
                                 "pip install 'rodjit[plot]'")
+    r = invoke("animate", "default.h5")
+    assert r.exit_code == 2 and "pip install 'rodjit[plot]'" in r.stderr
+    assert not (tmp_path / "default.gif").exists()
+
+
+def test_any_missing_extra_is_a_usage_error(tmp_path, monkeypatch):
+    """A verb that needs an extra that is not installed exits 2 with the install line."""
+    import rodjit.cli as cli
+    from rodjit._extras import need
+
+    monkeypatch.setattr(cli, "_load_config", lambda source: need("nosuchmodule", "analysis",
+                                                                 "rodjit run"))
+    r = CliRunner().invoke(main, ["run", "--dry-run"])
+    assert r.exit_code == 2, r.output
+    assert "install it with: pip install 'rodjit[analysis]'" in r.output
 
 
 def test_progress_bar_writes_to_stderr(capsys):
@@ -308,3 +324,44 @@ def test_sweep_dry_run_prints_points_files_and_writes_nothing(tmp_path, monkeypa
                  "worst point  1 (rod.mu=0 rod.N=50): 1001 snapshot rows"):
         assert text in r.output, r.output
     assert list(tmp_path.iterdir()) == []
+
+
+def _warning_lines(stderr: str) -> list[str]:
+    return [line for line in stderr.splitlines() if "warning" in line.lower()]
+
+
+@pytest.mark.parametrize("args", [
+    ("run", "-o", "w.h5", "--t-end", "0.3"),
+    ("fit", "rod.mu", "--target", "restitution_first=0.5", "--bracket", "0,100",
+     "--points", "2", "--set", "time.t_end=0.8", "--jobs", "2"),
+    ("fit", "rod.mu", "--target", "restitution_first=0.5", "--bracket", "0,100",
+     "--points", "2", "--set", "time.t_end=0.8", "--jobs", "1"),
+], ids=["run", "fit-workers", "fit-inline"])
+def test_a_warning_is_one_line_once_without_a_path(tmp_path, args):
+    """μ = γ = 0 (the default) warns: one ``warning:`` line on stderr, once, never the
+    file and line that issued it nor its source line (a worker's passed on to the
+    parent); before, ``rodjit fit`` showed ``.../point.py:186: ModelWarning:`` and the
+    call, and ``rodjit run`` said it on stderr and again in its summary."""
+    r = rodjit_cli(*args, cwd=tmp_path)
+    lines = _warning_lines(r.stderr) + _warning_lines(r.stdout)
+    assert lines == [f"warning: {rodjit.config.SHOCK_WARNING}"], r.stderr + r.stdout
+    assert ".py:" not in r.stderr and "ModelWarning" not in r.stderr, r.stderr
+
+
+def test_any_warning_a_command_issues_is_said_as_one_line(tmp_path, monkeypatch):
+    """Not only the model's: a library's warning while a command runs is one line too."""
+    import warnings
+
+    import rodjit.cli as cli
+
+    def noisy(*a, **k):
+        warnings.warn("something odd", RuntimeWarning)
+        warnings.warn("something odd", RuntimeWarning)
+        return rodjit.Config().override({"rod.mu": 1.0}), "default.h5"
+
+    monkeypatch.setattr(cli, "_load_config", lambda source: noisy())
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["run", "--dry-run"])
+    assert r.exit_code == 0, r.output
+    assert _warning_lines(r.stderr)[:1] == ["warning: something odd"]
+    assert _warning_lines(r.stderr).count("warning: something odd") == 1

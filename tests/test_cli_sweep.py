@@ -180,3 +180,71 @@ def test_sweep_progress_bar_writes_to_stderr(capsys):
     assert "13/52 points" in err and " 25%" in err and "2 failed" in err
     assert "1:15 elapsed" in err and "4:52 left" in err       # 75 s / 10 × 39 points left
     assert capsys.readouterr().out == ""
+
+
+def test_plot_takes_a_swept_key_by_its_dimension_name_too(tmp_path, monkeypatch):
+    """``to_xarray`` names the dimensions ``mu``, ``beta`` (``ds.sel(mu=10)``: old scripts
+    keep working); ``rodjit plot --x/--y/--at/--panels`` take those names as well as the
+    keys, for the same figure."""
+    pytest.importorskip("matplotlib")
+    from rodjit.plotting.sweep import sweep_figure
+
+    monkeypatch.chdir(tmp_path)
+    assert invoke("sweep", *GRID_ARGS, "--scheduler", "inline", "-q").exit_code == 0
+    ds = rodjit.load_sweep("sweep.h5").to_xarray()
+    assert set(ds.dims) == {"mu", "beta"}
+    assert (ds["mu"].attrs["key"], ds["beta"].attrs["key"]) == ("rod.mu", "floor.beta")
+    for x, at, x_key, at_key in (("mu", {"beta": "0.05"}, "rod.mu", {"floor.beta": "0.05"}),
+                                 ("beta", {"mu": "10"}, "floor.beta", {"rod.mu": "10"})):
+        a = sweep_figure("sweep.h5", quantity="min_u0", x=x, at=at).axes[0]
+        b = sweep_figure("sweep.h5", quantity="min_u0", x=x_key, at=at_key).axes[0]
+        assert a.get_xlabel() == b.get_xlabel() and a.get_title() == b.get_title()
+        assert [list(ln.get_xdata()) for ln in a.get_lines()] == \
+            [list(ln.get_xdata()) for ln in b.get_lines()]
+    r = invoke("plot", "sweep.h5", "--quantity", "min_u0", "--x", "beta", "--at", "mu=10",
+               "-o", "b.png")
+    assert r.exit_code == 0, r.stderr
+    r = invoke("plot", "sweep.h5", "--kind", "heatmap", "--quantity", "min_u0", "--x", "mu",
+               "--y", "beta", "-o", "h.png")
+    assert r.exit_code == 0, r.stderr
+    r = invoke("plot", "sweep.h5", "--x", "kappa")
+    assert r.exit_code == 2 and "swept: rod.mu or mu, floor.beta or beta" in r.stderr
+
+
+def test_sweep_coordinates_carry_units_and_meaning(tmp_path):
+    """Every dataset has ``units`` (docs/output.md): the swept keys' coordinates too."""
+    pytest.importorskip("xarray")
+    table = rodjit.sweep(rodjit.Config().override({"time.t_end": 0.2}),
+                         {"rod.mu": [0.0, 1.0], "floor.kappa_b": [1e3],
+                          "time.integrator": ["energy"]}, scheduler="inline")
+    ds = table.to_xarray()
+    assert ds["mu"].attrs["units"] == rodjit.config.field_spec("rod.mu").unit
+    assert ds["kappa_b"].attrs["units"] == "N"
+    assert ds["mu"].attrs["description"] == rodjit.config.field_spec("rod.mu").meaning
+    assert "units" not in ds["integrator"].attrs          # a name, not a quantity
+    for name, var in ds.data_vars.items():
+        if var.dtype.kind in "fi":
+            assert "units" in var.attrs, name
+
+
+@pytest.mark.parametrize("value, shown", [("0:100:11", "'0:100:11'"),
+                                          ("[0,10,100]", "rod.mu = '[0,10,100]': '[0'")])
+def test_a_bad_grid_value_lists_the_accepted_forms(tmp_path, monkeypatch, value, shown):
+    monkeypatch.chdir(tmp_path)
+    r = invoke("sweep", "--grid", f"rod.mu={value}")
+    assert r.exit_code == 2 and list(tmp_path.iterdir()) == []
+    line = r.stderr.strip()
+    assert line.startswith("Error: grid rod.mu") and f"{shown} is not a number" in line, line
+    for form in ("comma-separated list (rod.mu=0,1,10,100)", "linspace(a,b,n)",
+                 "logspace(a,b,n)"):
+        assert form in line, line
+    r = invoke("sweep", "--grid", "rod.mu=1,2s")     # a unit: the key's own hint
+    assert r.exit_code == 2 and "plain SI numbers without units" in r.stderr
+
+
+def test_set_with_a_unit_says_values_are_si_numbers(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    r = CliRunner().invoke(main, ["run", "--set", "time.t_end=2s"])
+    assert r.exit_code == 2 and list(tmp_path.iterdir()) == []
+    assert "values are plain SI numbers without units; write it in s" in r.stderr
+    assert "docs/units.md" in r.stderr

@@ -78,7 +78,8 @@ def test_unknown_key_suggests_close_match_and_lists_keys():
     assert "floor.kappa_b" in str(exc.value)
     with pytest.raises(ValueError, match=r"did you mean 'floor\.kappa_b'"):
         Config().override({"rod.kappa_b": 1.0})
-    with pytest.raises(ValueError, match=r"unknown configuration key 'flor\.'"):
+    with pytest.raises(ValueError, match=r"unknown configuration section \[flor\]; did you "
+                                         r"mean \[floor\]\? sections: \[rod\], \[floor\]"):
         Config.from_dict({"flor": {"beta": 1.0}})
 
 
@@ -109,3 +110,35 @@ def test_valid_keys_cover_the_contract():
               "time.t_end", "time.integrator", "time.cfl", "time.dt_max", "time.dt_min",
               "time.dt", "output.snapshot_interval", "output.diagnostics_interval"]:
         assert k in keys
+
+
+@pytest.mark.parametrize("text, line, message", [
+    ("[rod]\nN = 5\n\n[flor]\nkappa_b = 1000\n", 4,
+     "unknown configuration section [flor]; did you mean [floor]?"),
+    ("[floor]\nbeta = 0.05\nkapa_b = 1000\n", 3,
+     "unknown configuration key 'floor.kapa_b'; did you mean 'floor.kappa_b'?"),
+    ("# a comment\n[time]\nt_end = -1.0\n", 3, "time.t_end = -1.0 is out of range"),
+    ("rod.mu = 1.0\nfloor.kappa_b = \"1e3 N\"\n", 2,
+     "floor.kappa_b = '1e3 N' is not a number: values are plain SI numbers without units"),
+    ("[rod]\n  'mu' = -3.0\n", 2, "rod.mu = -3.0 is out of range"),
+], ids=["section", "key", "range", "unit", "quoted"])
+def test_a_toml_error_names_the_file_and_line(tmp_path, text, line, message):
+    path = tmp_path / "mine.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError) as exc:
+        Config.from_toml(path)
+    assert str(exc.value).startswith(f"{path}, line {line}: {message}"), str(exc.value)
+
+
+def test_a_value_with_a_unit_says_values_are_si_numbers():
+    """``--set time.t_end=2s``: the values are plain SI numbers (docs/units.md)."""
+    with pytest.raises(ValueError, match=r"^time\.t_end = '2s' is not a number: values are "
+                                         r"plain SI numbers without units; write it in s, "
+                                         r"without the unit \(see docs/units\.md; float > 0\)$"):
+        Config().override({"time.t_end": "2s"})
+    with pytest.raises(ValueError, match=r"write it in m, without the unit"):
+        Config().override({"floor.beta": "5 mm"})
+    with pytest.raises(ValueError, match=r"it is dimensionless"):
+        Config().override({"rod.N": "50 segments"})
+    with pytest.raises(ValueError, match=r"^rod\.mu = 'fast' is not a number \(float >= 0\)$"):
+        Config().override({"rod.mu": "fast"})          # no number: no unit hint

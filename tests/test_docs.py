@@ -37,11 +37,35 @@ def site(tmp_path_factory):
     for tool in ("mkdocs", "mkdocstrings", "mkdocs_click", "material", "pymdownx"):
         pytest.importorskip(tool, reason="the docs extra is not installed (pip install -e '.[docs]')")
     out = tmp_path_factory.mktemp("site")
-    proc = subprocess.run([sys.executable, "-m", "mkdocs", "build", "--strict", "-q", "-d", str(out)],
+    # Without -q: mkdocs counts a warning against --strict only when it is logged, and -q
+    # silences the logging (a build with warnings exits 0 under -q).
+    proc = subprocess.run(MKDOCS_BUILD + ["-d", str(out)],
                           cwd=ROOT, capture_output=True, text=True, timeout=900,
                           env={**__import__("os").environ, "NO_MKDOCS_2_WARNING": "1"})
-    assert proc.returncode == 0, proc.stderr[-3000:]
+    log = proc.stdout + proc.stderr
+    assert proc.returncode == 0, log[-3000:]
+    assert not re.search(r"^(WARNING|ERROR)\b", log, re.M), log[-3000:]
     return out
+
+
+MKDOCS_BUILD = [sys.executable, "-m", "mkdocs", "build", "--strict"]
+
+
+def test_docs_build_is_strict_and_not_quiet_here_and_in_ci():
+    """The site is built with --strict and without -q (which hides the warnings --strict
+    counts), by this test and by CI, and CI installs the docs extra for the suite too, so
+    the site tests run there instead of skipping."""
+    assert "-q" not in MKDOCS_BUILD and "--quiet" not in MKDOCS_BUILD
+    ci = (ROOT / ".ci" / "run").read_text()
+    builds = [line for line in ci.splitlines() if "mkdocs build" in line
+              and not line.lstrip().startswith("#")]
+    assert builds and all("--strict" in b for b in builds)
+    assert not any(re.search(r"\s(-q|--quiet)\b", b.split("mkdocs build", 1)[1])
+                   for b in builds), builds
+    lines = ci.splitlines()
+    suite = next(i for i, line in enumerate(lines) if "python3 -m pytest" in line)
+    venv = max(i for i, line in enumerate(lines[:suite]) if "-m venv" in line)
+    assert any('".[docs]"' in line for line in lines[venv:suite]), lines[venv:suite + 1]
 
 
 def test_public_modules_include_every_module_in_all():

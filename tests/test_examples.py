@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -20,13 +21,35 @@ def test_every_example_is_tested():
     assert sorted(p.name for p in (ROOT / "examples").glob("*.py")) == sorted(EXPECTED)
 
 
+def _tracked_files() -> dict[str, int] | None:
+    """The repository's tracked files and their modification times (None outside a git
+    checkout)."""
+    try:
+        proc = subprocess.run(["git", "ls-files", "-z"], cwd=ROOT, capture_output=True,
+                              text=True, timeout=60)
+    except OSError:
+        return None
+    if proc.returncode != 0 or not proc.stdout:
+        return None
+    return {p: (ROOT / p).stat().st_mtime_ns for p in proc.stdout.split("\0")
+            if p and (ROOT / p).is_file()}
+
+
 @pytest.mark.parametrize("script", sorted(EXPECTED))
 def test_example_runs(script, tmp_path):
+    """Run as a user does (no argument: the current directory), it writes its files there
+    and no file of the repository changes (docs/ included)."""
     pytest.importorskip("matplotlib")
     pytest.importorskip("xarray")
+    source = (ROOT / "examples" / script).read_text()
+    assert not re.search(r"""["'](\.\./)*docs/""", source), "an example writes into docs/"
+    before = _tracked_files()
     env = {**os.environ, "RODJIT_EXAMPLES_QUICK": "1"}
-    proc = subprocess.run([sys.executable, str(ROOT / "examples" / script), str(tmp_path)],
+    proc = subprocess.run([sys.executable, str(ROOT / "examples" / script)],
                           capture_output=True, text=True, timeout=600, env=env, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-3000:]
     for name in EXPECTED[script]:
         assert (tmp_path / name).stat().st_size > 0, name
+    if before is not None:
+        after = _tracked_files()
+        assert [p for p in before if before[p] != after.get(p)] == []

@@ -54,3 +54,22 @@ def test_errors(tmp_path):
         plotting.figure(path, "heights")
     with pytest.raises(ValueError, match="kind = 'pie' is not allowed"):
         plotting.figure(path, "pie")
+
+
+def test_a_contact_window_ranges_over_the_contact(run_file):
+    """A time window of the contact plot shows the heights and forces of that window: the
+    penetration below the floor is a visible part of the axis, not a sliver of 0-1 m."""
+    res = rodjit.load_file(run_file)
+    t, u0 = res.diagnostics["t"], res.diagnostics["u_bottom"]
+    t_hit = float(t[np.argmin(u0)])
+    window = (t_hit - 0.02, t_hit + 0.02)
+    shown = (t >= window[0]) & (t <= window[1])
+    top, bottom = plotting.figure(run_file, "contact", t_range=window).axes[:2]
+    lo, hi = top.get_ylim()
+    beta = res.config.floor.beta
+    assert lo < min(u0.min(), -beta) and hi >= u0[shown].max()
+    assert hi - lo < 1.2 * (max(u0[shown].max(), 0.0) - min(u0.min(), -beta))
+    assert top.get_xlim() == pytest.approx(window)
+    f = res.diagnostics["floor_force"][shown]
+    assert bottom.get_ylim()[1] == pytest.approx(f.max() + 0.05 * f.max(), rel=1e-6)
+    assert top.get_ylabel().endswith("[m]") and bottom.get_ylabel().endswith("[N]")

@@ -268,3 +268,28 @@ def test_sweep_panels_one_per_value(sweep_file, tmp_path):
     r = CliRunner().invoke(main, ["plot", str(sweep_file), "--panels", "floor.beta", "-o",
                                   str(tmp_path / "p.png")])
     assert r.exit_code == 0, r.output
+
+
+def test_animation_colour_scale_fits_the_data_and_the_time_stamp_is_uncovered(
+        run_file, tmp_path, monkeypatch):
+    """The strain colour scale spans the frames' strains (a fixed ±0.5 made |ε| <= 0.07
+    look white), and the time stamp lies clear of the legend."""
+    from rodjit.plotting import animation
+
+    kept = []
+    monkeypatch.setattr(animation, "discard", kept.append)
+    rodjit.animate(run_file, tmp_path / "rod.gif", fps=4, duration=1)
+    fig = kept[0]
+    ax = fig.axes[0]
+    bar = ax.collections[-1]
+    res = rodjit.load_file(run_file)
+    rows = animation.frame_rows(res.t.size, 4)
+    eps = np.diff(res.u[rows], axis=1) * CFG.rod.N - 1.0
+    largest = np.abs(eps).max()
+    assert bar.norm.vmax == pytest.approx(1.05 * largest, rel=1e-9)
+    assert bar.norm.vmin == -bar.norm.vmax
+    assert ax.get_title().startswith("t = ") and ax.get_title().endswith(" s")
+    # (not drawn again here: the frames' file is closed) the stamp is the axes' title, the
+    # legend the figure's, below the axes, where it cannot cover the stamp
+    assert ax.get_legend() is None and len(fig.legends) == 1
+    assert fig.axes[1].get_ylabel() == "strain ε [1]"

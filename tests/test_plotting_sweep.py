@@ -55,3 +55,38 @@ def test_a_log_axis_for_values_over_decades(tmp_path):
     assert ax.get_xscale() == "log"
     with pytest.raises(ValueError, match="kind = 'pie' is not allowed"):
         sweep_figure(path, "pie")
+
+
+def _inside_the_figure(fig, artist) -> bool:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    box = artist.get_window_extent(canvas.get_renderer())
+    width, height = canvas.get_width_height()
+    return box.x0 >= 0 and box.x1 <= width and box.y1 <= height
+
+
+@pytest.mark.parametrize("kind, options", [("restitution", {}), ("heatmap", {}),
+                                           ("restitution", {"panels": "floor.beta"})])
+def test_titles_fit_and_every_axis_has_its_unit(sweep_path, kind, options):
+    """The title (the quantity's long description) is wrapped inside the figure, not cut
+    at both sides; each axis names its unit: the key's, or the column's from the file."""
+    fig = sweep_figure(sweep_path, kind, at={"rod.mu": "1"} if kind == "heatmap" else None,
+                       **options)
+    for ax in fig.axes:
+        if ax.get_label() == "<colorbar>":
+            assert ax.get_ylabel() == "restitution_impact [1]"
+            continue
+        assert _inside_the_figure(fig, ax.title), ax.get_title()
+        labels = {ax.get_xlabel(), ax.get_ylabel()} - {""}
+        assert labels, kind
+        for label in labels:
+            assert label.endswith("]"), label
+    ax = fig.axes[0]
+    if kind == "heatmap":
+        assert (ax.get_xlabel(), ax.get_ylabel()) == ("κ_b (floor.kappa_b) [N]",
+                                                      "β (floor.beta) [m]")
+    else:
+        assert ax.get_xlabel() == "μ (rod.mu) [N s]"
+        assert ax.get_ylabel() == "restitution_impact [1]"

@@ -470,3 +470,64 @@ def test_a_signal_while_the_sweep_file_layout_is_written_waits_for_the_layout(
         assert table.status == "completed" and table.counts["completed"] == 1
     else:
         assert not path.exists()
+
+
+def test_a_sweep_whose_every_point_failed_ends_failed_with_the_first_cause(tmp_path):
+    path = tmp_path / "s.h5"
+    with pytest.raises(rodjit.SweepFailed) as info:
+        rodjit.sweep(BASE.override({**FAILING, "initial.velocity": -100.0}),
+                     {"rod.mu": [0.0, 1.0]}, scheduler="inline", output=path)
+    message = str(info.value)
+    assert message.startswith("every point of the sweep failed (2); the first: rod.mu=0")
+    assert "fixed step time.dt = 0.001 failed" in message
+    assert info.value.table.status == "failed" and info.value.table.message == message
+    on_disk = rodjit.load_sweep(path)
+    assert on_disk.status == "failed" and on_disk.message == message
+    with h5py.File(path, "r") as f:
+        assert f.attrs["status"] == "failed"
+
+
+_SWEEP_SCRIPT = """\
+import rodjit
+if __name__ == "__main__":
+    t = rodjit.sweep(rodjit.Config().override({"time.t_end": 0.2}), {"rod.mu": [0, 1]},
+                     jobs=2)
+    print("completed", t.counts["completed"])
+"""
+
+
+def _python(args, tmp_path, stdin=None):
+    return subprocess.run([sys.executable, *args], input=stdin, capture_output=True,
+                          text=True, timeout=600, cwd=tmp_path)
+
+
+def test_a_script_read_from_stdin_gets_missing_main_guard_before_any_worker(tmp_path):
+    """Spawned workers import the main script again by its path, which for ``python3 -``
+    is ``<stdin>``: every worker would die of FileNotFoundError. The sweep says so first."""
+    r = _python(["-"], tmp_path, stdin=_SWEEP_SCRIPT)
+    assert r.returncode == 1 and "completed" not in r.stdout
+    last = r.stderr.strip().splitlines()[-1]
+    assert last.startswith("rodjit.sweeps.main_guard.MissingMainGuard: ")
+    assert "standard input" in last and "save the script to a file" in last
+    assert "FileNotFoundError" not in r.stderr and "<stdin>" not in r.stderr.replace(
+        'File "<stdin>"', "")
+
+
+def test_python_c_and_a_script_file_sweep_with_workers(tmp_path):
+    """``python3 -c`` has no main script to import again (as a notebook): no guard needed."""
+    assert _python(["-c", _SWEEP_SCRIPT], tmp_path).stdout.split() == ["completed", "2"]
+    (tmp_path / "s.py").write_text(_SWEEP_SCRIPT)
+    assert _python(["s.py"], tmp_path).stdout.split() == ["completed", "2"]
+
+
+def test_a_main_module_no_worker_can_read_again_is_refused(monkeypatch, tmp_path):
+    from rodjit.sweeps import main_guard
+
+    main = type(sys)("__main__")
+    main.__file__ = str(tmp_path / "gone.py")        # deleted since it started
+    main.__spec__ = None
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    with pytest.raises(rodjit.MissingMainGuard, match="gone.py.*which is not a file"):
+        main_guard.check_main()
+    (tmp_path / "gone.py").write_text("x = 1\n")
+    main_guard.check_main()                          # a file: its guard is checked instead

@@ -51,7 +51,7 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
     from ..driver.run import SimulationError
     from ..driver.simulate import simulate
     from ..sweeps.executors import check_scheduler, default_jobs, make_executor
-    from ..sweeps.point import PointTask, law_modules
+    from ..sweeps.point import PointTask, law_modules, reissue_warnings
 
     configs = list(configs)
     check_scheduler(scheduler)
@@ -78,9 +78,11 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
         warm = configs[0] if not law_modules(configs[0]) else None
         executor = make_executor(scheduler, min(jobs, len(configs)), warm)
         try:
+            said: set = set()
             for res in executor.results(tasks, total=len(configs)):
                 if res is None:
                     continue
+                reissue_warnings(res, said)
                 i = res.index
                 if os.path.exists(paths[i]):
                     try:

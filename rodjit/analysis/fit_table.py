@@ -41,7 +41,7 @@ def read_measurements(path) -> list[dict]:
         The file is missing or empty, a column is unknown, or a cell is not a number
         (naming the line and column).
     """
-    from ..config import valid_keys
+    from ..config import MissingFile, valid_keys
     from .observables import OBSERVABLES
 
     try:
@@ -50,7 +50,7 @@ def read_measurements(path) -> list[dict]:
             rows = list(reader)
             header = reader.fieldnames or []
     except FileNotFoundError:
-        raise ValueError(f"measurement table {str(path)!r} does not exist") from None
+        raise MissingFile(path, "measurement table ") from None
     keys = set(valid_keys())
     known = set(OBSERVABLES) | {f"sigma_{o}" for o in OBSERVABLES} | keys
     bad = [h for h in header if h.strip() not in known]

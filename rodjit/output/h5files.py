@@ -15,11 +15,12 @@ from pathlib import Path
 
 import h5py
 
+from ..config import MissingFile
 from .cf import LIBVER
 from .lock import FileBusy, is_locked
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
-__all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
+__all__ = ["NotARunFile", "FileMissing", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
            "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
@@ -28,6 +29,11 @@ __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", 
 
 class NotARunFile(ValueError):
     """The path is not a rodjit run file (missing, not HDF5, or another kind of file)."""
+
+
+class FileMissing(NotARunFile, MissingFile):
+    """The path does not exist: a ``FileNotFoundError`` (as ``open`` raises) and, like every
+    file rodjit cannot read, a NotARunFile (a ValueError: one line, exit code 2)."""
 
 
 class OutputExists(ValueError):
@@ -39,7 +45,7 @@ def open_file(path) -> h5py.File:
     has it open or was killed before closing it (both leave the SWMR flags set)."""
     path = Path(path)
     if not path.exists():
-        raise NotARunFile(f"{str(path)!r} does not exist")
+        raise FileMissing(path)
     if path.is_dir():
         raise NotARunFile(f"{str(path)!r} is a directory, not a rodjit file")
     if not os.access(path, os.R_OK):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..records.datasets import strain_of
-from .mpl import NothingToDraw, discard, new_figure, write_whole
+from .mpl import NothingToDraw, discard, need_matplotlib, new_figure, write_whole
 from .source import RunSource
 
 __all__ = ["animate", "FORMATS", "MissingWriter"]
@@ -66,6 +66,7 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity = {quantity!r} is not allowed (one of "
                          f"{', '.join(QUANTITIES)})")
+    need_matplotlib()
     from matplotlib import animation
     from matplotlib.collections import LineCollection
     from matplotlib.colors import Normalize
@@ -100,24 +101,32 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
         ax.set_ylim(bottom, top)
         ax.set_xticks([])
         ax.set_ylabel("height [m]")
+        def frame_values(i):
+            u = src.snapshot_row("u", int(i))
+            values = strain_of(u, N) if quantity == "strain" else \
+                (lambda v: (v[:-1] + v[1:]) / 2)(src.snapshot_row("v", int(i)))
+            return u, values
+
+        # the colour scale fitted to the frames (one row per frame, read once more): a
+        # fixed scale made strains of a few per cent look white
+        lim = max(float(np.nanmax(np.abs(frame_values(i)[1]), initial=0.0)) for i in rows)
+        lim = lim * 1.05 if np.isfinite(lim) and lim > 0 else 1.0
         if quantity == "strain":
-            lim = 0.5
-            cmap, label = "RdBu_r", "strain ε"
+            cmap, label = "RdBu_r", "strain ε [1]"
         else:
-            lim = max(1.0, abs(c.initial.velocity)) * 5
             cmap, label = "PuOr", "velocity v [m s-1]"
         bar = LineCollection([], linewidths=14, cmap=cmap, norm=Normalize(-lim, lim),
                              capstyle="butt")
         ax.add_collection(bar)
         fig.colorbar(bar, ax=ax, label=label, shrink=0.8)
-        clock = ax.text(0.03, 0.97, "", transform=ax.transAxes, va="top", fontsize=9)
-        ax.legend(loc="upper right", fontsize=6)
-        ax.set_title(f"N = {N}, μ = {c.rod.mu:g}", fontsize=9)
+        # the time stamp is the axes' title, the legend below the axes: neither covers
+        # the other nor the rod
+        clock = ax.set_title("", fontsize=9)
+        fig.legend(loc="outside lower center", fontsize=6)
+        fig.suptitle(f"N = {N}, μ = {c.rod.mu:g}", fontsize=9)
 
         def draw(i):
-            u = src.snapshot_row("u", int(i))
-            values = strain_of(u, N) if quantity == "strain" else \
-                (lambda v: (v[:-1] + v[1:]) / 2)(src.snapshot_row("v", int(i)))
+            u, values = frame_values(i)
             segments = np.stack([np.stack([np.zeros(N), u[:-1]], 1),
                                  np.stack([np.zeros(N), u[1:]], 1)], 1)
             bar.set_segments(segments)

@@ -8,30 +8,40 @@ import sys
 import zlib
 from pathlib import Path
 
+from .._extras import MissingExtra
 from ..output.h5files import WriteFailed, disk_cause
 
-__all__ = ["MissingMatplotlib", "NothingToDraw", "new_figure", "discard", "save",
+__all__ = ["MissingMatplotlib", "NothingToDraw", "need_matplotlib", "new_figure", "discard", "save",
            "write_whole", "IMAGE_SUFFIXES"]
 
 IMAGE_SUFFIXES = (".png", ".pdf", ".svg")
 
 
-class MissingMatplotlib(ImportError):
-    pass
+class MissingMatplotlib(MissingExtra):
+    """matplotlib (the ``plot`` extra) is not installed; the message says how to install
+    it."""
 
 
 class NothingToDraw(ValueError):
     """The data hold nothing the figure could show (no samples, every value NaN)."""
 
 
-def new_figure(**kwargs):
-    """A matplotlib Figure: from pyplot when it is imported (inline in notebooks), else a
-    plain Figure; MissingMatplotlib without matplotlib."""
+def need_matplotlib() -> None:
+    """MissingMatplotlib (naming the extra) unless matplotlib can be imported."""
     try:
-        from matplotlib.figure import Figure
+        import matplotlib  # noqa: F401
+        import matplotlib.figure  # noqa: F401
     except ImportError:
         raise MissingMatplotlib("plotting needs matplotlib; install it with: "
                                 "pip install 'rodjit[plot]'") from None
+
+
+def new_figure(**kwargs):
+    """A matplotlib Figure: from pyplot when it is imported (inline in notebooks), else a
+    plain Figure; MissingMatplotlib without matplotlib."""
+    need_matplotlib()
+    from matplotlib.figure import Figure
+
     if "matplotlib.pyplot" in sys.modules:
         return sys.modules["matplotlib.pyplot"].figure(**kwargs)
     return Figure(**kwargs)

@@ -290,4 +290,20 @@ def _contact(src, fig, ax, *, t_range, **_):
     else:
         top.set_xlabel(_label("time t", "diagnostics", "t"))
     _window(top, t, t_range)
+    if t_range is not None:     # the heights and forces of the window, not of the whole run
+        shown = (t >= t_range[0]) & (t <= t_range[1])
+        _fit_y(top, d["u_bottom"][shown], (0.0, -beta))
+        _fit_y(bottom, d["floor_force"][shown], (0.0,))
     return [top, bottom]
+
+
+def _fit_y(ax, values, include=()) -> None:
+    """The y range of ``ax``: the finite ``values`` shown and the levels ``include``, with a
+    margin of 5 %."""
+    v = np.asarray(values, float)
+    v = np.concatenate([v[np.isfinite(v)], np.asarray(include, float)])
+    if v.size == 0:
+        return
+    lo, hi = float(v.min()), float(v.max())
+    pad = 0.05 * (hi - lo) if hi > lo else max(abs(hi), 1.0) * 0.05
+    ax.set_ylim(lo - pad, hi + pad)

@@ -3,14 +3,16 @@ the others), and a heatmap over two swept keys with the rest held fixed."""
 from __future__ import annotations
 
 import itertools
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
-from ..config import parse_value
+from ..config import field_spec, parse_value
+from ..output.cf import column_attrs
 from ..sweeps.grid import format_value
 from ..sweeps.point import SUMMARY_COLUMNS
-from ..sweeps.sweep_table import SweepTable, load_sweep
+from ..sweeps.sweep_table import SweepTable, dimension_names, load_sweep
 from .mpl import NothingToDraw, new_figure, save
 
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
@@ -30,6 +32,32 @@ def _name(key: str) -> str:
     return _SYMBOLS.get(key, key)
 
 
+def _unit(text: str | None) -> str:
+    """`` [unit]`` for an axis label ('' for a key or column without one: text, flags)."""
+    return f" [{text}]" if text else ""
+
+
+def _key_label(key: str) -> str:
+    """A swept key's axis label: its symbol, the key and its unit (``μ (rod.mu) [N s]``)."""
+    name = _name(key)
+    return (name if name == key else f"{name} ({key})") + _unit(field_spec(key).unit)
+
+
+def _quantity_label(quantity: str) -> str:
+    """A summary column's axis label with its unit, as the sweep file carries it."""
+    return quantity + _unit(column_attrs("summary", quantity).get("units"))
+
+
+def _title(ax, text: str) -> None:
+    """The axes title, wrapped to the axes' width (a long description would run past the
+    figure's edges)."""
+    fig = ax.figure
+    width_in = fig.get_figwidth() * ax.get_position().width
+    chars = max(30, int(width_in * 72 / (9 * 0.6)))     # 9 pt characters, ~0.6 em wide
+    lines = [textwrap.fill(part, chars, break_on_hyphens=False) for part in text.split("\n")]
+    ax.set_title("\n".join(lines), fontsize=9)
+
+
 def _check_quantity(quantity: str | None) -> str:
     quantity = quantity or DEFAULT_QUANTITY
     numeric = [c for c, (kind, _) in SUMMARY_COLUMNS.items() if kind != "str"]
@@ -40,9 +68,16 @@ def _check_quantity(quantity: str | None) -> str:
 
 
 def _check_key(grid, key: str, what: str) -> str:
-    if key not in grid.keys:
-        raise ValueError(f"{what} {key!r} is not a swept key (swept: {', '.join(grid.keys)})")
-    return key
+    """The swept key ``key`` names: the key itself (``rod.mu``) or its dimension name in
+    ``SweepTable.to_xarray`` (``mu``)."""
+    if key in grid.keys:
+        return key
+    by_dimension = {dim: k for k, dim in dimension_names(grid.keys).items()}
+    if key in by_dimension:
+        return by_dimension[key]
+    raise ValueError(f"{what} {key!r} is not a swept key (swept: "
+                     + ", ".join(f"{k} or {d}" if d != k else k
+                                 for k, d in dimension_names(grid.keys).items()) + ")")
 
 
 def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
@@ -50,7 +85,7 @@ def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
     values), else its first value when ``default_first``; keys left over vary."""
     out = {}
     for key, text in (at or {}).items():
-        _check_key(grid, key, "--at")
+        key = _check_key(grid, key, "--at")
         if key in free:
             raise ValueError(f"--at {key} fixes the key the figure runs along")
         values = grid.values[grid.keys.index(key)]
@@ -105,7 +140,7 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     grid = table.grid
     x = _check_key(grid, x, "--x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
     if panels is not None:             # one panel per value of that key, side by side
-        _check_key(grid, panels, "--panels")
+        panels = _check_key(grid, panels, "--panels")
         if panels == x or panels in (at or {}):
             raise ValueError(f"--panels {panels} is already the x axis or fixed by --at")
         if ax is not None:
@@ -140,10 +175,10 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
         ax.plot(xv, yv, MARKERS[j % len(MARKERS)] + "-", ms=5, lw=1.0, color=colors[j],
                 label=label or None)
     _scale(ax.set_xscale, xs)
-    ax.set_xlabel(_name(x) if _name(x) == x else f"{_name(x)} ({x})")
-    ax.set_ylabel(quantity)
+    ax.set_xlabel(_key_label(x))
+    ax.set_ylabel(_quantity_label(quantity))
     title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
-    ax.set_title(_label(quantity) + (f"\n{title}" if title else ""), fontsize=9)
+    _title(ax, _label(quantity) + (f"\n{title}" if title else ""))
     if quantity.startswith("restitution"):
         ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
     if others:
@@ -177,11 +212,11 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
     ax = ax or fig.add_subplot()
     mesh = ax.pcolormesh(np.ma.masked_invalid(z), cmap="viridis", shading="flat")
     ax.set_facecolor("0.85")
-    fig.colorbar(mesh, ax=ax, label=quantity)
+    fig.colorbar(mesh, ax=ax, label=_quantity_label(quantity))
     ax.set_xticks(np.arange(len(xs)) + 0.5, [format_value(v) for v in xs])
     ax.set_yticks(np.arange(len(ys)) + 0.5, [format_value(v) for v in ys])
-    ax.set_xlabel(f"{_name(x)} ({x})" if _name(x) != x else x)
-    ax.set_ylabel(f"{_name(y)} ({y})" if _name(y) != y else y)
+    ax.set_xlabel(_key_label(x))
+    ax.set_ylabel(_key_label(y))
     if len(xs) <= MAX_ANNOTATED and len(ys) <= MAX_ANNOTATED:
         finite = z[np.isfinite(z)]
         mid = (finite.min() + finite.max()) / 2 if finite.size else 0.0
@@ -193,20 +228,23 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
                 ax.text(c + 0.5, r + 0.5, text, ha="center", va="center", fontsize=7,
                         color=color)
     title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
-    ax.set_title(_label(quantity) + (f"\nat {title}" if title else ""), fontsize=9)
+    _title(ax, _label(quantity) + (f"\nat {title}" if title else ""))
 
 
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
                  at=None, panels=None, ax=None, figsize=None):
     """The matplotlib Figure of kind ``kind`` for a sweep file (path) or SweepTable; with
     ``ax``, drawn into that axes; ``panels`` (restitution): one panel per value of that
-    key.  NothingToDraw if every value shown would be NaN."""
+    key.  ``x``, ``y``, ``panels`` and the keys of ``at`` name swept keys as configuration
+    keys (``rod.mu``) or as the dimension names of ``SweepTable.to_xarray`` (``mu``).
+    NothingToDraw if every value shown would be NaN."""
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
     if quantity is None and DEFAULT_QUANTITY not in table.columns:
         quantity = "restitution_first"   # a sweep file older than the first-impact columns
     quantity = _check_quantity(quantity)
+    at = {_check_key(table.grid, k, "--at"): v for k, v in (at or {}).items()}
     fig = ax.figure if ax is not None else new_figure(figsize=figsize or (7.5, 4.8),
                                                       layout="constrained")
     if kind == "restitution":

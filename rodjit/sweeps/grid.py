@@ -16,7 +16,7 @@ from typing import Any, Iterator, Mapping
 
 import numpy as np
 
-from ..config import CROSS_CHECKS, Config, field_spec, parse_value
+from ..config import CROSS_CHECKS, Config, field_spec, number_with_unit, parse_value
 
 __all__ = ["Grid", "parse_grid_option", "format_value", "MAX_POINTS"]
 
@@ -78,9 +78,24 @@ def _values_from_text(key: str, text: str) -> list[Any]:
         return fn(a, b, n).tolist()
     items = [t for t in (s.strip() for s in text.split(",")) if t != ""]
     if not items:
-        raise ValueError(f"grid {key}: no values given (e.g. --grid {key}=1,2,3 or "
-                         f"{key}=linspace(0,1,5))")
-    return [parse_value(key, item) for item in items]
+        raise ValueError(f"grid {key}: no values given ({_forms(key)})")
+    values = [parse_value(key, item) for item in items]
+    if _field(key).kind in ("int", "float"):
+        for item, value in zip(items, values):
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                continue
+            if number_with_unit(item) is not None:
+                break           # the key's own message: values are SI numbers
+            where = f"grid {key}" + ("" if item == text.strip() else f" = {text.strip()!r}")
+            raise ValueError(f"{where}: {item!r} is not a number; {_forms(key)}")
+    return values
+
+
+def _forms(key: str) -> str:
+    """The forms a grid's values take, for messages."""
+    return (f"give the values as a comma-separated list ({key}=0,1,10,100), "
+            f"linspace(a,b,n) (n values from a to b: {key}=linspace(0,100,11)) or "
+            f"logspace(a,b,n) (n values from 10^a to 10^b)")
 
 
 def _coerce(key: str, values) -> tuple[Any, ...]:

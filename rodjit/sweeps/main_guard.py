@@ -2,11 +2,15 @@
 the user's main script again in every worker.  A script that calls ``rodjit.sweep`` at its
 top level, outside ``if __name__ == "__main__":``, would start a sweep inside every worker
 (multiprocessing forbids it and the worker dies), so every point failed.  ``check_main``
-finds that before any worker starts and says what to add."""
+finds that before any worker starts and says what to add; so too a main script the workers
+cannot read again (read from standard input or a pipe): spawn would fail to import it in
+every worker.  With no main script (a notebook, the interactive interpreter, ``python -c``)
+spawn imports nothing and no guard is needed."""
 from __future__ import annotations
 
 import ast
 import multiprocessing
+import os
 import sys
 
 __all__ = ["MissingMainGuard", "check_main"]
@@ -17,7 +21,8 @@ ADVICE = ('put the code that calls rodjit.sweep under  if __name__ == "__main__"
 
 class MissingMainGuard(RuntimeError):
     """``rodjit.sweep`` with worker processes was called from a script's top level outside
-    ``if __name__ == "__main__":``."""
+    ``if __name__ == "__main__":``, or from a main script the workers cannot import again
+    (one read from standard input)."""
 
 
 def _is_main_test(node) -> bool:
@@ -46,6 +51,15 @@ def _guarded(source: str, line: int) -> bool:
     return True
 
 
+def _readable_again(path: str) -> bool:
+    """Whether a spawned worker can read the main script ``path`` again: a regular file
+    (relative paths from the directory the interpreter started in, as spawn reads them);
+    not ``<stdin>``, a pipe such as ``/dev/fd/63`` or a file deleted since."""
+    if not os.path.isabs(path) and multiprocessing.process.ORIGINAL_DIR is not None:
+        path = os.path.join(multiprocessing.process.ORIGINAL_DIR, path)
+    return os.path.isfile(path)
+
+
 def check_main() -> None:
     """Raise MissingMainGuard when this call comes (through any functions) from the top
     level of the main script outside its ``__main__`` guard, or from a worker's re-import
@@ -56,11 +70,18 @@ def check_main() -> None:
                                + ADVICE.format(where=getattr(main, "__file__", "the script")))
     main = sys.modules.get("__main__")
     path = getattr(main, "__file__", None)
-    if main is None or path is None:           # interactive, notebook, python -c
-        return
+    if main is None or path is None:           # interactive, notebook, python -c: spawn
+        return                                 # has no script to import again
     spec = getattr(main, "__spec__", None)
     if spec is not None and spec.name.endswith(".__main__"):   # python -m package: spawn
         return                                                 # does not import it again
+    if spec is None and not _readable_again(path):
+        where = ("standard input (python3 -)" if path == "<stdin>"
+                 else f"{path!r}, which is not a file")
+        raise MissingMainGuard(f"rodjit.sweep with worker processes was called from a main "
+                               f"script read from {where}: worker processes import the main "
+                               f"script again and cannot read it; save the script to a file "
+                               f"and run python3 FILE, or use jobs=1, scheduler=\"inline\"")
     frame = sys._getframe(1)
     while frame is not None:
         if frame.f_globals is main.__dict__ and frame.f_code.co_name == "<module>":

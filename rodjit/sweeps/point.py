@@ -13,11 +13,13 @@ import os
 import pickle
 import socket
 import time
+import warnings
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from ..config import ModelWarning
 from ..driver.files import run_to_file
 from ..driver.run import Run, SimulationError
 from ..model.laws import get_law
@@ -32,7 +34,7 @@ from ..stepping import layout as L
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
            "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS", "start_worker",
-           "worker_info"]
+           "worker_info", "reissue_warnings"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -80,6 +82,7 @@ class PointResult:
     bounces: dict = field(default_factory=dict)
     worker: dict = field(default_factory=dict)
     disk: str = ""      # the disk refused a write of the point's run file: what it said
+    warnings: tuple = ()    # the ModelWarning texts the run issued, said by the parent
 
     @property
     def status(self) -> str:
@@ -204,13 +207,22 @@ def run_point(task: PointTask) -> PointResult:
     values = empty_values()
     bounces = empty_bounces()
     disk = ""
+    said: tuple = ()
     try:
         for mod in task.laws:
             importlib.import_module(mod)
-        if task.save_path is None:
-            got, bounces = _run_in_memory(task.config)
-        else:
-            got, bounces = _run_to_file(task.config, task.save_path)
+        caught: list = []
+        try:
+            # (process-wide, like every warnings filter: a Dask worker running tasks in
+            # several threads may misplace a warning between its points, never a result)
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always", ModelWarning)
+                if task.save_path is None:
+                    got, bounces = _run_in_memory(task.config)
+                else:
+                    got, bounces = _run_to_file(task.config, task.save_path)
+        finally:
+            said = _pass_on(caught)
         values.update(got)
         values.update(_bounce_values(bounces))
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
@@ -222,7 +234,29 @@ def run_point(task: PointTask) -> PointResult:
         else:
             values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     values["wall_time"] = time.perf_counter() - t0
-    return PointResult(task.index, values, bounces, worker_info(), disk)
+    return PointResult(task.index, values, bounces, worker_info(), disk, said)
+
+
+def _pass_on(caught) -> tuple:
+    """The texts of the ModelWarnings among ``caught`` (the parent says them: a worker's
+    own stderr would repeat them once per worker, with its file and line); other warnings
+    are issued again here as they came."""
+    texts = []
+    for w in caught:
+        if issubclass(w.category, ModelWarning):
+            texts.append(str(w.message))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return tuple(dict.fromkeys(texts))
+
+
+def reissue_warnings(result: PointResult, seen: set) -> None:
+    """Issue in this process, as ModelWarning, each warning text of ``result`` not in
+    ``seen`` (which gets it): every distinct warning of a sweep once."""
+    for text in getattr(result, "warnings", ()):
+        if text not in seen:
+            seen.add(text)
+            warnings.warn(text, ModelWarning, stacklevel=3)
 
 
 def _remove_run_file(path: str) -> None:

@@ -29,7 +29,7 @@ from .executors import check_scheduler, default_jobs, make_executor
 from .grid import MAX_POINTS, Grid
 from .main_guard import check_main
 from .plan import check_runs_dir, plan_sweep
-from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules
+from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
 from .sweep_table import SweepTable
 
 __all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
@@ -372,6 +372,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
             yield PointTask(i, cfg, path, law_modules(cfg))
 
     ran = failed = written = 0
+    said: set = set()      # the points' warnings issued so far (each text once)
     t_last = t0
     batch = []
     busy = False           # the last write found the file held by a reader
@@ -384,6 +385,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         try:
             for result in results:
                 if result is not None:
+                    reissue_warnings(result, said)
                     for name in SUMMARY_COLUMNS:
                         cols[name][result.index] = result.values[name]
                     if output is None:
@@ -448,6 +450,10 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
             message = (f"interrupted by {name} after {done0 + ran} of {n} points"
                        + (f"; continue with: rodjit sweep --resume -o {output}" if output
                           else ""))
+        if status == "completed" and n and bool(np.all(cols["status"] == "failed")):
+            status = "failed"       # nothing to show for it: the file says so, with why
+            message = (f"every point of the sweep failed ({n}); the first: "
+                       f"{grid.describe(0)}: {cols['message'][0]}")
         table.status, table.message = status, message
         if output is not None:
             try:
@@ -465,7 +471,6 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         raise SweepInterrupted(f"interrupted by {name} after the last point"
                                + (f"; {str(output)!r} is complete" if output else ""),
                                stop.signum, table)
-    if table.counts["completed"] == 0 and table.counts["failed"] == n:
-        raise SweepFailed(f"every point of the sweep failed ({n}); the first: "
-                          f"{grid.describe(0)}: {cols['message'][0]}", table)
+    if status == "failed":
+        raise SweepFailed(message, table)
     return table

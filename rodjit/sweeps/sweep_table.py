@@ -8,12 +8,14 @@ import numpy as np
 
 from .._display import html_table, number, text
 from .._extras import need
+from ..config import field_spec
+from ..output import cf
 from ..records.bounces import empty_bounces
 from . import sweep_file
 from .grid import Grid, format_value
 from .point import SUMMARY_COLUMNS
 
-__all__ = ["SweepTable", "load_sweep", "TABLE_COLUMNS"]
+__all__ = ["SweepTable", "load_sweep", "TABLE_COLUMNS", "dimension_names"]
 
 # the columns `report` prints after the swept keys (messages of failed points follow)
 TABLE_COLUMNS = ("status", "n_bounces", "restitution_first", "restitution_mean",
@@ -21,12 +23,25 @@ TABLE_COLUMNS = ("status", "n_bounces", "restitution_first", "restitution_mean",
                  "energy_error", "steps", "wall_time")
 
 
-# units of the numeric summary columns (records.metadata's unit system)
-SUMMARY_UNITS = {"n_bounces": "1", "n_complete_bounces": "1", "restitution_first": "1",
-                 "restitution_mean": "1", "contact_time_first": "s", "min_u0": "m",
-                 "max_floor_force": "N", "min_strain": "1", "energy_error": "1",
-                 "steps": "1", "rejected_steps": "1", "wall_time": "s", "compile_time": "s",
-                 "run_time": "s", "t_final": "s"}
+def _key_attrs(key: str) -> dict:
+    """The attributes of a swept key's coordinate: the key, its meaning and its unit (as
+    the sweep file's ``/summary`` columns carry them)."""
+    spec = field_spec(key)
+    attrs = {"key": key, "long_name": key}
+    if getattr(spec, "meaning", None):
+        attrs["description"] = spec.meaning
+    if getattr(spec, "unit", None):
+        attrs["units"] = spec.unit
+    return attrs
+
+
+def dimension_names(keys) -> dict[str, str]:
+    """Swept key -> its dimension name in ``SweepTable.to_xarray``: a Python identifier
+    (``rod.mu`` -> ``mu``; ``rod_mu`` when two keys share their last part).  ``rodjit plot``
+    takes either name for a swept key."""
+    last = [k.rpartition(".")[2] for k in keys]
+    return {k: (short if last.count(short) == 1 else k.replace(".", "_"))
+            for k, short in zip(keys, last)}
 
 
 @dataclass(repr=False)
@@ -156,9 +171,7 @@ class SweepTable:
     def dimension_names(self) -> dict[str, str]:
         """Swept key -> its dimension name in ``to_xarray``: a Python identifier (``rod.mu``
         -> ``mu``; ``rod_mu`` when two keys share their last part)."""
-        last = [k.rpartition(".")[2] for k in self.grid.keys]
-        return {k: (short if last.count(short) == 1 else k.replace(".", "_"))
-                for k, short in zip(self.grid.keys, last)}
+        return dimension_names(self.grid.keys)
 
     def to_xarray(self):
         """An xarray Dataset over the grid: one dimension per swept key, named by
@@ -167,7 +180,7 @@ class SweepTable:
         xr = need("xarray", "analysis", "SweepTable.to_xarray")
         dims = self.dimension_names()
         shape = tuple(len(v) for v in self.grid.values)
-        coords = {dims[k]: (dims[k], np.asarray(values), {"key": k, "long_name": k})
+        coords = {dims[k]: (dims[k], np.asarray(values), _key_attrs(k))
                   for k, values in zip(self.grid.keys, self.grid.values)}
         data = {}
         for name, values in self.columns.items():
@@ -175,8 +188,12 @@ class SweepTable:
                 continue
             kind, description = SUMMARY_COLUMNS.get(name, ("", ""))
             attrs = {"long_name": name, "description": description}
-            if name in SUMMARY_UNITS:
-                attrs["units"] = SUMMARY_UNITS[name]
+            try:
+                units = cf.column_attrs("summary", name).get("units")   # as in the file
+            except KeyError:        # a column this version does not know
+                units = None
+            if units:
+                attrs["units"] = units
             data[name] = (tuple(dims[k] for k in self.grid.keys),
                           np.asarray(values).reshape(shape), attrs)
         return xr.Dataset(data, coords, {"status": self.status, "points": len(self),

@@ -16,7 +16,7 @@ from ..._jit import step_kernel
 class AikiKosugiRod(NamedTuple):
     """Parameters of f(ε) = κ/2 (ε + 1/2 − 1/(2(1+ε)³)), ε > −1.
 
-    Parameters
+    Attributes
     ----------
     kappa : float
         Elastic modulus κ of the rod [N] (``rod.kappa``).
@@ -28,7 +28,7 @@ class AikiKosugiRod(NamedTuple):
 class AikiKosugiFloor(NamedTuple):
     """Parameters of σ_b(h) = κ_b (β³/(h+β)³ − 1) for h ≤ 0, 0 above; h > −β.
 
-    Parameters
+    Attributes
     ----------
     kappa_b : float
         Stiffness κ_b of the floor [N] (``floor.kappa_b``).
