@@ -193,8 +193,11 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             if not target:
                 raise ValueError("--resume needs the file to continue: rodjit run --resume "
                                  "FILE.h5")
+            from .output.estimate import parse_size
+
             summary = resume_file(target, t_end=t_end, command=command, progress=progress,
-                                  flush_interval=flush_interval)
+                                  flush_interval=flush_interval,
+                                  max_output=parse_size(max_output), max_steps=max_steps)
         else:
             cfg, default_name = _load_config(config)
             overrides = _overrides(sets)

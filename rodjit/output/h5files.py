@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import datetime
 import errno
+from contextlib import contextmanager
 import os
 import re
 from pathlib import Path
@@ -23,7 +24,7 @@ __all__ = ["NotARunFile", "FileBusy", "OutputExists", "open_file", "file_kind", 
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
            "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
-           "abandoned", "reserve_space", "quiet_disk_errors"]
+           "abandoned", "reserve_space", "quiet_disk_errors", "damaged"]
 
 
 class NotARunFile(ValueError):
@@ -67,6 +68,24 @@ def _unopenable(path, exc) -> NotARunFile:
                            f"--resume {path}' (or 'rodjit sweep --resume -o {path}') once "
                            f"there is space")
     return NotARunFile(f"cannot open {str(path)!r}: {' '.join(str(exc).split())}")
+
+
+@contextmanager
+def damaged(path):
+    """``with damaged(path):`` reading a rodjit file, whose errors on a damaged or
+    incomplete file (a missing object or attribute, unreadable HDF5 structures) become
+    one NotARunFile line naming the file; a disk error passes unchanged."""
+    try:
+        yield
+    except NotARunFile:
+        raise
+    except (KeyError, OSError, RuntimeError, TypeError, IndexError, AttributeError,
+            UnicodeError) as exc:
+        if disk_cause(exc) is not None:
+            raise
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise NotARunFile(f"{str(path)!r} is damaged or not a complete rodjit file "
+                          f"({detail})") from None
 
 
 def check_kind(f: h5py.File, kind: str, version, path=None) -> None:
