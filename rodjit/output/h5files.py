@@ -12,6 +12,7 @@ import errno
 from contextlib import contextmanager
 import os
 import re
+import stat
 from pathlib import Path
 
 import h5py
@@ -39,10 +40,13 @@ def open_file(path) -> h5py.File:
     """Open a rodjit file read-only: plainly if it was closed, in SWMR-read mode if a writer
     has it open or was killed before closing it (both leave the SWMR flags set)."""
     path = Path(path)
-    if not path.exists():
+    mode = _mode(path)
+    if mode is None:
         raise NotARunFile(f"{str(path)!r} does not exist")
-    if path.is_dir():
+    if stat.S_ISDIR(mode):
         raise NotARunFile(f"{str(path)!r} is a directory, not a rodjit file")
+    if not stat.S_ISREG(mode):
+        raise NotARunFile(f"{str(path)!r} is a {_special(mode)}, not a rodjit file")
     if not os.access(path, os.R_OK):
         raise NotARunFile(f"{str(path)!r} is not readable")
     if not h5py.is_hdf5(path):
@@ -56,6 +60,30 @@ def open_file(path) -> h5py.File:
         return h5py.File(path, "r", swmr=True)
     except OSError as exc:
         raise _unopenable(path, exc) from None
+
+
+def _mode(path) -> int | None:
+    """The ``st_mode`` of what ``path`` names (through symbolic links), None if nothing
+    is there; ValueError (one line) for a name the system refuses (too long, a loop of
+    links, a directory that cannot be searched)."""
+    try:
+        return os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise ValueError(f"the file name {str(path)[:60]!r}... is too long for the file "
+                             f"system ({len(os.fsencode(Path(path).name))} bytes)") from None
+        if exc.errno == errno.ELOOP:
+            raise ValueError(f"{str(path)!r} is a loop of symbolic links") from None
+        raise ValueError(f"cannot look at {str(path)!r}: {exc.strerror}") from None
+
+
+def _special(mode: int) -> str:
+    """What a file that is neither regular nor a directory is, for a message."""
+    return ("named pipe (FIFO)" if stat.S_ISFIFO(mode) else "character device"
+            if stat.S_ISCHR(mode) else "block device" if stat.S_ISBLK(mode) else "socket"
+            if stat.S_ISSOCK(mode) else "special file")
 
 
 def _unopenable(path, exc) -> NotARunFile:
@@ -172,16 +200,26 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
     configuration, an image or anyone else's data.  ``held``: the caller holds the writer
     lock of ``path`` (``output.lock``)."""
     path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.exists():
+    real = Path(os.path.realpath(path)) if path.is_symlink() else path   # written through
+    parent = real.parent if str(real.parent) else Path(".")
+    parent_mode = _mode(parent)
+    if parent_mode is None:
         raise ValueError(f"output directory {str(parent)!r} does not exist")
-    if not parent.is_dir():
+    if not stat.S_ISDIR(parent_mode):
         raise ValueError(f"output directory {str(parent)!r} is not a directory")
-    if path.is_dir():
+    if len(os.fsencode(path.name)) > _name_max(parent):
+        raise ValueError(f"the output file name {path.name[:40]!r}... is too long for the "
+                         f"file system ({len(os.fsencode(path.name))} bytes; at most "
+                         f"{_name_max(parent)})")
+    mode = _mode(path)
+    if mode is not None and stat.S_ISDIR(mode):
         raise ValueError(f"output {str(path)!r} is a directory, not a file")
+    if mode is not None and not stat.S_ISREG(mode):
+        raise ValueError(f"output {str(path)!r} is a {_special(mode)}, not a regular file: "
+                         f"rodjit writes only regular files (with or without --overwrite)")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ValueError(f"output directory {str(parent)!r} is not writable")
-    if path.exists():
+    if mode is not None:
         if not overwrite:
             raise OutputExists(f"output file {str(path)!r} already exists; pass "
                                f"overwrite=True to replace it")
@@ -198,6 +236,14 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
                 raise ValueError(f"output file {str(path)!r} is {what}; --overwrite replaces "
                                  f"only rodjit {kind} files: choose another output path")
     return path
+
+
+def _name_max(directory) -> int:
+    """The longest file name (bytes) the file system of ``directory`` takes."""
+    try:
+        return os.pathconf(directory, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        return 255
 
 
 # ---- the disk failing a writer --------------------------------------------------------------

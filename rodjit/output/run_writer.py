@@ -239,8 +239,9 @@ def _sign_current(f: h5py.File) -> None:
 
 def recover(path) -> None:
     """Rebuild a file whose writer died without closing it (SWMR flags still set): copy the
-    rows matched by its checkpoint into a fresh file, which then replaces it."""
-    path = Path(path)
+    rows matched by its checkpoint into a fresh file, which then replaces it (the file a
+    symbolic link names, keeping the link)."""
+    path = Path(os.path.realpath(path))
     tmp = path.with_name(path.name + ".recovering")
     with h5py.File(path, "r", swmr=True) as src:
         check_run_file(src, path)
