@@ -76,10 +76,15 @@ def _values_from_text(key: str, text: str) -> list[Any]:
         a, b, n = _range_args(key, m.group(1), m.group(2))
         fn = np.linspace if m.group(1) == "linspace" else np.logspace
         return fn(a, b, n).tolist()
-    items = [t for t in (s.strip() for s in text.split(",")) if t != ""]
-    if not items:
+    items = [s.strip() for s in text.split(",")]
+    if items and items[-1] == "" and any(items[:-1]):
+        items.pop()                  # a trailing comma: "1,2,"
+    if not any(items):
         raise ValueError(f"grid {key}: no values given (e.g. --grid {key}=1,2,3 or "
                          f"{key}=linspace(0,1,5))")
+    if "" in items:
+        raise ValueError(f"grid {key}: value {items.index('') + 1} of {text.strip()!r} is "
+                         f"empty (give values separated by single commas, e.g. 1,2,3)")
     return [parse_value(key, item) for item in items]
 
 
