@@ -333,6 +333,8 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                           ("--scheduler", scheduler), ("--save-runs", save_runs)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
     progress = _progress(show_progress, quiet, _SweepProgress)
+    if quiet:
+        _quiet_dask()
     try:
         if resume:
             if overwrite:
@@ -418,7 +420,29 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                    f"{output!r} is complete", err=True)
         sys.exit(128 + late)
     if table.counts["failed"]:
+        click.echo(f"Error: {_failed_points(table, output)}", err=True)   # even with -q
         sys.exit(1)
+
+
+def _failed_points(table, output) -> str:
+    """One line on the failed points of a sweep: how many, the first one's message."""
+    status = table.columns["status"]
+    failed = [i for i, s in enumerate(status) if s == "failed"]
+    first = str(table.columns.get("message", [""] * len(status))[failed[0]]) if failed else ""
+    return one_line(f"{len(failed)} of {len(status)} points failed (point {failed[0]}: "
+                    f"{first or 'no message'}); 'rodjit sweep --resume -o {output}' runs them "
+                    f"again")
+
+
+def _quiet_dask() -> None:
+    """--quiet: Dask's and distributed's own log lines stay off stderr (here and in the
+    processes they start, which read the environment)."""
+    import logging
+    import os
+
+    os.environ["DASK_LOGGING__DISTRIBUTED"] = "critical"
+    for name in ("distributed", "dask", "tornado", "bokeh"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 def _grid(options, max_points: float):
