@@ -16,7 +16,19 @@ from pathlib import Path
 
 import click
 
+EXIT_OK = 0
+EXIT_FAILED = 1
 EXIT_USAGE = 2
+EXIT_SIGNAL = 128          # + the signal's number: 130 SIGINT, 143 SIGTERM
+# the table of exit codes, as ``rodjit --help`` and docs/reference/cli.md print it
+EXIT_CODES = {
+    EXIT_OK: "done (every run or point completed)",
+    EXIT_FAILED: "a run, a sweep point or a fit failed, or the disk refused a write (the "
+                 "file keeps its last checkpoint and says why)",
+    EXIT_USAGE: "usage, configuration, path or file error: one line, nothing written",
+    EXIT_SIGNAL + 2: "stopped by SIGINT (a checkpoint is written; --resume continues)",
+    EXIT_SIGNAL + 15: "stopped by SIGTERM (likewise)",
+}
 DEFAULT_OUTPUT = "default.h5"
 
 
@@ -41,7 +53,7 @@ class UsageError(click.ClickException):
 
 
 class RunFailed(click.ClickException):
-    exit_code = 1
+    exit_code = EXIT_FAILED
 
     def __init__(self, message):
         super().__init__(one_line(message))
@@ -50,7 +62,17 @@ class RunFailed(click.ClickException):
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="rodjit", prog_name="rodjit")
 def main():
-    """Simulate an elastic rod bouncing on a floor (Aiki & Kosugi) and inspect the runs."""
+    """Simulate an elastic rod bouncing on a floor (Aiki & Kosugi) and inspect the runs.
+
+    \b
+    Exit codes (every verb):
+      0    done (every run or point completed)
+      1    a run, a sweep point or a fit failed, or the disk refused a write
+           (the file keeps its last checkpoint and says why)
+      2    usage, configuration, path or file error: one line, nothing written
+      130  stopped by SIGINT (a checkpoint is written; --resume continues)
+      143  stopped by SIGTERM (likewise)
+    """
 
 
 # ---- rodjit run ---------------------------------------------------------------------------
@@ -219,7 +241,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         if not quiet:
             click.echo(exc.summary.report())
         click.echo(str(exc), err=True)
-        sys.exit(128 + exc.signum)
+        sys.exit(EXIT_SIGNAL + exc.signum)
     except SimulationError as exc:
         _close(progress)
         if not quiet and getattr(exc, "summary", None) is not None:
@@ -397,7 +419,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             if exc.table.status == "completed":
                 click.echo(exc.table.report(max_rows=40))
         click.echo(str(exc), err=True)
-        sys.exit(128 + (exc.signum or 2))
+        sys.exit(EXIT_SIGNAL + (exc.signum or 2))
     except SweepFailed as exc:
         _close(progress)
         if not quiet:
@@ -418,7 +440,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     if late is not None:
         click.echo(f"interrupted by {signal.Signals(late).name} after the last point; "
                    f"{output!r} is complete", err=True)
-        sys.exit(128 + late)
+        sys.exit(EXIT_SIGNAL + late)
     if table.counts["failed"]:
         click.echo(f"Error: {_failed_points(table, output)}", err=True)   # even with -q
         sys.exit(1)
