@@ -10,6 +10,7 @@ file's layout is created while the first one does.
 from __future__ import annotations
 
 import math
+import os
 import signal
 import time
 from dataclasses import dataclass
@@ -23,7 +24,7 @@ from ..output.h5files import (FileBusy, OutputExists, WriteFailed, abandon, chec
                               damaged, disk_cause, open_file, repair_truncated, writer_alive,
                               writer_pid)
 from ..output.lock import WriterLock, note_failure
-from ..output.run_reader import check_run_file, read_checkpoint, read_config
+from ..output.run_reader import check_not_lost, check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
@@ -263,14 +264,21 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
                    handle_signals, overlap, max_output=MAX_OUTPUT,
                    max_steps=MAX_STEPS) -> RunSummary:
     """``resume_file`` once this process holds the writer lock of ``path``."""
-    repair_truncated(path)       # cut short by a full disk: its checkpoint is still there
-    with open_file(path) as f, damaged(path):
-        check_run_file(f, path)
-        config = read_config(f)
-        ck = read_checkpoint(f)
-        needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
-        alive = writer_alive(f, lock=False) if needs_recovery else False
-        pid = writer_pid(f) if alive else None
+    cut = repair_truncated(path)   # cut short by a full disk: its checkpoint is still there
+    try:
+        with open_file(path) as f, damaged(path):
+            check_run_file(f, path)
+            config = read_config(f)
+            ck = read_checkpoint(f)
+            if cut is not None:
+                check_not_lost(f, ck, cut[0], path)
+            needs_recovery = f.swmr_mode   # SWMR-read mode: the writer never closed it
+            alive = writer_alive(f, lock=False) if needs_recovery else False
+            pid = writer_pid(f) if alive else None
+    except ValueError:
+        if cut is not None:        # refused: the file goes back to what it was
+            os.truncate(path, cut[0])
+        raise
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
     if t_end is not None:

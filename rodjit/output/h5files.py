@@ -367,16 +367,17 @@ def truncation(path) -> tuple[int, int] | None:
     return None
 
 
-def repair_truncated(path) -> bool:
+def repair_truncated(path) -> tuple[int, int] | None:
     """Give a file cut short by a failed write its recorded length back (zeros at the end,
-    beyond every checkpointed row), so it opens and its checkpoint can be recovered; True
-    if it was cut short.  The caller holds the writer lock."""
+    which should lie beyond every checkpointed row: ``run_reader.check_not_lost`` makes
+    sure), so it opens and its checkpoint can be recovered; (bytes that were on disk,
+    bytes now) if it was cut short, else None.  The caller holds the writer lock."""
     cut = truncation(path)
     if cut is None:
-        return False
+        return None
     try:
         os.truncate(path, cut[1])
     except OSError as exc:
         raise WriteFailed(f"cannot repair {str(path)!r} ({cut[0]} of its {cut[1]} bytes are "
                           f"on disk): {disk_cause(exc) or exc.strerror}") from None
-    return True
+    return cut

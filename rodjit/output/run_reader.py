@@ -19,7 +19,7 @@ from .cf import as_bool
 from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, KIND, READS,
                          REQUIRED_ATTRS, STATUSES, TABLES, digest_rows, x_path)
 
-__all__ = ["check_run_file", "read_config", "read_checkpoint", "read_table", "read_x",
+__all__ = ["check_run_file", "check_not_lost", "read_config", "read_checkpoint", "read_table", "read_x",
            "load_file"]
 
 
@@ -124,6 +124,36 @@ def verify_checkpoint(f: h5py.File, slot: int, values: dict, digest) -> None:
         if not 0 <= int(n) <= rows:
             raise NotARunFile(f"{name!r} fails its integrity check: {where} claims {int(n)} "
                               f"rows of /{table}, which holds {rows}")
+
+
+def check_not_lost(f: h5py.File, ck: dict, on_disk: int, path=None) -> None:
+    """NotARunFile unless every byte the checkpoint ``ck`` relies on lies in the first
+    ``on_disk`` bytes of the file: a file cut short (``h5files.repair_truncated``) by a
+    full disk loses only what was written after its last checkpoint; one cut anywhere
+    else lost rows its checkpoint claims, which zeros must not stand in for."""
+    name = str(path if path is not None else f.filename)
+    with damaged(name):
+        for table, cols in TABLES.items():
+            n = ck["lengths"][table]
+            for col in cols:
+                ds = f[table][col]
+                if n == 0 or ds.chunks is None:
+                    continue
+                for i in range(ds.id.get_num_chunks()):
+                    info = ds.id.get_chunk_info(i)
+                    if info.chunk_offset[0] < n and info.byte_offset + info.size > on_disk:
+                        raise NotARunFile(
+                            f"{name!r} is cut short ({on_disk} bytes) inside rows its "
+                            f"checkpoint claims (/{table}/{col} from row "
+                            f"{info.chunk_offset[0]}): they are lost, and the file cannot "
+                            f"be continued")
+        ckg = f["checkpoint"]
+        g = ckg[f"slot{int(ckg['current'][()])}"]
+        for ds in [ckg["current"], *(g[d] for d in g)]:
+            offset = ds.id.get_offset()
+            if offset is not None and offset + ds.id.get_storage_size() > on_disk:
+                raise NotARunFile(f"{name!r} is cut short ({on_disk} bytes) inside its "
+                                  f"checkpoint ({ds.name}): it cannot be continued")
 
 
 def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str, np.ndarray]:
