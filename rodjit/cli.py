@@ -18,7 +18,19 @@ from pathlib import Path
 
 import click
 
+EXIT_OK = 0
+EXIT_FAILED = 1
 EXIT_USAGE = 2
+EXIT_SIGNAL = 128          # + the signal's number: 130 SIGINT, 143 SIGTERM
+# the table of exit codes, as ``rodjit --help`` and docs/reference/cli.md print it
+EXIT_CODES = {
+    EXIT_OK: "done (every run or point completed)",
+    EXIT_FAILED: "a run, a sweep point or a fit failed, or the disk refused a write (the "
+                 "file keeps its last checkpoint and says why)",
+    EXIT_USAGE: "usage, configuration, path or file error: one line, nothing written",
+    EXIT_SIGNAL + 2: "stopped by SIGINT (a checkpoint is written; --resume continues)",
+    EXIT_SIGNAL + 15: "stopped by SIGTERM (likewise)",
+}
 DEFAULT_OUTPUT = "default.h5"
 
 
@@ -43,7 +55,7 @@ class UsageError(click.ClickException):
 
 
 class RunFailed(click.ClickException):
-    exit_code = 1
+    exit_code = EXIT_FAILED
 
     def __init__(self, message):
         super().__init__(one_line(message))
@@ -96,7 +108,17 @@ class _Commands(click.Group):
 @click.version_option(package_name="rodjit", prog_name="rodjit")
 @click.pass_context
 def main(ctx):
-    """Simulate an elastic rod bouncing on a floor (Aiki & Kosugi) and inspect the runs."""
+    """Simulate an elastic rod bouncing on a floor (Aiki & Kosugi) and inspect the runs.
+
+    \b
+    Exit codes (every verb):
+      0    done (every run or point completed)
+      1    a run, a sweep point or a fit failed, or the disk refused a write
+           (the file keeps its last checkpoint and says why)
+      2    usage, configuration, path or file error: one line, nothing written
+      130  stopped by SIGINT (a checkpoint is written; --resume continues)
+      143  stopped by SIGTERM (likewise)
+    """
     ctx.with_resource(_warnings_as_lines())
 
 
@@ -238,8 +260,11 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
             if not target:
                 raise ValueError("--resume needs the file to continue: rodjit run --resume "
                                  "FILE.h5")
+            from .output.estimate import parse_size
+
             summary = resume_file(target, t_end=t_end, command=command, progress=progress,
-                                  flush_interval=flush_interval)
+                                  flush_interval=flush_interval,
+                                  max_output=parse_size(max_output), max_steps=max_steps)
         else:
             cfg, default_name = _load_config(config)
             overrides = _overrides(sets)
@@ -260,7 +285,7 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         _close(progress)
         _say_run(exc.summary, quiet)
         click.echo(str(exc), err=True)
-        sys.exit(128 + exc.signum)
+        sys.exit(EXIT_SIGNAL + exc.signum)
     except SimulationError as exc:
         _close(progress)
         if getattr(exc, "summary", None) is not None:
@@ -385,6 +410,8 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                           ("--scheduler", scheduler), ("--save-runs", save_runs)],
         [("--resume", resume), ("--overwrite", overwrite), ("--quiet", quiet)])
     progress = _progress(show_progress, quiet, _SweepProgress)
+    if quiet:
+        _quiet_dask()
     try:
         if resume:
             if overwrite:
@@ -447,7 +474,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
             if exc.table.status == "completed":
                 click.echo(exc.table.report(max_rows=40))
         click.echo(str(exc), err=True)
-        sys.exit(128 + (exc.signum or 2))
+        sys.exit(EXIT_SIGNAL + (exc.signum or 2))
     except SweepFailed as exc:
         _close(progress)
         if not quiet:
@@ -468,9 +495,31 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
     if late is not None:
         click.echo(f"interrupted by {signal.Signals(late).name} after the last point; "
                    f"{output!r} is complete", err=True)
-        sys.exit(128 + late)
+        sys.exit(EXIT_SIGNAL + late)
     if table.counts["failed"]:
+        click.echo(f"Error: {_failed_points(table, output)}", err=True)   # even with -q
         sys.exit(1)
+
+
+def _failed_points(table, output) -> str:
+    """One line on the failed points of a sweep: how many, the first one's message."""
+    status = table.columns["status"]
+    failed = [i for i, s in enumerate(status) if s == "failed"]
+    first = str(table.columns.get("message", [""] * len(status))[failed[0]]) if failed else ""
+    return one_line(f"{len(failed)} of {len(status)} points failed (point {failed[0]}: "
+                    f"{first or 'no message'}); 'rodjit sweep --resume -o {output}' runs them "
+                    f"again")
+
+
+def _quiet_dask() -> None:
+    """--quiet: Dask's and distributed's own log lines stay off stderr (here and in the
+    processes they start, which read the environment)."""
+    import logging
+    import os
+
+    os.environ["DASK_LOGGING__DISTRIBUTED"] = "critical"
+    for name in ("distributed", "dask", "tornado", "bokeh"):
+        logging.getLogger(name).setLevel(logging.CRITICAL)
 
 
 def _grid(options, max_points: float):

@@ -118,7 +118,11 @@ class _Spec:
         elif self.kind == "float":
             if is_bool or not isinstance(value, numbers.Real):
                 raise ValueError(f"{key} = {value!r} is not a number ({self.describe()})")
-            value = float(value)
+            try:
+                value = float(value)
+            except OverflowError:      # an integer beyond any float (hundreds of digits)
+                raise ValueError(f"{key} = {_shown(value)} is out of range "
+                                 f"({self.describe()})") from None
             if not math.isfinite(value):
                 raise ValueError(f"{key} = {value!r} is not finite ({self.describe()})")
         elif self.kind == "str":
@@ -127,7 +131,7 @@ class _Spec:
             if self.choices is not None and value not in self.choices:
                 raise ValueError(f"{key} = {value!r} is not allowed ({self.describe()})")
         if self.check is not None and not self.check(value):
-            raise ValueError(f"{key} = {value!r} is out of range ({self.describe()})")
+            raise ValueError(f"{key} = {_shown(value)} is out of range ({self.describe()})")
         return value
 
     def comment(self, default: Any) -> str:
@@ -145,6 +149,14 @@ class _Spec:
         else:
             text = f"{self.kind} {self.rng}".strip()
         return text + (", or unset" if self.optional else "")
+
+
+def _shown(value) -> str:
+    """``repr(value)``, an integer of many digits shortened (its digits counted)."""
+    text = repr(value)
+    if isinstance(value, int) and len(text) > 24:
+        return f"{text[:12]}...({len(text.lstrip('-'))} digits)"
+    return text
 
 
 def _quoted_error(key: str, value: str, spec: "_Spec") -> str:
@@ -944,6 +956,9 @@ def _flatten(data: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     for key, value in data.items():
         full = f"{prefix}{key}"
         if isinstance(value, Mapping):
+            if prefix and full in valid_keys():   # a table where a value belongs
+                raise ValueError(f"{full} takes a value ({field_spec(full).describe()}), "
+                                 f"not a table ({{{', '.join(map(str, value))}}})")
             if prefix:  # sections nest one level only
                 raise _unknown_key_error(full)
             if full not in _FIELDS:

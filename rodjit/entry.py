@@ -45,8 +45,40 @@ def _exit_interrupted(signum: int):
     _finish(128 + signum)
 
 
+class _PipeSafe:
+    """Standard output that a reader closing its end (``rodjit info x.h5 | head -1``, ``|
+    true``) cannot fail: what is left to print goes to /dev/null, and the command ends
+    with the exit code of its work, as ``head``-style pipes expect."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._drop()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._drop()
+
+    def _drop(self):
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, self._stream.fileno())
+        os.close(null)
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
 def main() -> None:
     """Run the ``rodjit`` command line on ``sys.argv`` and exit with its code."""
+    if sys.stdout is not None and not isinstance(sys.stdout, _PipeSafe):
+        sys.stdout = _PipeSafe(sys.stdout)
     try:
         install_early_handlers()     # (already while ``rodjit/__init__`` was imported)
         if hasattr(signal, "SIGXFSZ"):

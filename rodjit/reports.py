@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .output.h5files import NotARunFile, file_kind, writer_alive
+from .output.h5files import NotARunFile, damaged, file_kind, writer_alive
 from .output.lock import failure_note
 from .output.run_layout import FORMAT_VERSION as RUN_FORMAT_VERSION
 from .output.summary import summarize
@@ -94,7 +94,8 @@ def readable_kind(path) -> str:
 def about(path) -> tuple[str, About]:
     """The kind of the file at ``path`` and what ``info`` prints of it."""
     kind = readable_kind(path)
-    return kind, READERS[kind](str(path))
+    with damaged(path):
+        return kind, READERS[kind](str(path))
 
 
 def info(path) -> str:

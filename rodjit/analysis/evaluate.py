@@ -12,7 +12,9 @@ import math
 import os
 import tempfile
 
-__all__ = ["evaluate", "Extractor"]
+__all__ = ["evaluate", "check_limits", "Extractor", "MAX_POINTS"]
+
+from ..sweeps.grid import MAX_POINTS   # runs one study may ask for (a sweep's limit)
 
 # an observable beside the built-in ones: name -> function(Result) -> float
 Extractor = "Callable[[rodjit.Result], float]"
@@ -41,6 +43,36 @@ def _failed(message: str, extra=None) -> dict:
     return out
 
 
+def check_limits(configs, *, max_output: float | None = None, max_steps: float | None = None,
+                 max_points: float = MAX_POINTS) -> None:
+    """ValueError (one line) unless every configuration passes the limits a new run or
+    sweep passes (``output.estimate.check_run``, the one estimate): at most
+    ``max_points`` of them, each finishing in at most ``max_steps`` fixed steps and
+    holding at most ``max_output`` bytes of output (in memory, or in the temporary file
+    a pool worker writes)."""
+    from ..output.estimate import ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, check_run
+
+    if len(configs) > max_points:
+        raise ValueError(f"{len(configs):,} runs are more than the limit of "
+                         f"{max_points:,.0f} points")
+    seen = set()
+    for i, cfg in enumerate(configs):
+        key = tuple(cfg.get(k) for k in ESTIMATE_KEYS)
+        if key in seen:
+            continue
+        seen.add(key)
+        check_run(cfg, None, max_output=MAX_OUTPUT if max_output is None else max_output,
+                  max_steps=MAX_STEPS if max_steps is None else max_steps,
+                  what=f"the run at {_where(cfg, configs[0])}")
+
+
+def _where(cfg, first) -> str:
+    """The keys where ``cfg`` differs from the first configuration (for a message)."""
+    a, b = cfg.flat(), first.flat()
+    differ = [f"{k}={a[k]!r}" for k in a if a[k] != b.get(k)]
+    return ", ".join(differ[:3]) if differ else "the base configuration"
+
+
 def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
              merge_time: float | None = None, extra: dict | None = None) -> list[dict]:
     """The observables (``rodjit.analysis.observables``, and ``extra``: name ->
@@ -54,6 +86,7 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
     from ..sweeps.point import PointTask, law_modules, reissue_warnings
 
     configs = list(configs)
+    check_limits(configs)
     check_scheduler(scheduler)
     jobs = default_jobs() if jobs is None else jobs
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:

@@ -103,11 +103,16 @@ class FitResult:
         return asdict(self)
 
 
+MAX_SCAN = 10**4     # values one scan of the bracket may take
+
+
 def scan_points(lo: float, hi: float, n: int) -> list[float]:
     """``n`` values spanning [lo, hi]: geometric when the bracket spans two decades or more
     (0 kept as the first point), else even."""
-    if n < 2:
-        raise ValueError(f"points = {n!r} is out of range (>= 2)")
+    if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= MAX_SCAN:
+        shown = repr(n) if len(repr(n)) <= 24 else repr(n)[:12] + "..."
+        raise ValueError(f"points = {shown} is out of range (a whole number in [2, "
+                         f"{MAX_SCAN}])")
     if lo >= 0 and hi > 0 and (lo == 0 or hi / lo >= 100):
         if lo == 0:
             return [0.0] + [float(x) for x in np.geomspace(hi * 1e-3, hi, n - 1)]

@@ -10,6 +10,7 @@ file's layout is created while the first one does.
 from __future__ import annotations
 
 import math
+import os
 import signal
 import time
 from dataclasses import dataclass
@@ -20,10 +21,10 @@ from ..output import run_writer
 from ..output.estimate import (MAX_OUTPUT, MAX_STEPS, Estimate, check_run, format_size,
                                free_space)
 from ..output.h5files import (FileBusy, OutputExists, WriteFailed, abandon, check_output,
-                              disk_cause, open_file, repair_truncated, writer_alive,
+                              damaged, disk_cause, open_file, repair_truncated, writer_alive,
                               writer_pid)
 from ..output.lock import WriterLock, note_failure
-from ..output.run_reader import check_run_file, read_checkpoint, read_config
+from ..output.run_reader import check_not_lost, check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .pipeline import Inline, Pipeline
@@ -230,7 +231,8 @@ def plan_run(config=None, path=None, *, overwrite: bool = False, t_end: float | 
 
 def resume_file(path, *, t_end: float | None = None, command: str | None = None,
                 progress=None, flush_interval: float = FLUSH_INTERVAL,
-                handle_signals: bool = True, overlap: bool | None = None) -> RunSummary:
+                handle_signals: bool = True, overlap: bool | None = None,
+                max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS) -> RunSummary:
     """Continue the run in ``path`` from its checkpoint (to ``t_end`` if given, which also
     extends a completed run); the result equals an uninterrupted run bit for bit.
 
@@ -245,6 +247,9 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         The new end time (default: the file's ``time.t_end``).
     command, progress, flush_interval, handle_signals, overlap
         As in ``run_to_file``.
+    max_output, max_steps : float, optional
+        As in ``run_to_file``, for the file the continued run makes (its estimate to the
+        new end, the same as a new run's; only what it adds must fit the free space).
     """
     path = Path(path)
     _check_interval(flush_interval)
@@ -252,20 +257,28 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
         open_file(path).close()      # the one-line reason: missing, a directory, ...
     with WriterLock(path):
         return _resume_locked(path, t_end, command, progress, flush_interval,
-                              handle_signals, overlap)
+                              handle_signals, overlap, max_output, max_steps)
 
 
 def _resume_locked(path: Path, t_end, command, progress, flush_interval,
-                   handle_signals, overlap) -> RunSummary:
+                   handle_signals, overlap, max_output=MAX_OUTPUT,
+                   max_steps=MAX_STEPS) -> RunSummary:
     """``resume_file`` once this process holds the writer lock of ``path``."""
-    repair_truncated(path)       # cut short by a full disk: its checkpoint is still there
-    with open_file(path) as f:
-        check_run_file(f, path)
-        config = read_config(f)
-        ck = read_checkpoint(f)
-        needs_recovery = f.swmr_mode   # opened in SWMR-read mode: the writer never closed it
-        alive = writer_alive(f, lock=False) if needs_recovery else False
-        pid = writer_pid(f) if alive else None
+    cut = repair_truncated(path)   # cut short by a full disk: its checkpoint is still there
+    try:
+        with open_file(path) as f, damaged(path):
+            check_run_file(f, path)
+            config = read_config(f)
+            ck = read_checkpoint(f)
+            if cut is not None:
+                check_not_lost(f, ck, cut[0], path)
+            needs_recovery = f.swmr_mode   # SWMR-read mode: the writer never closed it
+            alive = writer_alive(f, lock=False) if needs_recovery else False
+            pid = writer_pid(f) if alive else None
+    except ValueError:
+        if cut is not None:        # refused: the file goes back to what it was
+            os.truncate(path, cut[0])
+        raise
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
     if t_end is not None:
@@ -289,13 +302,17 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
     if command is None:
         command = f"rodjit.resume_file({str(path)!r})"
     finish_only = complete and t_end is None    # killed after its last checkpoint
+    if not finish_only:       # the limits of a new run, on the file it makes to its end
+        check_run(config, path, max_output=max_output, max_steps=max_steps,
+                  what="the continued run", written=path.stat().st_size)
     with StopFlag(handle_signals) as stop:
-        if needs_recovery:
-            run_writer.recover(path)
-        writer = run_writer.reopen_run_file(
-            path, config_toml=config.to_toml() if t_end is not None else None,
-            history=(f"closed at its end t = {t!r} by: {command}" if finish_only else
-                     f"resumed at t = {t!r} by: {command}"))
+        with damaged(path):
+            if needs_recovery:
+                run_writer.recover(path)
+            writer = run_writer.reopen_run_file(
+                path, config_toml=config.to_toml() if t_end is not None else None,
+                history=(f"closed at its end t = {t!r} by: {command}" if finish_only else
+                         f"resumed at t = {t!r} by: {command}"))
         if finish_only:
             writer.close(run, "completed")
             return closed_summary(writer)

@@ -148,8 +148,16 @@ def deferred_signals():
 
 
 def _exit_at_once(signum, frame):
-    os.write(2, f"Error: interrupted by {signal.Signals(signum).name}\n".encode())
+    if not in_worker():     # a worker stopped by its parent says nothing: the parent does
+        os.write(2, f"Error: interrupted by {signal.Signals(signum).name}\n".encode())
     os._exit(128 + signum)
+
+
+def in_worker() -> bool:
+    """Whether this process is a worker started by another one (``multiprocessing``: a
+    sweep's pool), whose parent reports for it."""
+    mp = sys.modules.get("multiprocessing")
+    return mp is not None and mp.parent_process() is not None
 
 
 def install_early_handlers(exit_now: bool = False) -> None:

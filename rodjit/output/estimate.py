@@ -154,11 +154,15 @@ def too_large(what: str, e: Estimate, max_output: float) -> str | None:
 
 
 def check_run(config, path=None, *, max_output: float = MAX_OUTPUT,
-              max_steps: float = MAX_STEPS, what: str = "the run") -> Estimate:
+              max_steps: float = MAX_STEPS, what: str = "the run",
+              written: float = 0) -> Estimate:
     """ValueError (one line, with the estimate) unless ``config`` can finish and fit: a
     fixed time.dt that time can resolve (t + dt > t at t_end), needing at most
     ``max_steps`` steps and dividing the output intervals; a file of at most
-    ``max_output`` bytes and no more than the free space of the disk of ``path``."""
+    ``max_output`` bytes and no more than the free space of the disk of ``path``.  Every
+    path that starts or continues a run checks it here (a new run, a resume or extension,
+    a sweep's points, ``converge``, ``fit``); ``written``: bytes of the file already on
+    disk (a continued run), which need no new space."""
     values = _values(config)
     e = estimate_values(values)
     error = fixed_step_error(values, max_steps) or too_large(what, e, max_output)
@@ -166,7 +170,7 @@ def check_run(config, path=None, *, max_output: float = MAX_OUTPUT,
         raise ValueError(error)
     if path is not None:
         free = free_space(path)
-        if free is not None and e.file_bytes > free:
+        if free is not None and e.file_bytes - written > free:
             parent = Path(path).parent if str(Path(path).parent) else Path(".")
             raise ValueError(f"{what} would write {e.describe()}, more than the "
                              f"{format_size(free)} free on the disk of {str(parent)!r}")

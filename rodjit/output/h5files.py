@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import datetime
 import errno
+from contextlib import contextmanager
 import os
 import re
+import stat
 from pathlib import Path
 
 import h5py
@@ -24,7 +26,7 @@ __all__ = ["NotARunFile", "FileMissing", "FileBusy", "OutputExists", "open_file"
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
            "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
-           "abandoned", "reserve_space", "quiet_disk_errors"]
+           "abandoned", "reserve_space", "quiet_disk_errors", "damaged"]
 
 
 class NotARunFile(ValueError):
@@ -44,10 +46,13 @@ def open_file(path) -> h5py.File:
     """Open a rodjit file read-only: plainly if it was closed, in SWMR-read mode if a writer
     has it open or was killed before closing it (both leave the SWMR flags set)."""
     path = Path(path)
-    if not path.exists():
+    mode = _mode(path)
+    if mode is None:
         raise FileMissing(path)
-    if path.is_dir():
+    if stat.S_ISDIR(mode):
         raise NotARunFile(f"{str(path)!r} is a directory, not a rodjit file")
+    if not stat.S_ISREG(mode):
+        raise NotARunFile(f"{str(path)!r} is a {_special(mode)}, not a rodjit file")
     if not os.access(path, os.R_OK):
         raise NotARunFile(f"{str(path)!r} is not readable")
     if not h5py.is_hdf5(path):
@@ -63,6 +68,30 @@ def open_file(path) -> h5py.File:
         raise _unopenable(path, exc) from None
 
 
+def _mode(path) -> int | None:
+    """The ``st_mode`` of what ``path`` names (through symbolic links), None if nothing
+    is there; ValueError (one line) for a name the system refuses (too long, a loop of
+    links, a directory that cannot be searched)."""
+    try:
+        return os.stat(path).st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+    except OSError as exc:
+        if exc.errno == errno.ENAMETOOLONG:
+            raise ValueError(f"the file name {str(path)[:60]!r}... is too long for the file "
+                             f"system ({len(os.fsencode(Path(path).name))} bytes)") from None
+        if exc.errno == errno.ELOOP:
+            raise ValueError(f"{str(path)!r} is a loop of symbolic links") from None
+        raise ValueError(f"cannot look at {str(path)!r}: {exc.strerror}") from None
+
+
+def _special(mode: int) -> str:
+    """What a file that is neither regular nor a directory is, for a message."""
+    return ("named pipe (FIFO)" if stat.S_ISFIFO(mode) else "character device"
+            if stat.S_ISCHR(mode) else "block device" if stat.S_ISBLK(mode) else "socket"
+            if stat.S_ISSOCK(mode) else "special file")
+
+
 def _unopenable(path, exc) -> NotARunFile:
     """The one-line reason a file does not open."""
     m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc))
@@ -73,6 +102,24 @@ def _unopenable(path, exc) -> NotARunFile:
                            f"--resume {path}' (or 'rodjit sweep --resume -o {path}') once "
                            f"there is space")
     return NotARunFile(f"cannot open {str(path)!r}: {' '.join(str(exc).split())}")
+
+
+@contextmanager
+def damaged(path):
+    """``with damaged(path):`` reading a rodjit file, whose errors on a damaged or
+    incomplete file (a missing object or attribute, unreadable HDF5 structures) become
+    one NotARunFile line naming the file; a disk error passes unchanged."""
+    try:
+        yield
+    except NotARunFile:
+        raise
+    except (KeyError, OSError, RuntimeError, TypeError, IndexError, AttributeError,
+            UnicodeError) as exc:
+        if disk_cause(exc) is not None:
+            raise
+        detail = " ".join(str(exc).split()) or type(exc).__name__
+        raise NotARunFile(f"{str(path)!r} is damaged or not a complete rodjit file "
+                          f"({detail})") from None
 
 
 def check_kind(f: h5py.File, kind: str, version, path=None) -> None:
@@ -159,16 +206,26 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
     configuration, an image or anyone else's data.  ``held``: the caller holds the writer
     lock of ``path`` (``output.lock``)."""
     path = Path(path)
-    parent = path.parent if str(path.parent) else Path(".")
-    if not parent.exists():
+    real = Path(os.path.realpath(path)) if path.is_symlink() else path   # written through
+    parent = real.parent if str(real.parent) else Path(".")
+    parent_mode = _mode(parent)
+    if parent_mode is None:
         raise ValueError(f"output directory {str(parent)!r} does not exist")
-    if not parent.is_dir():
+    if not stat.S_ISDIR(parent_mode):
         raise ValueError(f"output directory {str(parent)!r} is not a directory")
-    if path.is_dir():
+    if len(os.fsencode(path.name)) > _name_max(parent):
+        raise ValueError(f"the output file name {path.name[:40]!r}... is too long for the "
+                         f"file system ({len(os.fsencode(path.name))} bytes; at most "
+                         f"{_name_max(parent)})")
+    mode = _mode(path)
+    if mode is not None and stat.S_ISDIR(mode):
         raise ValueError(f"output {str(path)!r} is a directory, not a file")
+    if mode is not None and not stat.S_ISREG(mode):
+        raise ValueError(f"output {str(path)!r} is a {_special(mode)}, not a regular file: "
+                         f"rodjit writes only regular files (with or without --overwrite)")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ValueError(f"output directory {str(parent)!r} is not writable")
-    if path.exists():
+    if mode is not None:
         if not overwrite:
             raise OutputExists(f"output file {str(path)!r} already exists; pass "
                                f"overwrite=True to replace it")
@@ -185,6 +242,14 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
                 raise ValueError(f"output file {str(path)!r} is {what}; --overwrite replaces "
                                  f"only rodjit {kind} files: choose another output path")
     return path
+
+
+def _name_max(directory) -> int:
+    """The longest file name (bytes) the file system of ``directory`` takes."""
+    try:
+        return os.pathconf(directory, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        return 255
 
 
 # ---- the disk failing a writer --------------------------------------------------------------
@@ -308,16 +373,17 @@ def truncation(path) -> tuple[int, int] | None:
     return None
 
 
-def repair_truncated(path) -> bool:
+def repair_truncated(path) -> tuple[int, int] | None:
     """Give a file cut short by a failed write its recorded length back (zeros at the end,
-    beyond every checkpointed row), so it opens and its checkpoint can be recovered; True
-    if it was cut short.  The caller holds the writer lock."""
+    which should lie beyond every checkpointed row: ``run_reader.check_not_lost`` makes
+    sure), so it opens and its checkpoint can be recovered; (bytes that were on disk,
+    bytes now) if it was cut short, else None.  The caller holds the writer lock."""
     cut = truncation(path)
     if cut is None:
-        return False
+        return None
     try:
         os.truncate(path, cut[1])
     except OSError as exc:
         raise WriteFailed(f"cannot repair {str(path)!r} ({cut[0]} of its {cut[1]} bytes are "
                           f"on disk): {disk_cause(exc) or exc.strerror}") from None
-    return True
+    return cut

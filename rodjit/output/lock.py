@@ -27,8 +27,11 @@ class FileBusy(ValueError):
 
 
 def lock_path(path) -> Path:
-    """The lock file of the output ``path``: ``.NAME.lock`` beside it."""
+    """The lock file of the output ``path``: ``.NAME.lock`` beside it (beside the file a
+    symbolic link names: the link and its target are one output)."""
     path = Path(path)
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
     return path.with_name(f".{path.name}.lock")
 
 

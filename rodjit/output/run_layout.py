@@ -11,6 +11,7 @@ flagged ``int8``.  Format 1 also had ``/grid/x``, the same values as ``/snapshot
 """
 from __future__ import annotations
 
+import hashlib
 from typing import NamedTuple
 
 import h5py
@@ -26,8 +27,9 @@ from .growing_table import Table
 from .h5files import now, writer_attrs
 
 __all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
-           "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "RunLayout",
-           "build_layout", "overwrite"]
+           "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
+           "DIGEST_PARTS", "REQUIRED_ATTRS", "RunLayout", "build_layout", "add_digests",
+           "digest_rows", "overwrite"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
 FORMAT_VERSION = 2
@@ -111,7 +113,13 @@ SUMMARY_ATTRS = ("rodjit_version", "format_version", "created", "command",
                  "history")                                 # shown by ``info``
 CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")      # a checkpoint's arrays
 CK_SCALARS = ("run_time", "compile_time")                     # and its numbers
-_CK_DATASETS = CK_ARRAYS + CK_SCALARS + ("lengths",)
+_CK_DATASETS = CK_DATASETS = CK_ARRAYS + CK_SCALARS + ("lengths",)
+# what a slot's ``digest`` covers, one row each: its datasets and the stored configuration
+DIGEST_PARTS = _CK_DATASETS + ("config_toml",)
+DIGEST_SIZE = 16
+# the root attributes without which a run file is not complete (the kind and format are
+# checked on their own, ``h5files.check_kind``)
+REQUIRED_ATTRS = ("config_toml", "status")
 _CK_NAMES = {"state": ("u", "v", "a"), "clock": CLOCK_NAMES, "count": COUNT_NAMES,
              "ev": EV_NAMES, "sstats": SCHEME_STATS or ("unused",),
              "lengths": tuple(TABLES)}
@@ -136,8 +144,9 @@ class RunLayout(NamedTuple):
     def of(cls, f: h5py.File) -> "RunLayout":
         """Looked up in an existing run file."""
         ckg = f["checkpoint"]
+        names = _CK_DATASETS + (("digest",) if "digest" in ckg["slot0"] else ())
         return cls({name: Table.of(f[name][c] for c in cols) for name, cols in TABLES.items()},
-                   [{name: ckg[f"slot{i}"][name] for name in _CK_DATASETS} for i in (0, 1)],
+                   [{name: ckg[f"slot{i}"][name] for name in names} for i in (0, 1)],
                    ckg["current"])
 
 
@@ -238,7 +247,41 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
             _ck_attrs(ds, name)
             for axis, dim in enumerate(_CK_DIMS.get(name, ())):
                 ds.dims[axis].attach_scale(dims[dim])
+    first_values = {name: np.asarray(first[name]) for name in _CK_DATASETS}
+    add_digests(ckg, slots, digest_rows(first_values, base["config_toml"]))
     return RunLayout(tables, slots, current)
+
+
+def digest_rows(values: dict, config_toml: str) -> np.ndarray:
+    """The ``digest`` of a checkpoint slot: one BLAKE2b row per ``DIGEST_PARTS`` entry,
+    over the dtype, shape and bytes of each of its datasets (``values``: name -> the array
+    as stored) and over the stored configuration."""
+    rows = np.zeros((len(DIGEST_PARTS), DIGEST_SIZE), np.uint8)
+    for i, name in enumerate(DIGEST_PARTS):
+        h = hashlib.blake2b(name.encode(), digest_size=DIGEST_SIZE, person=b"rodjit-ck")
+        if name == "config_toml":
+            h.update(str(config_toml).encode("utf-8", "surrogatepass"))
+        else:
+            arr = np.ascontiguousarray(values[name])
+            h.update(f"|{arr.dtype.str}|{arr.shape}|".encode())
+            h.update(arr.tobytes())
+        rows[i] = np.frombuffer(h.digest(), np.uint8)
+    return rows
+
+
+def add_digests(ckg: h5py.Group, slots: list, first=None) -> None:
+    """Create the ``digest`` dataset of both slots (``first``: slot 0's rows; slot 1 and a
+    missing ``first`` stay zeros, which match no content), adding them to ``slots``.  Run
+    files written before digests existed lack them and get them when continued."""
+    for slot, datasets in enumerate(slots):
+        g = ckg[f"slot{slot}"]
+        shape = (len(DIGEST_PARTS), DIGEST_SIZE)
+        ds = (g.create_dataset("digest", data=first) if slot == 0 and first is not None
+              else g.create_dataset("digest", shape, np.uint8))
+        _attr(ds, "names", DIGEST_PARTS)
+        _attr(ds, "long_name", "checkpoint: BLAKE2b-128 of each of the slot's datasets and "
+                               "of the root attribute config_toml (in 'names' order)")
+        datasets["digest"] = ds
 
 
 def _ck_attrs(ds, name: str) -> None:

@@ -12,37 +12,148 @@ from ..records.columns import BOOL_COLUMNS
 from ..records.result import Result
 from ..records.stats import run_stats
 from ..stepping import layout as L
-from .h5files import NotARunFile, check_kind, open_file
-from .cf import as_bool
-from .run_layout import CK_ARRAYS, CK_SCALARS, KIND, READS, TABLES, x_path
+import time
 
-__all__ = ["check_run_file", "read_config", "read_checkpoint", "read_table", "read_x",
+from .h5files import NotARunFile, check_kind, damaged, open_file
+from .cf import as_bool
+from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, KIND, READS,
+                         REQUIRED_ATTRS, STATUSES, TABLES, digest_rows, x_path)
+
+__all__ = ["check_run_file", "check_not_lost", "read_config", "read_checkpoint", "read_table", "read_x",
            "load_file"]
 
 
 def check_run_file(f: h5py.File, path=None) -> None:
-    """Raise NotARunFile unless ``f`` is a rodjit run file of a format this version reads."""
-    check_kind(f, KIND, READS, path)
+    """Raise NotARunFile unless ``f`` is a complete rodjit run file of a format this
+    version reads: its root attributes, every table's columns and both checkpoint slots
+    present (its checkpoint's integrity is ``read_checkpoint``'s)."""
+    name = str(path if path is not None else f.filename)
+    with damaged(name):
+        check_kind(f, KIND, READS, path)
+        for attr in REQUIRED_ATTRS:
+            if attr not in f.attrs:
+                raise NotARunFile(f"{name!r} is not a complete rodjit file (its root "
+                                  f"attribute {attr!r} is missing)")
+        status = f.attrs["status"]
+        if status not in STATUSES:
+            raise NotARunFile(f"{name!r} is not a complete rodjit file (status {status!r} "
+                              f"is not one of {', '.join(STATUSES)})")
+        needed = [f"{t}/{c}" for t, cols in TABLES.items() for c in cols] + [x_path(f)]
+        needed += ["checkpoint/current"] + [f"checkpoint/slot{i}/{d}" for i in (0, 1)
+                                            for d in CK_DATASETS]
+        for obj in needed:
+            if obj not in f:
+                raise NotARunFile(f"{name!r} is not a complete rodjit file ('/{obj}' is "
+                                  f"missing)")
 
 
 def read_config(f: h5py.File) -> Config:
     """The configuration the file's run runs (root attribute ``config_toml``)."""
-    return Config.from_stored_toml(f.attrs["config_toml"])
+    with damaged(f.filename):
+        text = f.attrs["config_toml"]
+    return Config.from_stored_toml(text)
 
 
 def read_checkpoint(f: h5py.File) -> dict:
     """The valid checkpoint: arrays for ``Run.from_checkpoint`` plus ``lengths`` (table
     rows it matches, ``{"snapshots": n, ...}``) and cumulative ``compile_time``."""
+    with damaged(f.filename):
+        tries = 3 if f.swmr_mode else 1      # a live writer may commit while it is read
+        for attempt in range(tries):
+            try:
+                return _read_checkpoint(f)
+            except NotARunFile:
+                if attempt == tries - 1:
+                    raise
+                time.sleep(0.05)
+
+
+def _read_checkpoint(f: h5py.File) -> dict:
     ck = f["checkpoint"]
-    slot = int(ck["current"][()])
+    if f.swmr_mode:
+        ck["current"].refresh()
+    current = ck["current"][()]
+    slot = int(current) if np.ndim(current) == 0 else -1
     if slot not in (0, 1):
         raise NotARunFile(f"{f.filename!r} holds no valid checkpoint yet")
     g = ck[f"slot{slot}"]
-    out = {name: g[name][()] for name in CK_ARRAYS}
+    if f.swmr_mode:
+        for name in CK_DATASETS + (("digest",) if "digest" in g else ()):
+            g[name].refresh()
+    values = {name: g[name][()] for name in CK_DATASETS}
+    verify_checkpoint(f, slot, values, g["digest"][()] if "digest" in g else None)
+    out = {name: values[name] for name in CK_ARRAYS}
     for name in CK_SCALARS:
-        out[name] = float(g[name][()])
-    out["lengths"] = dict(zip(TABLES, (int(n) for n in g["lengths"][()])))
+        out[name] = float(values[name])
+    out["lengths"] = dict(zip(TABLES, (int(n) for n in values["lengths"])))
     return out
+
+
+_PART_NAMES = {"config_toml": "stored configuration (config_toml)"}
+
+
+def verify_checkpoint(f: h5py.File, slot: int, values: dict, digest) -> None:
+    """NotARunFile (one line, naming what does not match) unless the checkpoint of
+    ``slot`` (``values``: its datasets) proves itself: its ``digest`` (absent in files
+    written before digests existed) matches its content and the stored configuration, its
+    state has a row of every node, and the table rows it claims are in the file."""
+    name = f.filename
+    where = f"the checkpoint (slot {slot})"
+    if digest is not None:
+        expected = digest_rows(values, str(f.attrs["config_toml"]))
+        if np.shape(digest) != expected.shape:
+            raise NotARunFile(f"{name!r} fails its integrity check: the digest of {where} "
+                              f"has shape {np.shape(digest)}, not {expected.shape}")
+        bad = [_PART_NAMES.get(part, f"'{part}'") for part, a, b in
+               zip(DIGEST_PARTS, digest, expected) if not np.array_equal(a, b)]
+        if bad:
+            raise NotARunFile(f"{name!r} fails its integrity check: the digest of {where} "
+                              f"does not match its {', '.join(bad)} (the file was altered or "
+                              f"damaged)")
+    n1 = f[x_path(f)].shape[0]
+    state = values["state"]
+    if np.ndim(state) != 2 or state.shape[1] != n1:
+        raise NotARunFile(f"{name!r} fails its integrity check: the state of {where} has "
+                          f"shape {np.shape(state)}, not (3, {n1}) for its {n1} nodes")
+    lengths = np.ravel(values["lengths"])
+    if lengths.shape != (len(TABLES),):
+        raise NotARunFile(f"{name!r} fails its integrity check: {where} claims "
+                          f"{lengths.size} table lengths, not {len(TABLES)}")
+    for table, n in zip(TABLES, lengths):
+        rows = min(f[table][c].shape[0] for c in TABLES[table])
+        if not 0 <= int(n) <= rows:
+            raise NotARunFile(f"{name!r} fails its integrity check: {where} claims {int(n)} "
+                              f"rows of /{table}, which holds {rows}")
+
+
+def check_not_lost(f: h5py.File, ck: dict, on_disk: int, path=None) -> None:
+    """NotARunFile unless every byte the checkpoint ``ck`` relies on lies in the first
+    ``on_disk`` bytes of the file: a file cut short (``h5files.repair_truncated``) by a
+    full disk loses only what was written after its last checkpoint; one cut anywhere
+    else lost rows its checkpoint claims, which zeros must not stand in for."""
+    name = str(path if path is not None else f.filename)
+    with damaged(name):
+        for table, cols in TABLES.items():
+            n = ck["lengths"][table]
+            for col in cols:
+                ds = f[table][col]
+                if n == 0 or ds.chunks is None:
+                    continue
+                for i in range(ds.id.get_num_chunks()):
+                    info = ds.id.get_chunk_info(i)
+                    if info.chunk_offset[0] < n and info.byte_offset + info.size > on_disk:
+                        raise NotARunFile(
+                            f"{name!r} is cut short ({on_disk} bytes) inside rows its "
+                            f"checkpoint claims (/{table}/{col} from row "
+                            f"{info.chunk_offset[0]}): they are lost, and the file cannot "
+                            f"be continued")
+        ckg = f["checkpoint"]
+        g = ckg[f"slot{int(ckg['current'][()])}"]
+        for ds in [ckg["current"], *(g[d] for d in g)]:
+            offset = ds.id.get_offset()
+            if offset is not None and offset + ds.id.get_storage_size() > on_disk:
+                raise NotARunFile(f"{name!r} is cut short ({on_disk} bytes) inside its "
+                                  f"checkpoint ({ds.name}): it cannot be continued")
 
 
 def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str, np.ndarray]:

@@ -23,8 +23,8 @@ from ..stepping import layout as L
 from .cf import LIBVER
 from .h5files import (WriteFailed, abandon, disk_cause, history_with, now, open_for_writing,
                       stamp_writer)
-from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
-                         overwrite)
+from .run_layout import (CK_ARRAYS, CK_DATASETS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout,
+                         add_digests, build_layout, digest_rows, overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
 from .writer_id import LEGACY_ATTRS, WRITER_ATTRS
 
@@ -53,6 +53,8 @@ class RunWriter(Sink):
         self._current = layout.current
         self._slots = layout.slots
         self.current = int(self._current[()])
+        self._config_toml = str(f.attrs["config_toml"])     # what each digest covers
+        self._dtypes = {name: ds.dtype for name, ds in self._slots[0].items()}
         self.checkpoint = checkpoint
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
@@ -109,6 +111,12 @@ class RunWriter(Sink):
         overwrite(g["compile_time"], compile_time)
         lengths = [t.length for t in self.tables.values()]
         overwrite(g["lengths"], lengths)
+        if "digest" in g:
+            values = {"run_time": float(ck["run_time"]), "compile_time": compile_time,
+                      "lengths": lengths, **{name: ck[name] for name in CK_ARRAYS}}
+            overwrite(g["digest"], digest_rows(
+                {name: np.asarray(values[name], self._dtypes[name]) for name in CK_DATASETS},
+                self._config_toml))
         self.file.flush()
         overwrite(self._current, slot)
         self.file.flush()
@@ -204,6 +212,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
                     ds.resize(lengths[name], axis=0)
         if config_toml is not None:
             f.attrs["config_toml"] = config_toml
+        _sign_current(f)
         f.attrs["history"] = history_with(f, history)
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
@@ -215,10 +224,24 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         raise
 
 
+def _sign_current(f: h5py.File) -> None:
+    """Give the current slot the digest of its (verified) content and of the file's
+    configuration as it now stands: after ``config_toml`` changed (a new t_end), and in a
+    file written before digests existed, whose slots get them here (before SWMR writing
+    starts, which cannot add datasets)."""
+    ckg = f["checkpoint"]
+    if "digest" not in ckg["slot0"]:
+        add_digests(ckg, [{}, {}])
+    g = ckg[f"slot{int(ckg['current'][()])}"]
+    values = {name: g[name][()] for name in CK_DATASETS}
+    overwrite(g["digest"], digest_rows(values, str(f.attrs["config_toml"])))
+
+
 def recover(path) -> None:
     """Rebuild a file whose writer died without closing it (SWMR flags still set): copy the
-    rows matched by its checkpoint into a fresh file, which then replaces it."""
-    path = Path(path)
+    rows matched by its checkpoint into a fresh file, which then replaces it (the file a
+    symbolic link names, keeping the link)."""
+    path = Path(os.path.realpath(path))
     tmp = path.with_name(path.name + ".recovering")
     with h5py.File(path, "r", swmr=True) as src:
         check_run_file(src, path)

@@ -120,6 +120,9 @@ def _worker_main(conn, warm) -> None:
     """A pool worker: load the kernels of ``warm`` (a Config), then run the tasks the parent
     sends until it sends None or goes away."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
+    # the parent ends a worker by SIGTERM when the sweep stops: it exits without a word
+    # (the parent says what stopped the sweep, once)
+    signal.signal(signal.SIGTERM, lambda signum, frame: os._exit(128 + signum))
     _die_with_parent()
     quiet_disk_errors()       # a run file the disk refuses: the parent reports it
     try:

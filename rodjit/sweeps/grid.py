@@ -76,9 +76,14 @@ def _values_from_text(key: str, text: str) -> list[Any]:
         a, b, n = _range_args(key, m.group(1), m.group(2))
         fn = np.linspace if m.group(1) == "linspace" else np.logspace
         return fn(a, b, n).tolist()
-    items = [t for t in (s.strip() for s in text.split(",")) if t != ""]
-    if not items:
+    items = [s.strip() for s in text.split(",")]
+    if items and items[-1] == "" and any(items[:-1]):
+        items.pop()                  # a trailing comma: "1,2,"
+    if not any(items):
         raise ValueError(f"grid {key}: no values given ({_forms(key)})")
+    if "" in items:
+        raise ValueError(f"grid {key}: value {items.index('') + 1} of {text.strip()!r} is "
+                         f"empty (give values separated by single commas, e.g. 1,2,3)")
     values = [parse_value(key, item) for item in items]
     if _field(key).kind in ("int", "float"):
         for item, value in zip(items, values):

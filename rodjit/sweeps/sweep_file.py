@@ -29,6 +29,7 @@ before kept.  A write that fails anyway (an I/O error) leaves its handles open
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import time
 from contextlib import contextmanager
@@ -39,7 +40,7 @@ import numpy as np
 from ..config import Config, field_spec
 from ..output import cf
 from ..output.h5files import (FileBusy, NotARunFile, WriteFailed, abandon, check_kind,
-                              disk_cause, history_with, now, open_file, reserve_space,
+                              damaged, disk_cause, history_with, now, open_file, reserve_space,
                               stamp_writer, writer_attrs)
 from ..records.bounces import empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
@@ -69,6 +70,9 @@ LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file befor
 # point with a short bounce table (its arrays are counted twice on top)
 RESERVE_BASE = 64 * 1024
 RESERVE_POINT = 32 * 1024
+
+# the root attributes without which a sweep file is not complete
+REQUIRED_ATTRS = ("base_config_toml", "grid", "n_points", "status")
 
 _STR = h5py.string_dtype("utf-8")
 _DTYPES = {"str": _STR, "int": np.int64, "float": np.float64}
@@ -136,6 +140,17 @@ def _writing(path, mode: str, wait: float = LOCK_WAIT, reserve: int = 0):
         raise WriteFailed(cause, cause) from None
 
 
+def header_digest(base_toml: str, grid_json: str, n_points: int) -> str:
+    """The root attribute ``header_digest``: BLAKE2b-128 (hex) of what the file claims to
+    sweep (the base configuration, the grid, the number of points); files written before
+    it existed lack it."""
+    h = hashlib.blake2b(digest_size=16, person=b"rodjit-sweep")
+    for part in (str(base_toml), str(grid_json), str(int(n_points))):
+        data = part.encode("utf-8", "surrogatepass")
+        h.update(len(data).to_bytes(8, "little") + data)
+    return h.hexdigest()
+
+
 def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
     """A new sweep file: attributes, every summary column with all rows pending.
     WriteFailed if the disk refuses (the caller removes the partial file)."""
@@ -145,7 +160,9 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
                            "rodjit_version": __version__, "created": now(),
                            "command": command, "base_config_toml": base.to_toml(),
                            "grid": grid.to_json(), "grid_keys": list(grid.keys),
-                           "n_points": n, "status": "running", "message": "",
+                           "n_points": n,
+                           "header_digest": header_digest(base.to_toml(), grid.to_json(), n),
+                           "status": "running", "message": "",
                            "history": [f"{now()} created by: {command}"],
                            **writer_attrs(), **attrs,
                            **cf.root_attrs(f"rodjit sweep over {', '.join(grid.keys)} "
@@ -339,20 +356,56 @@ def check_sweep_file(f: h5py.File, path=None) -> None:
 
 
 def read_header(f: h5py.File) -> dict:
-    """Base configuration, grid and the root attributes of an open sweep file."""
-    attrs = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in f.attrs.items()}
-    return {"base": Config.from_stored_toml(f.attrs["base_config_toml"]),
-            "grid": Grid.from_json(f.attrs["grid"]), "attrs": attrs}
+    """Base configuration, grid and the root attributes of an open sweep file, which must
+    prove itself: NotARunFile (one line, naming what does not match) if a required
+    attribute is missing or ``header_digest`` (when present) does not match them."""
+    name = f.filename
+    with damaged(name):
+        for attr in REQUIRED_ATTRS:
+            if attr not in f.attrs:
+                raise NotARunFile(f"{name!r} is not a complete rodjit file (its root "
+                                  f"attribute {attr!r} is missing)")
+        if f.attrs["status"] not in STATUSES:
+            raise NotARunFile(f"{name!r} is not a complete rodjit file (status "
+                              f"{f.attrs['status']!r} is not one of {', '.join(STATUSES)})")
+        attrs = {k: (v.tolist() if isinstance(v, np.ndarray) else v)
+                 for k, v in f.attrs.items()}
+        base_toml, grid_json = str(f.attrs["base_config_toml"]), str(f.attrs["grid"])
+        n = f.attrs["n_points"]
+        if "header_digest" in f.attrs and str(f.attrs["header_digest"]) != header_digest(
+                base_toml, grid_json, int(n)):
+            raise NotARunFile(f"{name!r} fails its integrity check: its header_digest does "
+                              f"not match its base_config_toml, grid and n_points (the file "
+                              f"was altered or damaged)")
+    grid = Grid.from_json(grid_json)
+    if int(n) != len(grid):
+        raise NotARunFile(f"{name!r} fails its integrity check: it claims {int(n)} points, "
+                          f"its grid has {len(grid)}")
+    return {"base": Config.from_stored_toml(base_toml), "grid": grid, "attrs": attrs}
 
 
 def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
-    """The summary columns, in file order; text columns as arrays of str."""
+    """The summary columns, in file order; text columns as arrays of str.  NotARunFile if
+    a column is missing or its rows are not the points the file claims."""
+    name = f.filename
     out = {}
-    for name, ds in f["summary"].items():
-        if (name == POINT and ds.is_scale) or name in RAGGED:
-            continue                      # the dimension, the bounce rows' locators
-        out[name] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
-                     else ds[()])
+    with damaged(name):
+        n = int(f.attrs["n_points"])
+        for col, ds in f["summary"].items():
+            if col == POINT and ds.is_scale:
+                continue                      # the dimension, not a column
+            if ds.shape != (n,):
+                raise NotARunFile(f"{name!r} fails its integrity check: its summary column "
+                                  f"{col!r} has {ds.shape[0] if ds.shape else 0} rows, not "
+                                  f"the {n} points it claims")
+            if col in RAGGED:
+                continue                      # where the bounce rows are, not a column
+            out[col] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
+                        else ds[()])
+    for col in ("status",):     # (format 1 lacks columns added since)
+        if col not in out:
+            raise NotARunFile(f"{name!r} is not a complete rodjit file (its summary column "
+                              f"{col!r} is missing)")
     return out
 
 
@@ -364,6 +417,10 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
         if start < 0 or count == 0:
             return empty_bounces()
         g = f[BOUNCES]
+        if count < 0 or start + count > int(g.attrs["rows"]) or start + count > g[ROW].shape[0]:
+            raise NotARunFile(f"{f.filename!r} fails its integrity check: point {index}'s "
+                              f"bounce rows {start}..{start + count - 1} lie outside its "
+                              f"bounce table ({g[ROW].shape[0]} rows)")
         out = {name: g[name][start:start + count] for name in BOUNCE_COLUMNS}
         out["open"] = cf.as_bool(out["open"])
         return out
