@@ -14,7 +14,8 @@ from ..records.stats import run_stats
 from ..stepping import layout as L
 from .h5files import NotARunFile, check_kind, open_file
 from .cf import as_bool
-from .run_layout import CK_ARRAYS, CK_SCALARS, KIND, READS, TABLES, x_path
+from .run_layout import (CK_ARRAYS, CK_SCALARS, KIND, READS, TABLES, counter_names,
+                         counters_by_name, x_path)
 
 __all__ = ["check_run_file", "read_config", "read_checkpoint", "read_table", "read_x",
            "load_file"]
@@ -39,6 +40,8 @@ def read_checkpoint(f: h5py.File) -> dict:
         raise NotARunFile(f"{f.filename!r} holds no valid checkpoint yet")
     g = ck[f"slot{slot}"]
     out = {name: g[name][()] for name in CK_ARRAYS}
+    # the per-scheme counters by name, laid out as this version counts them
+    out["sstats"] = counters_by_name(out["sstats"], counter_names(g["sstats"]))
     for name in CK_SCALARS:
         out[name] = float(g[name][()])
     out["lengths"] = dict(zip(TABLES, (int(n) for n in g["lengths"][()])))

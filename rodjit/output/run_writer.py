@@ -23,8 +23,8 @@ from ..stepping import layout as L
 from .cf import LIBVER
 from .h5files import (WriteFailed, abandon, disk_cause, history_with, now, open_for_writing,
                       stamp_writer)
-from .run_layout import (CK_ARRAYS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, build_layout,
-                         overwrite)
+from .run_layout import (CK_ARRAYS, CK_COUNTERS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout,
+                         build_layout, counter_names, counters_by_name, overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
 from .writer_id import LEGACY_ATTRS, WRITER_ATTRS
 
@@ -53,6 +53,9 @@ class RunWriter(Sink):
         self._current = layout.current
         self._slots = layout.slots
         self.current = int(self._current[()])
+        # the file's own counter names (an older file may name other counters than
+        # this version's SCHEME_STATS): each checkpoint is written by name into them
+        self._counters = counter_names(self._slots[0]["sstats"])
         self.checkpoint = checkpoint
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
@@ -104,7 +107,8 @@ class RunWriter(Sink):
         slot = 1 if self.current == 0 else 0
         g = self._slots[slot]
         for name in CK_ARRAYS:
-            overwrite(g[name], ck[name])
+            overwrite(g[name], ck[name] if name != "sstats" else
+                      counters_by_name(ck[name], CK_COUNTERS, self._counters))
         overwrite(g["run_time"], float(ck["run_time"]))
         overwrite(g["compile_time"], compile_time)
         lengths = [t.length for t in self.tables.values()]
