@@ -333,8 +333,10 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         ``config`` is not a ``rodjit.Config``.
     ValueError
         A ladder that is not one key with at least two monotonically refining levels, an
-        unknown observable, or a time key that does not set the integrator's steps (the
-        message names the key that does).
+        unknown observable, a time key that does not set the integrator's steps (the
+        message names the key that does), or a level whose run would refuse to run
+        (``Config.check_runnable``: verlet under tolerance control above its viscous
+        limit, naming time.cfl).
     """
     from ..config import Config
     from .observables import OBSERVABLES
@@ -363,6 +365,8 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         time_at = values[-2] if time_at is None else time_at
         at = base.override({key: time_at})
         t_configs = [at.override({t_key: v}) for v in t_values]
+    for c in configs + t_configs:        # what a run would refuse: before any runs
+        c.check_runnable()
     runs = evaluate(configs + t_configs, jobs=jobs, scheduler=scheduler,
                     merge_time=merge_time, extra=extra, histories=bool(t_configs))
     runs, t_runs = runs[:len(configs)], runs[len(configs):]
@@ -381,7 +385,10 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                 # scales the cap by the same factors
                 c0 = base.get(cap)
                 c_values = [c0 * v / t_values[0] for v in t_values]
-                c_runs = evaluate([at.override({cap: v}) for v in c_values], jobs=jobs,
+                c_configs = [at.override({cap: v}) for v in c_values]
+                for c in c_configs:
+                    c.check_runnable()
+                c_runs = evaluate(c_configs, jobs=jobs,
                                   scheduler=scheduler, merge_time=merge_time, extra=extra,
                                   histories=True)
                 warnings.append(
@@ -420,6 +427,17 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                 ts.status, ts.message = NOT_MEASURED, "the ladder did not change the steps"
                 ts.extrapolated, ts.error = math.nan, math.nan
                 oc.time_status = NOT_MEASURED
+            elif ts.status == "exact" and all(math.isfinite(x) for x in ts.values):
+                # identical at every level although the steps changed: the steps that set
+                # this value (e.g. a maximum reached where a step cap binds) did not
+                ts.status = NOT_MEASURED
+                ts.message = ("identical at every level: the steps that set it did not "
+                              "change")
+                ts.extrapolated, ts.error = math.nan, math.nan
+                oc.time_status = NOT_MEASURED
+                warnings.append(f"{name}: time error not measured: the same value at every "
+                                f"level of the {t_key} ladder (the steps that set it did "
+                                f"not change)")
             else:
                 ref = ts.extrapolated if math.isfinite(ts.extrapolated) else ts.values[-1]
                 here = _at_base(base_t, t_values, ts.values, runs, values, time_at, name)

@@ -17,6 +17,7 @@ This module imports no Numba code: ``config`` imports it to validate names.
 from __future__ import annotations
 
 import importlib
+import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -58,6 +59,7 @@ class Scheme:
     cap: str = ""
     cap_keys: tuple[str, ...] = ()
     error_norm: str = ""
+    viscous_mu_max: float = math.inf
 
     def step_keys(self, control: str, fixed: bool = False) -> tuple[str, ...]:
         """The configuration keys that set the steps under ``time.control = control``
@@ -94,8 +96,11 @@ _KDK_CAP = ("control.STABILITY_CFL × the stability limit 2/ω under tolerance c
             "barrier approach: at most time.cfl (≤ control.GAP_MAX) of the gap per step")
 
 SCHEMES: tuple[Scheme, ...] = (
+    # verlet's Crank–Nicolson viscous sub-step is split off the kicks: measured 2.8e-4 on
+    # the first-bounce restitution at μ = 100 (N = 5) at every rtol, 1e-5 at μ = 1
     Scheme("verlet", "rodjit.stepping.kdk", "Verlet", _kdk, workspace.WORK_ROWS,
            order=2, cfl_control=True, error_norm=_KDK_NORM, cap_keys=("time.cfl",),
+           viscous_mu_max=1.0,
            cap=_KDK_CAP + "; the viscous sub-step's limit time.cfl·h²/(2μ) (μ > 0)"),
     Scheme("semi-implicit", "rodjit.stepping.kdk", "SemiImplicit", _kdk, workspace.WORK_ROWS,
            order=2, cfl_control=True, error_norm=_KDK_NORM, cap_keys=("time.cfl",),
