@@ -17,7 +17,6 @@ This module imports no Numba code: ``config`` imports it to validate names.
 from __future__ import annotations
 
 import importlib
-import math
 from dataclasses import dataclass
 from typing import Any, Callable
 
@@ -59,7 +58,7 @@ class Scheme:
     cap: str = ""
     cap_keys: tuple[str, ...] = ()
     error_norm: str = ""
-    viscous_mu_max: float = math.inf
+    viscous_mu_max: float = float("inf")
 
     def step_keys(self, control: str, fixed: bool = False) -> tuple[str, ...]:
         """The configuration keys that set the steps under ``time.control = control``
