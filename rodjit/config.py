@@ -21,6 +21,12 @@ from typing import Any, ClassVar, Mapping
 from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
 from .stepping.registry import get as _registry_get
 
+
+def _registry_names() -> tuple[str, ...]:
+    """The integrators registered now (``registry.register`` adds to the built-in ones)."""
+    from .stepping import registry
+    return registry.NAMES
+
 # time.control of the kick–drift–kick integrators: "tolerance" (steps from time.rtol and
 # time.atol, stability as a cap) or "cfl" (time.cfl × the stability limit, no estimate)
 CONTROLS = ("tolerance", "cfl")
@@ -67,10 +73,16 @@ class _Spec:
 
     def __init__(self, kind: str, rng: str = "", check=None, optional: bool = False,
                  choices: tuple[str, ...] | None = None, *, meaning: str, unit: str = ""):
-        self.kind, self.rng, self.check, self.optional, self.choices = kind, rng, check, optional, choices
+        self.kind, self.rng, self.check, self.optional = kind, rng, check, optional
+        self._choices = choices  # a tuple, or a function giving it (names registered later)
         self.meaning = meaning   # what the key sets: for comments, listings and file attributes
         self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text and
                                  # boolean keys
+
+    @property
+    def choices(self) -> tuple[str, ...] | None:
+        """The allowed values (None: any of the kind); registries answer at call time."""
+        return self._choices() if callable(self._choices) else self._choices
 
     def coerce(self, key: str, value: Any) -> Any:
         """``value`` checked and converted to the field's Python type (NumPy integers and
@@ -186,7 +198,7 @@ _FIELDS: dict[str, dict[str, _Spec]] = {
     },
     "time": {
         "t_end": _Spec("float", "> 0", _pos, meaning="time at which the run ends", unit="s"),
-        "integrator": _Spec("str", choices=INTEGRATORS, meaning="time integrator"),
+        "integrator": _Spec("str", choices=_registry_names, meaning="time integrator"),
         "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1, unit="1",
                      meaning="fraction of the stability limit taken as the step (verlet, "
                              "semi-implicit with time.control = 'cfl')"),

@@ -23,7 +23,7 @@ from typing import Any, Callable
 from . import workspace
 
 __all__ = ["Scheme", "SCHEMES", "NAMES", "SCHEME_STATS", "TIME_KEYS", "get", "entry_of",
-           "load", "make_scheme", "counter_index"]
+           "load", "make_scheme", "counter_index", "register"]
 
 # the configuration keys that can set the length of a step
 TIME_KEYS = ("time.rtol", "time.atol", "time.cfl", "time.dt")
@@ -133,6 +133,47 @@ SCHEME_STATS: tuple[str, ...] = tuple(dict.fromkeys(c for s in SCHEMES for c in 
 def counter_index(name: str) -> int:
     """Position of a counter in ``sstats`` (a compile-time constant for the scheme's step)."""
     return SCHEME_STATS.index(name)
+
+
+def register(scheme: Scheme) -> Scheme:
+    """Make ``scheme`` selectable as ``time.integrator``, as ``rodjit.laws.register`` makes
+    a law selectable: from a module of one's own, with no line added here.
+
+    Its ``module`` (imported on first use) provides ``initial`` and ``step`` (``schemes``)
+    and the parameter class ``params``; the registry's facts (``step_keys``, ``cap_keys``,
+    ``order``, ``error_norm``) then tell ``converge`` how to study it.  Its parameter class
+    is renamed into ``registered`` (so a process without the module finds only a cache
+    miss in the compiled-code cache, not an import error).  Its ``counters``
+    must be among ``SCHEME_STATS`` (the compiled steps index ``sstats`` by constants, and
+    the run file names its entries): a new counter is a line of this module.
+
+    Returns
+    -------
+    Scheme
+        ``scheme``.
+
+    Raises
+    ------
+    TypeError
+        ``scheme`` is not a ``Scheme``.
+    ValueError
+        Its name is taken, or a counter is not among ``SCHEME_STATS``.
+    """
+    global SCHEMES, NAMES
+    if not isinstance(scheme, Scheme):
+        raise TypeError(f"register takes a registry.Scheme, not {type(scheme).__name__}")
+    if scheme.name in NAMES:
+        raise ValueError(f"time.integrator = {scheme.name!r} is already registered")
+    unknown = [c for c in scheme.counters if c not in SCHEME_STATS]
+    if unknown:
+        raise ValueError(f"scheme {scheme.name!r}: counters {unknown} are not among "
+                         f"{list(SCHEME_STATS)}")
+    module, params = load(scheme)      # imports the scheme's module (nothing compiled)
+    from . import registered           # how the compiled-code cache names its type
+    registered.adopt(params, scheme.name, module)
+    SCHEMES = SCHEMES + (scheme,)
+    NAMES = NAMES + (scheme.name,)
+    return scheme
 
 
 def get(name: str) -> Scheme:
