@@ -21,6 +21,13 @@ from pathlib import Path
 from typing import Any, ClassVar, Mapping
 
 from .stepping.registry import NAMES as INTEGRATORS   # the one list of integrator names
+from .stepping.registry import get as _registry_get
+
+
+def _registry_names() -> tuple[str, ...]:
+    """The integrators registered now (``registry.register`` adds to the built-in ones)."""
+    from .stepping import registry
+    return registry.NAMES
 
 # time.control of the kick–drift–kick integrators: "tolerance" (steps from time.rtol and
 # time.atol, stability as a cap) or "cfl" (time.cfl × the stability limit, no estimate)
@@ -66,18 +73,24 @@ SHOCK_WARNING = (
     "time, penetration, strain) have no continuum limit as rod.N grows; energy and "
     "long-run statistics remain meaningful (set rod.gamma > 0 or rod.mu > 0 for a "
     "convergent first bounce)")
-# verlet's Crank–Nicolson viscous sub-step is split off the kicks: measured 2.8e-4 on the
-# first-bounce restitution at μ = 100 (N = 5), 1e-5 at μ = 1
-VERLET_MU_MAX = 1.0
-VERLET_WARNING = (
-    f"time.integrator = 'verlet' with rod.mu > {VERLET_MU_MAX:g}: its viscous sub-step, "
-    "split off the kicks, limits the step to mu*dt*4/h^2 <= 2*time.cfl (steps grow like "
-    "mu*N^2) and still misses 1e-4 on first-bounce observables; use 'energy' or "
-    "'semi-implicit'")
+# verlet's Crank–Nicolson viscous sub-step is split off the kicks: above this μ its error
+# is set by its viscous step cap, not by its tolerance (``registry.Scheme.viscous_mu_max``)
+VERLET_MU_MAX = _registry_get("verlet").viscous_mu_max
+
+
+def _viscous_warning(name: str, mu_max: float) -> str:
+    return (f"time.integrator = {name!r} with rod.mu > {mu_max:g}: its viscous sub-step, "
+            "split off the kicks, limits the step to mu*dt*4/h^2 <= 2*time.cfl (steps grow "
+            "like mu*N^2) and still misses 1e-4 on first-bounce observables; use 'energy' "
+            "or 'semi-implicit'")
+
+
+VERLET_WARNING = _viscous_warning("verlet", VERLET_MU_MAX)
 
 __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig",
-           "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning", "MissingFile",
-           "valid_keys", "field_spec", "key_lines", "parse_value", "CROSS_CHECKS"]
+            "TimeConfig", "OutputConfig", "INTEGRATORS", "CONTROLS", "ModelWarning", "MissingFile",
+           "valid_keys", "field_spec", "key_lines", "parse_value", "CROSS_CHECKS",
+           "RUN_CHECKS"]
 
 COMPRESSIONS = ("gzip", "lzf", "none")
 
@@ -87,10 +100,16 @@ class _Spec:
 
     def __init__(self, kind: str, rng: str = "", check=None, optional: bool = False,
                  choices: tuple[str, ...] | None = None, *, meaning: str, unit: str = ""):
-        self.kind, self.rng, self.check, self.optional, self.choices = kind, rng, check, optional, choices
+        self.kind, self.rng, self.check, self.optional = kind, rng, check, optional
+        self._choices = choices  # a tuple, or a function giving it (names registered later)
         self.meaning = meaning   # what the key sets: for comments, listings and file attributes
         self.unit = unit         # UDUNITS string (docs/MODEL.md "Units"); "" for text and
                                  # boolean keys
+
+    @property
+    def choices(self) -> tuple[str, ...] | None:
+        """The allowed values (None: any of the kind); registries answer at call time."""
+        return self._choices() if callable(self._choices) else self._choices
 
     def coerce(self, key: str, value: Any) -> Any:
         """``value`` checked and converted to the field's Python type (NumPy integers and
@@ -245,7 +264,7 @@ _FIELDS: dict[str, dict[str, _Spec]] = {
     },
     "time": {
         "t_end": _Spec("float", "> 0", _pos, meaning="time at which the run ends", unit="s"),
-        "integrator": _Spec("str", choices=INTEGRATORS, meaning="time integrator"),
+        "integrator": _Spec("str", choices=_registry_names, meaning="time integrator"),
         "cfl": _Spec("float", "in (0, 1]", lambda c: 0 < c <= 1, unit="1",
                      meaning="fraction of the stability limit taken as the step (verlet, "
                              "semi-implicit with time.control = 'cfl')"),
@@ -595,6 +614,23 @@ CROSS_CHECKS = ((("rod.law",), _law_check("rod")),
                 (("time.dt_min", "time.dt_max"), _check_dt_range))
 
 
+def _check_tolerance_honoured(integrator, control, dt, mu) -> None:
+    entry = _registry_get(integrator)
+    if control == "tolerance" and dt is None and mu > entry.viscous_mu_max:
+        raise ValueError(
+            f"time.integrator = {integrator!r} cannot honour time.rtol/time.atol at "
+            f"rod.mu = {mu:g} > {entry.viscous_mu_max:g}: its split viscous sub-step caps "
+            f"the step at time.cfl*h^2/(2*mu), and that cap, not the tolerance, sets its "
+            f"error; set time.control = 'cfl' and refine time.cfl, or use "
+            f"time.integrator = 'semi-implicit' or 'energy'")
+
+
+# What a run checks beyond ``CROSS_CHECKS`` before it steps (``Config.check_runnable``):
+# configurations that are valid (a file may hold one) but that a run refuses.
+RUN_CHECKS = ((("time.integrator", "time.control", "time.dt", "rod.mu"),
+               _check_tolerance_honoured),)
+
+
 _SECTIONS = {"rod": RodConfig, "floor": FloorConfig, "gravity": GravityConfig,
              "initial": InitialConfig, "time": TimeConfig, "output": OutputConfig}
 
@@ -661,9 +697,27 @@ class Config:
         out = []
         if self.rod.mu == 0 and self.rod.gamma == 0:
             out.append(SHOCK_WARNING)
-        if self.time.integrator == "verlet" and self.rod.mu > VERLET_MU_MAX:
-            out.append(VERLET_WARNING)
+        entry = _registry_get(self.time.integrator)
+        if self.rod.mu > entry.viscous_mu_max:
+            out.append(_viscous_warning(entry.name, entry.viscous_mu_max))
         return tuple(out)
+
+    def check_runnable(self) -> None:
+        """Refuse, in one line, a configuration that is valid but whose run could not keep
+        its promise (``RUN_CHECKS``): under ``time.control = "tolerance"`` an integrator
+        whose error above its ``viscous_mu_max`` (the registry's fact; ``verlet``: 1) is
+        set by its viscous step cap, not by ``time.rtol``/``time.atol`` (verlet at
+        μ = 100 misses the first restitution by the same 3.5e-5 at every rtol from 1e-3
+        to 1e-7).  Runs call it before stepping; reading a file that holds such a
+        configuration does not.
+
+        Raises
+        ------
+        ValueError
+            Such a configuration, naming the key that does set its steps.
+        """
+        for keys, check in RUN_CHECKS:
+            check(*(self.get(key) for key in keys))
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Config":

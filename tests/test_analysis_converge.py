@@ -2,6 +2,7 @@
 MODEL.md §4, the spring-wall impact), its statuses, and the convergence file."""
 from __future__ import annotations
 
+import importlib
 import math
 
 import h5py
@@ -212,3 +213,208 @@ def test_bad_ladders_are_one_line_errors():
                  {"rod.N": [5, 10, 20]}, also={"time.rtol": [1e-6, 1e-7]})
     with pytest.raises(ValueError, match="time.rtol"):
         converge(cfg, {"rod.N": [5, 10, 20]}, also={"time.cfl": [0.05, 0.01]})
+
+
+# ---- the time ladder from the registry: honest time errors, predictability ---------------
+def _mu100(t_end=1.0, **over):
+    return rodjit.load_preset("paper-mu100").override(
+        {"time.t_end": t_end, "output.snapshot_interval": 0.01, **over})
+
+
+def test_the_registry_facts_of_the_step_keys_hold_in_runs():
+    """What the registry says sets the steps does: dp54 and radau5 take the same steps at
+    any time.cfl under time.control = "cfl", verlet's change with it."""
+    from rodjit.driver.simulate import simulate
+    from rodjit.stepping import registry
+
+    base = _mu100(0.3, **{"rod.N": 8, "output.snapshot_interval": 0.0,
+                          "time.control": "cfl"})
+    for name in ("dp54", "radau5", "verlet"):
+        entry = registry.get(name)
+        steps = [simulate(base.override({"time.integrator": name, "time.cfl": c})).stats["steps"]
+                 for c in (0.5, 0.05)]
+        ignores = steps[0] == steps[1]
+        assert ignores is ("time.cfl" not in entry.step_keys("cfl")), (name, steps)
+        assert entry.step_keys("cfl", fixed=True) == ("time.dt",)
+        assert entry.step_keys("tolerance") == ("time.rtol", "time.atol")
+
+
+@pytest.mark.parametrize("integrator", ["dp54", "radau5", "dop853"])
+def test_a_time_ladder_over_a_key_that_sets_no_steps_names_the_one_that_does(integrator):
+    cfg = _mu100(**{"time.integrator": integrator, "time.control": "cfl"})
+    with pytest.raises(ValueError, match=r"time.cfl does not set the steps .* ladder "
+                                         r"time.rtol instead") as exc:
+        converge(cfg, {"rod.N": [10, 20, 40]}, also={"time.cfl": [0.05, 0.0125, 0.003125]})
+    assert "\n" not in str(exc.value)
+    with pytest.raises(ValueError, match="ladder time.rtol instead"):
+        converge(cfg.override({"rod.N": 10}), {"time.cfl": [0.5, 0.1, 0.02]})
+    with pytest.raises(ValueError, match="ladder time.dt instead"):
+        converge(cfg.override({"time.dt": 1e-5}), {"rod.N": [10, 20]},
+                 also={"time.rtol": [1e-6, 1e-7]})
+
+
+def test_default_time_ladder_is_the_key_the_registry_names():
+    from rodjit.analysis.converge import default_time_ladder
+
+    cfg = rodjit.Config()
+    assert list(default_time_ladder(cfg)) == ["time.rtol"]
+    for name, key in (("verlet", "time.cfl"), ("semi-implicit", "time.cfl"),
+                      ("dp54", "time.rtol"), ("dop853", "time.rtol"),
+                      ("radau5", "time.rtol"), ("energy", "time.rtol")):
+        c = cfg.override({"time.integrator": name, "time.control": "cfl"})
+        assert list(default_time_ladder(c)) == [key], name
+    assert list(default_time_ladder(cfg.override({"time.dt": 1e-5}))) == ["time.dt"]
+
+
+def test_verlet_under_tolerance_control_above_its_viscous_limit_refuses_in_one_line():
+    """verlet at μ = 100 under tolerance control takes the steps of its viscous cap
+    (time.cfl·h²/(2μ)) at every rtol, so no tolerance bounds its error: the run and
+    converge refuse in one line naming the knob that works, before anything runs; the
+    configuration itself stays valid (a file holding it still reads)."""
+    from rodjit.driver.simulate import simulate
+
+    cfg = _mu100(1.0, **{"time.integrator": "verlet", "time.control": "tolerance"})
+    for call in (lambda: converge(cfg, {"rod.N": [10, 20, 40]}),
+                 lambda: converge(cfg, {"rod.mu": [400.0, 200.0, 100.0]}),
+                 lambda: simulate(cfg)):
+        with pytest.raises(ValueError, match="cannot honour time.rtol") as exc:
+            call()
+        assert "\n" not in str(exc.value) and "time.control = 'cfl' and refine time.cfl" in str(
+            exc.value)
+    assert cfg.warnings()                      # valid, with its warning
+    cfg.override({"time.control": "cfl"}).check_runnable()
+    cfg.override({"rod.mu": 1.0}).check_runnable()
+    cfg.override({"time.dt": 1e-6}).check_runnable()
+
+
+def test_a_ladder_that_does_not_change_the_steps_refines_the_cap_key():
+    """verlet at μ = 1, N = 40 under tolerance control: its viscous cap binds at every
+    rtol from 1e-3 to 2.5e-4 (38,402 steps each), so converge refines time.cfl, which
+    scales that cap, instead of reporting the zero spread of identical runs."""
+    cfg = _mu100(0.6, **{"time.integrator": "verlet", "rod.mu": 1.0})
+    conv = converge(cfg, {"rod.N": [10, 20, 40]}, also={"time.rtol": [1e-3, 5e-4, 2.5e-4]},
+                    time_at=40, observables=["restitution_first"], jobs=1)
+    assert conv.time_key == "time.cfl"
+    assert conv.time_levels == pytest.approx([0.05, 0.025, 0.0125])
+    assert conv.time_steps[0] < conv.time_steps[1] < conv.time_steps[2]
+    assert any("time.rtol does not change the steps" in w and "38,402" in w
+               for w in conv.warnings)
+    oc = conv["restitution_first"]
+    true = _true_time_error(cfg.override({"rod.N": 40}), "restitution_first")
+    assert true > 1e-9 * abs(oc.value)
+    assert true / 10 <= oc.time_error <= 10 * true, (oc.time_error, true)
+    cv = importlib.import_module("rodjit.analysis.converge")
+    assert cv._same_steps([{"steps": 7}, {"steps": 7}, {"steps": 7}])
+    assert not cv._same_steps([{"steps": 7}, {"steps": 8}])
+    assert not cv._same_steps([{"steps": -1}, {"steps": -1}])
+
+
+def test_unchanged_steps_print_not_measured_never_zero(monkeypatch):
+    """The same ladder with the cap's key closed: "not measured", never 0 or exact."""
+    cv = importlib.import_module("rodjit.analysis.converge")
+    cfg = _mu100(0.6, **{"time.integrator": "verlet", "rod.mu": 1.0, "rod.N": 40})
+    monkeypatch.setattr(cv, "_cap_key", lambda base, key: None)
+    conv = converge(cfg, {"rod.N": [20, 40]}, also={"time.rtol": [1e-3, 5e-4, 2.5e-4]},
+                    time_at=40, observables=["restitution_first", "max_floor_force"], jobs=1)
+    assert len(set(conv.time_steps)) == 1
+    for oc in conv.observables.values():
+        assert oc.time_status == cv.NOT_MEASURED and math.isnan(oc.time_error)
+        assert oc.time.status == cv.NOT_MEASURED
+    text = repr(conv)
+    assert "(time not measured)" in text and "(time 0)" not in text
+    assert "exact" not in text.split("warning")[0]
+    assert "predictability_time: not measured" in text
+    assert any("time error not measured" in w for w in conv.warnings)
+
+
+def _true_time_error(cfg, name):
+    """|f(cfg) − f(the same semi-discrete system by dop853 at rtol 1e-12)|."""
+    from rodjit.analysis.observables import observables
+    from rodjit.driver.simulate import simulate
+
+    ref = cfg.override({"time.integrator": "dop853", "time.control": "tolerance",
+                        "time.rtol": 1e-12, "time.atol": 1e-15})
+    return abs(observables(simulate(cfg))[name] - observables(simulate(ref))[name])
+
+
+def _check_time_error(cfg, ladder, also=None, tiny_ok=False,
+                      names=("restitution_first", "max_floor_force"), never_zero=()):
+    """converge's time error within 10x of the true one; with ``tiny_ok`` a true error
+    below 1e-9 relative may be reported as anything up to 1e-8 relative, and a value the
+    ladder does not move as "not measured" (an accurate integrator's steps in contact,
+    capped by its stability, do not move along the ladder), never as 0."""
+    conv = converge(cfg, {"rod.N": ladder}, also=also, observables=[*names, *never_zero],
+                    jobs=1)
+    at = cfg.override({"rod.N": conv.time_at})
+    for name in never_zero:        # at least: no zero where the true error is not tiny
+        oc = conv[name]
+        true = _true_time_error(at, name)
+        if true > 1e-9 * abs(oc.value):
+            assert math.isnan(oc.time_error) or oc.time_error >= true / 10, (name, true)
+    for name in names:
+        oc = conv[name]
+        true = _true_time_error(at, name)
+        if tiny_ok and oc.time_status == "not measured":
+            assert math.isnan(oc.time_error) and "(time not measured)" in repr(conv)
+            continue
+        if tiny_ok and true <= 1e-9 * abs(oc.value):
+            assert oc.time_error <= 1e-8 * abs(oc.value), (name, oc.time_error, true)
+            continue
+        assert true > 1e-9 * abs(oc.value), (name, true)
+        assert true / 10 <= oc.time_error <= 10 * true, (name, oc.time_error, true)
+    return conv
+
+
+def test_the_knobs_named_in_the_refusals_measure_the_time_error_within_10x():
+    """What the refusals name works: verlet under cfl control with a time.cfl ladder, and
+    dp54 and radau5 with the rtol ladder, give a time error within 10x of the true one."""
+    cfg = _mu100(0.6)
+    conv = _check_time_error(cfg.override({"time.integrator": "verlet",
+                                           "time.control": "cfl"}), [5, 10, 20])
+    assert conv.time_key == "time.cfl"
+    for name in ("dp54", "radau5"):
+        c = cfg.override({"time.integrator": name, "time.control": "cfl",
+                          "time.rtol": 1e-3, "time.atol": 1e-6})
+        # max_floor_force is sampled at the steps (radau5 takes a few hundred): its
+        # sampling error, not the time error, sets the spread along the ladder
+        conv = _check_time_error(c, [5, 10, 20], tiny_ok=True,
+                                 names=("restitution_first", "contact_time_first"),
+                                 never_zero=("max_floor_force",))
+        assert conv.time_key == "time.rtol"
+
+
+@pytest.mark.slow   # verlet at N = 20 on its time.cfl ladder: 25.6 million steps
+def test_verlet_time_error_on_the_paper_mu100_ladder():
+    cfg = _mu100(1.0, **{"time.integrator": "verlet", "time.control": "cfl"})
+    _check_time_error(cfg, [10, 20, 40])
+
+
+def test_predictability_time_of_synthetic_histories():
+    from rodjit.analysis.converge import predictability_time
+
+    t = np.linspace(0, 5, 501)
+    u = np.stack([np.sin(t), 1 + np.sin(t)], axis=1)
+    same = [(t, u), (t, u + 1e-6), (t, u + 2e-6)]
+    assert predictability_time(same, 5.0) == math.inf
+    grow = [(t, u), (t, u + 1e-6 * np.exp(3 * t)[:, None]), (t, u)]
+    # 1 % of the range (3: from sin = −1 to 1 + sin = 2) is 0.03: the finest pair's
+    # difference 1e-6·e^{3t} passes it at t = ln(3e4)/3 = 3.44
+    assert predictability_time(grow, 5.0) == pytest.approx(math.log(3e4) / 3, abs=0.011)
+    assert math.isnan(predictability_time([(t, u), None], 5.0))
+    assert math.isnan(predictability_time([(t[:0], u[:0]), (t[:0], u[:0])], 5.0))
+
+
+def test_predictability_time_of_the_chaotic_and_the_damped_paper_runs():
+    """paper-mu0 is chaotic: its default time ladder (rtol 1e-6, /4, /16) loses the
+    trajectory before t = 5 s; paper-mu100 settles and keeps it."""
+    mu0 = rodjit.load_preset("paper-mu0")
+    conv = converge(mu0, {"rod.N": [5, 10]}, time_at=5, observables=["restitution_first"],
+                    jobs=1)
+    assert conv.time_key == "time.rtol"
+    assert 0 < conv.predictability_time < 5.0
+    assert "predictability_time: " in repr(conv)
+    mu100 = rodjit.load_preset("paper-mu100")
+    conv = converge(mu100, {"rod.N": [5, 10]}, time_at=5,
+                    observables=["restitution_first"], jobs=1)
+    assert conv.predictability_time == math.inf
+    assert "none before t_end" in repr(conv)

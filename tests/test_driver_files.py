@@ -149,6 +149,40 @@ def test_existing_output_needs_overwrite(tmp_path, small_config):
     assert rodjit.load_file(out).status == "completed"
 
 
+def test_resume_maps_the_scheme_counters_by_name(tmp_path, small_config, many_calls):
+    """A file whose checkpoint names other per-scheme counters, in another order (an older
+    or newer rodjit), resumes: each counter is matched by name, one this version does not
+    count is dropped, and the run continues bit for bit."""
+    from rodjit.stepping.registry import SCHEME_STATS
+
+    ref, cut = tmp_path / "ref.h5", tmp_path / "cut.h5"
+    rodjit.run_to_file(small_config, ref)
+    with pytest.raises(rodjit.RunInterrupted):
+        rodjit.run_to_file(small_config, cut, progress=_interrupt_at(5))
+    names = ("retired_counter",) + tuple(reversed(SCHEME_STATS))
+    with h5py.File(cut, "r+") as f:
+        for slot in ("slot0", "slot1"):
+            g = f["checkpoint"][slot]
+            old = dict(zip(SCHEME_STATS, g["sstats"][()]))
+            del g["sstats"]
+            ds = g.create_dataset("sstats", data=np.array(
+                [99] + [old[n] for n in reversed(SCHEME_STATS)], np.int64))
+            ds.attrs["names"] = np.array(names, dtype=h5py.string_dtype())
+        at_cut = old
+    assert at_cut["newton_iterations"] > 0
+    back = rodjit.load_file(cut).stats
+    assert {n: back[n] for n in SCHEME_STATS} == at_cut and "retired_counter" not in back
+    assert rodjit.resume_file(cut).status == "completed"
+    done, want = rodjit.load_file(cut), rodjit.load_file(ref)
+    assert {n: done.stats[n] for n in SCHEME_STATS} == {n: want.stats[n] for n in SCHEME_STATS}
+    np.testing.assert_array_equal(done.u, want.u)
+    with h5py.File(cut) as f:        # the file keeps its own names, written by name
+        g = f["checkpoint"][f"slot{int(f['checkpoint/current'][()])}"]
+        assert tuple(n.decode() if isinstance(n, bytes) else n
+                     for n in g["sstats"].attrs["names"]) == names
+        assert list(g["sstats"][()]) == [0] + [want.stats[n] for n in reversed(SCHEME_STATS)]
+
+
 def test_resume_errors(tmp_path, small_config, many_calls):
     cut = tmp_path / "cut.h5"
     with pytest.raises(rodjit.RunInterrupted):

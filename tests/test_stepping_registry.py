@@ -237,3 +237,70 @@ def test_node_mass_kernel_matches_the_mass_vector():
         np.testing.assert_array_equal(m, masses(n))
         im = np.array([inv_node_mass(i, n, 1.0 / h) for i in range(n + 1)])
         np.testing.assert_array_equal(im, 1.0 / m)
+
+
+# ---- the registry's facts and registration from outside --------------------------------
+def test_every_scheme_states_its_order_step_keys_cap_and_norm():
+    for entry in registry.SCHEMES:
+        assert entry.order >= 2 and entry.error_norm, entry.name
+        assert entry.step_keys("tolerance") == ("time.rtol", "time.atol")
+        assert entry.step_keys("cfl", fixed=True) == ("time.dt",)
+        assert set(entry.cap_keys) <= set(registry.TIME_KEYS)
+        assert entry.step_keys("cfl") == (("time.cfl",) if entry.cfl_control else
+                                          ("time.rtol", "time.atol"))
+    assert {e.name for e in registry.SCHEMES if e.cfl_control} == {"verlet", "semi-implicit"}
+    assert {e.name: e.order for e in registry.SCHEMES} == {
+        "verlet": 2, "semi-implicit": 2, "energy": 2, "dp54": 5, "dop853": 8, "radau5": 5}
+    assert registry.get("verlet").viscous_mu_max == config.VERLET_MU_MAX == 1.0
+    assert all(e.viscous_mu_max == float("inf") for e in registry.SCHEMES if e.name != "verlet")
+
+
+def _toy_line(**kw):
+    return registry.Scheme("toy", "toy_scheme", "Toy", lambda tc, P: P(float(tc.cfl)),
+                           workspace.WORK_ROWS, counters=("newton_iterations",),
+                           cfl_control=True, order=1, **kw)
+
+
+def test_a_scheme_registers_from_outside_as_a_law_does(monkeypatch):
+    monkeypatch.setattr(registry, "SCHEMES", registry.SCHEMES)
+    monkeypatch.setattr(registry, "NAMES", registry.NAMES)
+    with pytest.raises(ValueError, match="time.integrator"):
+        rodjit.Config().override({"time.integrator": "toy"})
+    line = registry.register(_toy_line())
+    assert registry.get("toy") is line and "toy" in registry.NAMES
+    cfg = rodjit.Config().override({"time.integrator": "toy", "time.control": "cfl"})
+    assert registry.make_scheme(cfg.time).cfl == cfg.time.cfl
+    # named through the registered namespace, so a cache index naming it never fails to load
+    _, params = registry.load(line)
+    assert params.__module__ == "rodjit.stepping.registered"
+    from rodjit.analysis.converge import default_time_ladder
+    assert list(default_time_ladder(cfg)) == ["time.cfl"]
+    with pytest.raises(ValueError, match="already registered"):
+        registry.register(_toy_line())
+    with pytest.raises(ValueError, match="not among"):
+        registry.register(dataclasses.replace(_toy_line(), name="toy2",
+                                              counters=("toy_counter",)))
+    with pytest.raises(TypeError, match="registry.Scheme"):
+        registry.register("toy")
+
+
+@pytest.mark.slow   # compiles the whole loop for the toy's parameter type
+def test_a_registered_scheme_runs_and_leaves_the_cache_usable(tmp_path):
+    import subprocess
+    import sys
+    here = Path(__file__).parent
+    run = ("import rodjit; r = rodjit.simulate(rodjit.Config().override({'rod.N': 8, "
+           "'time.t_end': 0.05, 'time.integrator': %r, 'time.control': 'cfl', "
+           "'time.cfl': 0.2})); print(r.status, r.stats['steps'], r.stats['newton_iterations'])")
+    reg = ("from rodjit.stepping import registry, workspace; registry.register("
+           "registry.Scheme('toy', 'toy_scheme', 'Toy', lambda tc, P: P(float(tc.cfl)), "
+           "workspace.WORK_ROWS, counters=('newton_iterations',), cfl_control=True)); ")
+    out = subprocess.run([sys.executable, "-c", reg + run % "toy"], cwd=here,
+                         capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr
+    status, steps, counted = out.stdout.split()
+    assert status == "completed" and int(steps) == int(counted) > 0
+    # a process that cannot import the toy's module still loads the cache
+    out = subprocess.run([sys.executable, "-c", run % "verlet"], cwd=tmp_path,
+                         capture_output=True, text=True, timeout=900)
+    assert out.returncode == 0, out.stderr

@@ -169,7 +169,7 @@ def spring_wall(ax_time, ax_rest):
         s, e = spring_wall_impact(alpha)
         conv = rodjit.converge(_spring_wall_config(alpha, E), {"rod.N": SPRING_LADDER},
                                observables=["contact_time_first", "restitution_first"],
-                               scheduler="inline")
+                               also=False, scheduler="inline")   # the space ladder alone
         ct = conv["contact_time_first"].value * c
         rs = conv["restitution_first"].value
         coarse = conv["contact_time_first"].space.values[0] * c

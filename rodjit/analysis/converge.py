@@ -1,6 +1,7 @@
 """``rodjit.converge``: observables along a resolution ladder, with observed orders,
 Richardson-extrapolated continuum values and error estimates, the time-discretisation
-contribution measured separately on a tolerance ladder."""
+contribution measured separately on a time ladder over the key that sets the integrator's
+steps (``stepping.registry``), and the predictability time of the heights along it."""
 from __future__ import annotations
 
 import math
@@ -12,11 +13,19 @@ from .evaluate import evaluate
 from .richardson import Study, study
 
 __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
-           "FORMAT_VERSION", "default_time_ladder"]
+           "FORMAT_VERSION", "default_time_ladder", "step_keys", "predictability_time",
+           "PREDICTABILITY_FRACTION", "NOT_MEASURED"]
 
 DEFAULT_OBSERVABLES = ("restitution_first", "contact_time_first", "min_u0",
                        "max_floor_force")
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2     # 2: time_status, predictability_time, time_steps
+# The status of a time study whose runs all took the same number of steps: the ladder did
+# not change the steps, so the spread of its values says nothing about the time error.
+NOT_MEASURED = "not measured"
+# The runs along the time ladder disagree in the heights by more than their error bar
+# once the two finest differ by more than this fraction of the heights' range over the run
+# (the trajectory is then no longer one trajectory; docs/MODEL.md §5).
+PREDICTABILITY_FRACTION = 0.01
 # the resolution keys whose level is a mesh width (1/value); any other key's value is used
 # as the level itself (time.rtol, time.dt, time.cfl: smaller is finer)
 _INVERSE_KEYS = ("rod.N",)
@@ -56,6 +65,7 @@ class ObservableConvergence:
     time: Study | None = None
     time_error: float = math.nan
     statuses: list = field(default_factory=list)
+    time_status: str = ""     # NOT_MEASURED when the ladder did not change the steps
 
     @property
     def value(self) -> float:
@@ -71,7 +81,8 @@ class ObservableConvergence:
         return {"name": self.name, "value": self.value, "error": self.error,
                 "space": self.space.to_dict(),
                 "time": self.time.to_dict() if self.time is not None else None,
-                "time_error": self.time_error, "statuses": list(self.statuses)}
+                "time_error": self.time_error, "time_status": self.time_status,
+                "statuses": list(self.statuses)}
 
 
 @dataclass
@@ -101,10 +112,17 @@ class Convergence:
     observables : dict
         Observable name -> its study (``ObservableConvergence``).
     warnings : list of str
-        Failed runs, the model's own limits, ladders outside the asymptotic range and
-        values that do not settle.
+        Failed runs, the model's own limits, ladders outside the asymptotic range, values
+        that do not settle and time ladders that did not change the steps.
     runs, time_runs : list of dict
-        Each level's observables and status (space ladder, tolerance ladder).
+        Each level's observables, status and ``steps`` (space ladder, time ladder).
+    predictability_time : float
+        The simulated time [s] after which the runs along the time ladder disagree in the
+        heights by more than their error bar (``predictability_time``); inf if they never
+        do before ``time.t_end``, NaN when not measured (no time ladder of three levels
+        with snapshots, or one that did not change the steps).
+    time_steps : list of int
+        The accepted steps of each run of the time ladder.
     """
 
     base: object
@@ -117,6 +135,8 @@ class Convergence:
     warnings: list
     runs: list
     time_runs: list
+    predictability_time: float = math.nan
+    time_steps: list = field(default_factory=list)
 
     def __getitem__(self, name: str) -> ObservableConvergence:
         return self.observables[name]
@@ -128,8 +148,16 @@ class Convergence:
         for name, oc in self.observables.items():
             s = oc.space
             order = f"p={s.order:.2f}" if math.isfinite(s.order) else "p=—"
-            t = (f" (time {oc.time_error:.2g})" if math.isfinite(oc.time_error) else "")
+            t = (f" (time {oc.time_error:.2g})" if math.isfinite(oc.time_error) else
+                 f" (time {oc.time_status})" if oc.time_status else "")
             lines.append(f"  {name}: {oc.value:.6g} ± {oc.error:.2g}{t}  {order}  {s.status}")
+        if self.time_key:
+            p = self.predictability_time
+            lines.append("  predictability_time: " + (
+                "not measured" if math.isnan(p) else
+                f"none before t_end = {self.base.time.t_end:g} s" if p == math.inf else
+                f"{p:.4g} s (the heights along the {self.time_key} ladder disagree beyond "
+                f"it: trajectory-level outputs after it are not reproducible)"))
         for w in self.warnings:
             lines.append(f"  warning: {w}")
         return "\n".join(lines)
@@ -148,7 +176,9 @@ class Convergence:
                 "time_levels": list(self.time_levels), "time_at": self.time_at,
                 "config": self.base.to_dict(),
                 "observables": {k: v.to_dict() for k, v in self.observables.items()},
-                "warnings": list(self.warnings)}
+                "warnings": list(self.warnings),
+                "predictability_time": self.predictability_time,
+                "time_steps": list(self.time_steps)}
 
     def save(self, path, overwrite: bool = False) -> None:
         """Write an HDF5 file (root attribute ``rodjit_kind = "convergence"``): root
@@ -190,7 +220,9 @@ class Convergence:
                             "time_at": float(self.time_at) if self.time_at is not None
                             else math.nan,
                             "config": self.base.to_toml(),
-                            "warnings": "\n".join(self.warnings)})
+                            "warnings": "\n".join(self.warnings),
+                            "predictability_time": float(self.predictability_time),
+                            "time_steps": np.asarray(self.time_steps, np.int64)})
             for name, oc in self.observables.items():
                 g = f.create_group(f"observables/{name}")
                 s = oc.space
@@ -199,7 +231,8 @@ class Convergence:
                 g["statuses"] = np.asarray(oc.statuses, dtype=h5py.string_dtype())
                 g.attrs.update({"value": oc.value, "error": oc.error, "order": s.order,
                                 "space_error": s.error, "status": s.status,
-                                "message": s.message, "time_error": oc.time_error})
+                                "message": s.message, "time_error": oc.time_error,
+                                "time_error_status": oc.time_status})
                 if oc.time is not None:
                     g["time_h"], g["time_values"] = np.asarray(oc.time.h), np.asarray(
                         oc.time.values)
@@ -250,11 +283,17 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
              extra=None, time_at=None, jobs=None, scheduler=None,
              merge_time=None) -> Convergence:
     """Observables of ``config`` along a resolution ladder: observed orders, the
-    Richardson-extrapolated continuum value and an error estimate for each.
+    Richardson-extrapolated continuum value and an error estimate for each, the time
+    error measured on a time ladder, and the predictability time of the heights.
 
-    All runs go to the sweep engine's executors at once.  With a tolerance ladder
-    (``also``), the time contribution |value at the base tolerance − the tolerance ladder's
-    converged value| at ``time_at`` is added to each error.
+    All runs go to the sweep engine's executors at once.  The time ladder (``also``, by
+    default ``default_time_ladder``: the key that sets the integrator's steps, from
+    ``stepping.registry``) runs at ``time_at``; its contribution |value at the base
+    setting − the ladder's converged value| is added to each error.  Where every run of
+    the time ladder took the same number of steps (its key does not change the steps, e.g.
+    a cap binds) and the registry names a key that scales the cap, the same ladder is run
+    over that key instead; if the steps still do not change, the time error is
+    ``NOT_MEASURED`` (never 0) and a warning says so.
 
     Parameters
     ----------
@@ -263,16 +302,18 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     ladder : dict, optional
         One key and its levels, coarse to fine (lists, or ``"linspace(...)"`` text as on
         the command line); default ``{"rod.N": [25, 50, 100, 200, 400]}``.
-    also : dict, optional
-        A tolerance ladder, e.g. ``{"time.rtol": [1e-5, 1e-6, 1e-7]}``; its key must be
-        what chooses the integrator's steps (``time.rtol``/``time.atol`` under tolerance
-        control, ``time.cfl`` under ``time.control = "cfl"``, ``time.dt``).
+    also : dict or False, optional
+        A time ladder, e.g. ``{"time.rtol": [1e-5, 1e-6, 1e-7]}``; its key must set the
+        integrator's steps (``step_keys``: ``time.rtol``/``time.atol`` under tolerance
+        control and for the integrators without cfl control, ``time.cfl`` for ``verlet``
+        and ``semi-implicit`` under ``time.control = "cfl"``, ``time.dt`` with fixed
+        steps).  None: ``default_time_ladder``; False: no time ladder.
     observables : sequence of str
         Names of ``rodjit.analysis.OBSERVABLES`` or of ``extra`` to study.
     extra : dict, optional
         Further observables: name -> function(Result) -> float.
     time_at : optional
-        The ``ladder`` level the tolerance ladder runs at (default: the second finest).
+        The ``ladder`` level the time ladder runs at (default: the second finest).
     jobs : int, optional
         Worker processes, as for ``rodjit.sweep`` (default: every core).
     scheduler : str, optional
@@ -292,7 +333,10 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         ``config`` is not a ``rodjit.Config``.
     ValueError
         A ladder that is not one key with at least two monotonically refining levels, an
-        unknown observable, or a tolerance key that does not choose the steps.
+        unknown observable, a time key that does not set the integrator's steps (the
+        message names the key that does), or a level whose run would refuse to run
+        (``Config.check_runnable``: verlet under tolerance control above its viscous
+        limit, naming time.cfl).
     """
     from ..config import Config
     from .observables import OBSERVABLES
@@ -302,6 +346,7 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         raise TypeError(f"config must be a rodjit.Config, not {type(base).__name__}")
     ladder = {"rod.N": [25, 50, 100, 200, 400]} if ladder is None else ladder
     key, values = _check_ladder("ladder", ladder, base)
+    _check_time_key("ladder", key, base)
     extra = dict(extra or {})
     observables = list(observables)
     unknown = [o for o in observables if o not in OBSERVABLES and o not in extra]
@@ -310,17 +355,20 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                          f"{', '.join([*OBSERVABLES, *extra])}")
     configs = [base.override({key: v}) for v in values]
     t_key, t_values, t_configs = None, [], []
-    if also is not None:
+    if also is None and key not in _TIME_KEYS:
+        also = default_time_ladder(base)
+    if also:
         t_key, t_values = _check_ladder("also", also, base)
-        _check_time_key(t_key, base)
+        _check_time_key("also", t_key, base)
         if t_key == key:
             raise ValueError(f"also: {t_key} is already the ladder's key")
         time_at = values[-2] if time_at is None else time_at
         at = base.override({key: time_at})
         t_configs = [at.override({t_key: v}) for v in t_values]
-        base_t = base.get(t_key)
+    for c in configs + t_configs:        # what a run would refuse: before any runs
+        c.check_runnable()
     runs = evaluate(configs + t_configs, jobs=jobs, scheduler=scheduler,
-                    merge_time=merge_time, extra=extra)
+                    merge_time=merge_time, extra=extra, histories=bool(t_configs))
     runs, t_runs = runs[:len(configs)], runs[len(configs):]
     warnings = []
     failed = [f"{key} = {v}: {r['reason']}" for v, r in zip(values, runs)
@@ -328,6 +376,39 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     warnings += [f"run failed at {x}" for x in failed]
     # the model's own limits (the shock-forming μ = γ = 0 rod), once each along the ladder
     warnings += list(dict.fromkeys(w for c in configs for w in c.warnings()))
+    measured = True
+    if t_key is not None:
+        if _same_steps(t_runs):
+            cap = _cap_key(base, t_key)
+            if cap is not None:
+                # the tolerance does not change the steps: the cap binds; refine what
+                # scales the cap by the same factors
+                c0 = base.get(cap)
+                c_values = [c0 * v / t_values[0] for v in t_values]
+                c_configs = [at.override({cap: v}) for v in c_values]
+                for c in c_configs:
+                    c.check_runnable()
+                c_runs = evaluate(c_configs, jobs=jobs,
+                                  scheduler=scheduler, merge_time=merge_time, extra=extra,
+                                  histories=True)
+                warnings.append(
+                    f"{t_key} does not change the steps of time.integrator = "
+                    f"{base.time.integrator!r} here ({_steps_text(t_runs)} steps at every "
+                    f"level: its step cap, which scales with {cap}, binds); the time "
+                    f"error is measured on "
+                    f"{cap} = {', '.join(f'{v:g}' for v in c_values)} instead "
+                    f"(registry: {_cap_text(base)})")
+                t_key, t_values, t_runs = cap, c_values, c_runs
+            if _same_steps(t_runs):
+                measured = False
+                warnings.append(
+                    f"time error not measured: {t_key} = "
+                    f"{', '.join(f'{v:g}' for v in t_values)} did not change the steps "
+                    f"({_steps_text(t_runs)} at every level)")
+        base_t = base.get(t_key)
+    histories = [r.pop("history", None) for r in t_runs]
+    for r in runs:
+        r.pop("history", None)
     out = {}
     for name in observables:
         s = study(name, _levels(key, values), _values_of(runs, name))
@@ -342,49 +423,135 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         if t_key is not None:
             ts = study(name, _levels(t_key, t_values), _values_of(t_runs, name))
             oc.time = ts
-            ref = ts.extrapolated if math.isfinite(ts.extrapolated) else ts.values[-1]
-            here = _at_base(base_t, t_values, ts.values, runs, values, time_at, name)
-            oc.time_error = abs(here - ref) if math.isfinite(here) else math.nan
-            if ts.status not in ("converged", "exact", "oscillating"):
-                warnings.append(f"{name}: {t_key} ladder {ts.status}: {ts.message}")
+            if not measured:
+                ts.status, ts.message = NOT_MEASURED, "the ladder did not change the steps"
+                ts.extrapolated, ts.error = math.nan, math.nan
+                oc.time_status = NOT_MEASURED
+            elif ts.status == "exact" and all(math.isfinite(x) for x in ts.values):
+                # identical at every level although the steps changed: the steps that set
+                # this value (e.g. a maximum reached where a step cap binds) did not
+                ts.status = NOT_MEASURED
+                ts.message = ("identical at every level: the steps that set it did not "
+                              "change")
+                ts.extrapolated, ts.error = math.nan, math.nan
+                oc.time_status = NOT_MEASURED
+                warnings.append(f"{name}: time error not measured: the same value at every "
+                                f"level of the {t_key} ladder (the steps that set it did "
+                                f"not change)")
+            else:
+                ref = ts.extrapolated if math.isfinite(ts.extrapolated) else ts.values[-1]
+                here = _at_base(base_t, t_values, ts.values, runs, values, time_at, name)
+                oc.time_error = abs(here - ref) if math.isfinite(here) else math.nan
+                if ts.status not in ("converged", "exact", "oscillating"):
+                    warnings.append(f"{name}: {t_key} ladder {ts.status}: {ts.message}")
         if s.status not in ("converged", "exact"):
             warnings.append(f"{name}: {s.status}: {s.message}")
         out[name] = oc
+    p_time = math.nan
+    if t_key is not None and measured:
+        p_time = predictability_time(histories, base.time.t_end)
     return Convergence(base, key, values, t_key, t_values, time_at, out, warnings, runs,
-                       t_runs)
+                       t_runs, p_time, [r.get("steps", -1) for r in t_runs])
+
+
+_TIME_KEYS = ("time.rtol", "time.atol", "time.cfl", "time.dt")
+
+
+def step_keys(base) -> tuple[str, ...]:
+    """The keys that set the steps of the base config's integrator (the registry's
+    ``Scheme.step_keys`` under its ``time.control`` and ``time.dt``)."""
+    from ..stepping.registry import get
+
+    return get(base.time.integrator).steps_of(base.time)
 
 
 def _by_tolerance(base) -> bool:
-    """Whether time.rtol/atol choose the steps (energy, or time.control = "tolerance")."""
-    return base.time.integrator == "energy" or base.time.control == "tolerance"
+    """Whether time.rtol/atol set the steps (the registry's facts of the integrator)."""
+    return "time.rtol" in step_keys(base)
 
 
-def _check_time_key(key: str, base) -> None:
-    """The tolerance ladder must vary what controls the integrator's steps."""
-    integ = base.time.integrator
-    if key in ("time.rtol", "time.atol") and not _by_tolerance(base):
-        raise ValueError(f"also: {key} does not choose the steps of time.integrator = "
-                         f"{integ!r} with time.control = 'cfl': use --also time.cfl=...")
-    if key == "time.cfl" and _by_tolerance(base):
-        raise ValueError(f"also: time.cfl does not choose the steps of time.integrator = "
-                         f"{integ!r} under tolerance control: use --also time.rtol=... "
-                         f"(or set time.control = 'cfl')")
-    if key == "time.cfl" and base.time.dt is not None:
-        raise ValueError("also: time.cfl has no effect with a fixed step time.dt; ladder "
-                         "time.dt instead")
+def _check_time_key(name: str, key: str, base) -> None:
+    """A ladder over a time key must vary what sets the integrator's steps."""
+    if key not in _TIME_KEYS or key == "time.dt":      # time.dt fixes every scheme's steps
+        return
+    keys = step_keys(base)
+    if key in keys:
+        return
+    tc = base.time
+    why = ("with the fixed step time.dt" if tc.dt is not None else
+           f"under time.control = {tc.control!r}")
+    raise ValueError(f"{name}: {key} does not set the steps of time.integrator = "
+                     f"{tc.integrator!r} {why}: ladder {keys[0]} instead "
+                     f"(e.g. --{'also' if name == 'also' else 'ladder'} {keys[0]}=...)")
+
+
+def _same_steps(t_runs) -> bool:
+    """Every run of the time ladder ran and took the same number of accepted steps."""
+    steps = [r.get("steps", -1) for r in t_runs]
+    return len(steps) >= 2 and steps[0] >= 0 and all(n == steps[0] for n in steps)
+
+
+def _steps_text(t_runs) -> str:
+    return f"{t_runs[0].get('steps', -1):,}"
+
+
+def _cap_key(base, t_key):
+    """The key that scales the integrator's step cap (the registry's ``cap_keys``), when
+    the time ladder was over a tolerance and a cap can bind; None otherwise."""
+    from ..stepping.registry import get
+
+    entry = get(base.time.integrator)
+    if t_key not in ("time.rtol", "time.atol") or base.time.dt is not None:
+        return None
+    return next((k for k in entry.cap_keys if k != t_key), None)
+
+
+def _cap_text(base) -> str:
+    from ..stepping.registry import get
+
+    return "its step cap (" + get(base.time.integrator).cap + ")"
+
+
+def predictability_time(histories, t_end: float,
+                        fraction: float = PREDICTABILITY_FRACTION) -> float:
+    """The simulated time after which the runs of a time ladder disagree in the heights
+    by more than their error bar: the first common output time at which the two finest
+    runs differ (max over nodes) by more than ``fraction`` of the heights' range over the
+    finest run.  inf if they never do before ``t_end``; NaN without two runs with common
+    output times (no snapshots, or a failed run).
+
+    Parameters
+    ----------
+    histories : sequence of (t, u) or None
+        Each run's snapshot times and heights, coarse to fine.
+    t_end : float
+        The runs' end [s].
+    fraction : float
+        The error bar as a fraction of the heights' range.
+    """
+    hs = [h for h in histories if h is not None]
+    if len(hs) < 2 or len(hs) != len(histories):
+        return math.nan
+    (t1, u1), (t2, u2) = hs[-2], hs[-1]
+    n = min(len(t1), len(t2))
+    if n < 2 or not np.allclose(t1[:n], t2[:n], rtol=0, atol=1e-9 * max(1.0, t_end)):
+        return math.nan
+    scale = float(np.max(u2[:n]) - np.min(u2[:n]))
+    if not scale > 0:
+        return math.nan
+    d = np.max(np.abs(u2[:n] - u1[:n]), axis=1)
+    bad = np.flatnonzero(~(d <= fraction * scale))      # NaN counts as a disagreement
+    return float(t2[bad[0]]) if bad.size else math.inf
 
 
 def default_time_ladder(base) -> dict:
-    """The tolerance ladder of the base config's integrator: time.rtol (energy, or any
-    integrator under tolerance control) or time.cfl (time.control = "cfl"), the base value
-    and two refinements by 4."""
-    if base.time.dt is not None:
-        return {"time.dt": [base.time.dt, base.time.dt / 4, base.time.dt / 16]}
-    if _by_tolerance(base):
-        r = base.time.rtol
-        return {"time.rtol": [r, r / 4, r / 16]}
-    c = base.time.cfl
-    return {"time.cfl": [c, c / 4, c / 16]}
+    """The time ladder of the base config's integrator: the key that sets its steps
+    (``step_keys``: time.dt with fixed steps, time.rtol under tolerance control or for an
+    integrator without cfl control, time.cfl under cfl control), the base value and two
+    refinements by 4."""
+    k = step_keys(base)[0]
+    v = base.get(k)
+    return {k: [v, v / 4, v / 16]}
 
 
 def _at_base(base_t, t_values, t_obs, runs, values, time_at, name) -> float:

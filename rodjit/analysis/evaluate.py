@@ -20,7 +20,7 @@ from ..sweeps.grid import MAX_POINTS   # runs one study may ask for (a sweep's l
 Extractor = "Callable[[rodjit.Result], float]"
 
 
-def _values(result, extra, merge_time) -> dict:
+def _values(result, extra, merge_time, histories=False) -> dict:
     from .observables import observables
 
     try:
@@ -32,6 +32,10 @@ def _values(result, extra, merge_time) -> dict:
         out[name] = float(fn(result))
     out["run_status"] = result.status
     out["message"] = result.message
+    out["steps"] = int(result.stats.get("steps", -1))
+    out["rejected_steps"] = int(result.stats.get("rejected_steps", -1))
+    if histories:                     # the heights at the snapshot times
+        out["history"] = (result.t.copy(), result.u.copy())
     return out
 
 
@@ -74,9 +78,12 @@ def _where(cfg, first) -> str:
 
 
 def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
-             merge_time: float | None = None, extra: dict | None = None) -> list[dict]:
+             merge_time: float | None = None, extra: dict | None = None,
+             histories: bool = False) -> list[dict]:
     """The observables (``rodjit.analysis.observables``, and ``extra``: name ->
-    function(Result) -> float) of every Config in ``configs``, in their order.
+    function(Result) -> float) of every Config in ``configs``, in their order, with each
+    run's accepted and rejected ``steps`` (and with ``histories``: ``history``, the
+    snapshot times and heights ``(t, u)``).
 
     ``jobs``/``scheduler`` as for ``rodjit.sweep``.  A run that fails gives
     ``status = "failed"`` and its message as ``reason`` (observables missing)."""
@@ -97,7 +104,7 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
         out = []
         for cfg in configs:
             try:
-                out.append(_values(simulate(cfg), extra, merge_time))
+                out.append(_values(simulate(cfg), extra, merge_time, histories))
             except SimulationError as exc:
                 out.append(_failed(str(exc), extra))
         return out
@@ -119,7 +126,8 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
                 i = res.index
                 if os.path.exists(paths[i]):
                     try:
-                        results[i] = _values(load_file(paths[i]), extra, merge_time)
+                        results[i] = _values(load_file(paths[i]), extra, merge_time,
+                                             histories)
                     except Exception as exc:
                         results[i] = _failed(f"{type(exc).__name__}: {exc}", extra)
                     os.remove(paths[i])

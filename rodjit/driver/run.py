@@ -132,6 +132,7 @@ class Run:
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
         self.config = config
+        config.check_runnable()     # a tolerance the integrator cannot honour: one line
         self.scheme, self.ctrl, self.system, self.rod, self.floor = parameters(config)
         tc = config.time
         n1 = config.rod.N + 1

@@ -27,9 +27,9 @@ from .growing_table import Table
 from .h5files import now, writer_attrs
 
 __all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
-           "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
+            "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
            "DIGEST_PARTS", "REQUIRED_ATTRS", "RunLayout", "build_layout", "add_digests",
-           "digest_rows", "overwrite"]
+           "digest_rows", "overwrite", "CK_COUNTERS", "counter_names", "counters_by_name"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
 FORMAT_VERSION = 2
@@ -123,6 +123,28 @@ REQUIRED_ATTRS = ("config_toml", "status")
 _CK_NAMES = {"state": ("u", "v", "a"), "clock": CLOCK_NAMES, "count": COUNT_NAMES,
              "ev": EV_NAMES, "sstats": SCHEME_STATS or ("unused",),
              "lengths": tuple(TABLES)}
+
+
+CK_COUNTERS = _CK_NAMES["sstats"]       # the names of a new checkpoint's 'sstats' entries
+
+
+def counter_names(ds) -> tuple[str, ...]:
+    """The names of a checkpoint's ``sstats`` entries as its file stores them (attribute
+    ``names``; a file without it has the current ``SCHEME_STATS`` layout)."""
+    names = ds.attrs.get("names")
+    if names is None:
+        return CK_COUNTERS[:ds.shape[0]]
+    return tuple(n.decode() if isinstance(n, bytes) else str(n) for n in np.atleast_1d(names))
+
+
+def counters_by_name(values, names, to=None) -> np.ndarray:
+    """Counter ``values`` named ``names`` laid out as ``to`` (default: this version's
+    ``sstats``, ``SCHEME_STATS``): matched by name, a counter ``to`` has and ``names``
+    lacks is 0, one ``to`` lacks is dropped.  A checkpoint stores the per-scheme counters
+    by name, so adding or removing a counter never breaks resuming an older file."""
+    to = CK_COUNTERS if to is None else to
+    stored = dict(zip(names, np.asarray(values, np.int64).tolist()))
+    return np.array([stored.get(n, 0) for n in to], np.int64)
 
 
 def _filters(compression: str) -> dict:

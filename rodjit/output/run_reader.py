@@ -4,6 +4,8 @@ present in every column.  Formats 1 and 2 read alike: the nodes' positions from 
 the format keeps them, boolean columns as bool."""
 from __future__ import annotations
 
+import time
+
 import h5py
 import numpy as np
 
@@ -12,12 +14,11 @@ from ..records.columns import BOOL_COLUMNS
 from ..records.result import Result
 from ..records.stats import run_stats
 from ..stepping import layout as L
-import time
-
-from .h5files import NotARunFile, check_kind, damaged, open_file
 from .cf import as_bool
+from .h5files import NotARunFile, check_kind, damaged, open_file
 from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, KIND, READS,
-                         REQUIRED_ATTRS, STATUSES, TABLES, digest_rows, x_path)
+                         REQUIRED_ATTRS, STATUSES, TABLES, counter_names, counters_by_name,
+                         digest_rows, x_path)
 
 __all__ = ["check_run_file", "check_not_lost", "read_config", "read_checkpoint", "read_table", "read_x",
            "load_file"]
@@ -83,6 +84,8 @@ def _read_checkpoint(f: h5py.File) -> dict:
     values = {name: g[name][()] for name in CK_DATASETS}
     verify_checkpoint(f, slot, values, g["digest"][()] if "digest" in g else None)
     out = {name: values[name] for name in CK_ARRAYS}
+    # the per-scheme counters by name, laid out as this version counts them
+    out["sstats"] = counters_by_name(out["sstats"], counter_names(g["sstats"]))
     for name in CK_SCALARS:
         out[name] = float(values[name])
     out["lengths"] = dict(zip(TABLES, (int(n) for n in values["lengths"])))

@@ -23,8 +23,9 @@ from ..stepping import layout as L
 from .cf import LIBVER
 from .h5files import (WriteFailed, abandon, disk_cause, history_with, now, open_for_writing,
                       stamp_writer)
-from .run_layout import (CK_ARRAYS, CK_DATASETS, STATUSES, SUMMARY_ATTRS, TABLES, RunLayout,
-                         add_digests, build_layout, digest_rows, overwrite)
+from .run_layout import (CK_ARRAYS, CK_COUNTERS, CK_DATASETS, STATUSES, SUMMARY_ATTRS, TABLES,
+                         RunLayout, add_digests, build_layout, counter_names,
+                         counters_by_name, digest_rows, overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
 from .writer_id import LEGACY_ATTRS, WRITER_ATTRS
 
@@ -55,6 +56,9 @@ class RunWriter(Sink):
         self.current = int(self._current[()])
         self._config_toml = str(f.attrs["config_toml"])     # what each digest covers
         self._dtypes = {name: ds.dtype for name, ds in self._slots[0].items()}
+        # the file's own counter names (an older file may name other counters than
+        # this version's SCHEME_STATS): each checkpoint is written by name into them
+        self._counters = counter_names(self._slots[0]["sstats"])
         self.checkpoint = checkpoint
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
@@ -105,15 +109,19 @@ class RunWriter(Sink):
         written), flush, flip ``current``, flush."""
         slot = 1 if self.current == 0 else 0
         g = self._slots[slot]
+        # what the slot stores: the counters by the file's own names
+        stored = {name: ck[name] if name != "sstats" else
+                  counters_by_name(ck[name], CK_COUNTERS, self._counters)
+                  for name in CK_ARRAYS}
         for name in CK_ARRAYS:
-            overwrite(g[name], ck[name])
+            overwrite(g[name], stored[name])
         overwrite(g["run_time"], float(ck["run_time"]))
         overwrite(g["compile_time"], compile_time)
         lengths = [t.length for t in self.tables.values()]
         overwrite(g["lengths"], lengths)
         if "digest" in g:
             values = {"run_time": float(ck["run_time"]), "compile_time": compile_time,
-                      "lengths": lengths, **{name: ck[name] for name in CK_ARRAYS}}
+                      "lengths": lengths, **stored}
             overwrite(g["digest"], digest_rows(
                 {name: np.asarray(values[name], self._dtypes[name]) for name in CK_DATASETS},
                 self._config_toml))

@@ -5,8 +5,12 @@ imported only when a run uses the scheme), the NamedTuple class of its parameter
 module, how the parameters are built from a ``TimeConfig``, the counters its step keeps in
 ``sstats``, the rows of scratch space it needs, whether the loop limits how fast its
 steps approach the barriers, and whether it has a dense output (a continuous extension the
-loop evaluates at the output times inside a step instead of landing on them).  ``config`` takes the allowed names from here, so adding an
-integrator is one new module plus one line in ``SCHEMES``.
+loop evaluates at the output times inside a step instead of landing on them).  It also
+holds the facts a study needs about the scheme's steps: its order, which configuration
+keys set its steps under each ``time.control`` (``step_keys``), what caps them and which
+keys scale that cap, and the error norm its tolerance is measured in.  ``config`` takes
+the allowed names from here, so adding an integrator is one new module plus one line in
+``SCHEMES``; ``analysis.converge`` takes the time ladder's key from here.
 
 This module imports no Numba code: ``config`` imports it to validate names.
 """
@@ -18,8 +22,11 @@ from typing import Any, Callable
 
 from . import workspace
 
-__all__ = ["Scheme", "SCHEMES", "NAMES", "SCHEME_STATS", "get", "entry_of", "load",
-           "make_scheme", "counter_index"]
+__all__ = ["Scheme", "SCHEMES", "NAMES", "SCHEME_STATS", "TIME_KEYS", "get", "entry_of",
+           "load", "make_scheme", "counter_index", "register"]
+
+# the configuration keys that can set the length of a step
+TIME_KEYS = ("time.rtol", "time.atol", "time.cfl", "time.dt")
 
 
 @dataclass(frozen=True)
@@ -46,6 +53,25 @@ class Scheme:
     gap_control: bool = True
     step_rules: str = "second-order"
     dense: bool = False
+    order: int = 2
+    cfl_control: bool = False
+    cap: str = ""
+    cap_keys: tuple[str, ...] = ()
+    error_norm: str = ""
+    viscous_mu_max: float = float("inf")
+
+    def step_keys(self, control: str, fixed: bool = False) -> tuple[str, ...]:
+        """The configuration keys that set the steps under ``time.control = control``
+        (``fixed``: ``time.dt`` is set, which fixes the steps of every scheme)."""
+        if fixed:
+            return ("time.dt",)
+        if control == "cfl" and self.cfl_control:
+            return ("time.cfl",)
+        return ("time.rtol", "time.atol")
+
+    def steps_of(self, time_config) -> tuple[str, ...]:
+        """``step_keys`` of a ``TimeConfig``."""
+        return self.step_keys(time_config.control, time_config.dt is not None)
 
 
 def _kdk(tc, P):
@@ -55,22 +81,45 @@ def _kdk(tc, P):
 
 _ENERGY_WORK_ROWS = 17   # rows S … D of stepping/energy.py (tests check it)
 
+# the error norms (each scheme's module docstring derives its estimate); the norms differ
+# between schemes, so equal tolerances do not mean equal errors (docs/integrators.md)
+_KDK_NORM = ("max over nodes of |dt²/6·(a⁺ − a)| / (atol + rtol·max(|u|, |u⁺|)): the "
+             "heights' predicted local error")
+_ENERGY_NORM = ("max over nodes of the heights' and velocities' local error / (atol + "
+                "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
+_PAIR_NORM = ("root mean square over (u, v) of the embedded error / (atol + "
+              "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
+_RADAU_NORM = ("root mean square over (u, v) of Hairer's filtered embedded error / (atol + "
+               "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
+_KDK_CAP = ("control.STABILITY_CFL × the stability limit 2/ω under tolerance control; the "
+            "barrier approach: at most time.cfl (≤ control.GAP_MAX) of the gap per step")
+
 SCHEMES: tuple[Scheme, ...] = (
-    Scheme("verlet", "rodjit.stepping.kdk", "Verlet", _kdk, workspace.WORK_ROWS),
-    Scheme("semi-implicit", "rodjit.stepping.kdk", "SemiImplicit", _kdk, workspace.WORK_ROWS),
+    # verlet's Crank–Nicolson viscous sub-step is split off the kicks: measured 2.8e-4 on
+    # the first-bounce restitution at μ = 100 (N = 5) at every rtol, 1e-5 at μ = 1
+    Scheme("verlet", "rodjit.stepping.kdk", "Verlet", _kdk, workspace.WORK_ROWS,
+           order=2, cfl_control=True, error_norm=_KDK_NORM, cap_keys=("time.cfl",),
+           viscous_mu_max=1.0,
+           cap=_KDK_CAP + "; the viscous sub-step's limit time.cfl·h²/(2μ) (μ > 0)"),
+    Scheme("semi-implicit", "rodjit.stepping.kdk", "SemiImplicit", _kdk, workspace.WORK_ROWS,
+           order=2, cfl_control=True, error_norm=_KDK_NORM, cap_keys=("time.cfl",),
+           cap=_KDK_CAP),
     Scheme("energy", "rodjit.stepping.energy", "Energy",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), _ENERGY_WORK_ROWS,
-           counters=("newton_iterations", "newton_failures"), gap_control=False),
+           counters=("newton_iterations", "newton_failures"), gap_control=False,
+           order=2, error_norm=_ENERGY_NORM),
     Scheme("dp54", "rodjit.stepping.erk", "DP54",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 16, gap_control=False,
-           step_rules="pair-dp54", dense=True),
+           step_rules="pair-dp54", dense=True, order=5, error_norm=_PAIR_NORM,
+           cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
     Scheme("dop853", "rodjit.stepping.erk", "DOP853",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 40, gap_control=False,
-           step_rules="pair-dop853", dense=True),
+           step_rules="pair-dop853", dense=True, order=8, error_norm=_PAIR_NORM,
+           cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
     Scheme("radau5", "rodjit.stepping.radau", "Radau5",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
            counters=("newton_iterations", "newton_failures"), gap_control=False,
-           dense=True),
+           dense=True, order=5, error_norm=_RADAU_NORM),
 )
 
 NAMES: tuple[str, ...] = tuple(s.name for s in SCHEMES)
@@ -84,6 +133,47 @@ SCHEME_STATS: tuple[str, ...] = tuple(dict.fromkeys(c for s in SCHEMES for c in 
 def counter_index(name: str) -> int:
     """Position of a counter in ``sstats`` (a compile-time constant for the scheme's step)."""
     return SCHEME_STATS.index(name)
+
+
+def register(scheme: Scheme) -> Scheme:
+    """Make ``scheme`` selectable as ``time.integrator``, as ``rodjit.laws.register`` makes
+    a law selectable: from a module of one's own, with no line added here.
+
+    Its ``module`` (imported on first use) provides ``initial`` and ``step`` (``schemes``)
+    and the parameter class ``params``; the registry's facts (``step_keys``, ``cap_keys``,
+    ``order``, ``error_norm``) then tell ``converge`` how to study it.  Its parameter class
+    is renamed into ``registered`` (so a process without the module finds only a cache
+    miss in the compiled-code cache, not an import error).  Its ``counters``
+    must be among ``SCHEME_STATS`` (the compiled steps index ``sstats`` by constants, and
+    the run file names its entries): a new counter is a line of this module.
+
+    Returns
+    -------
+    Scheme
+        ``scheme``.
+
+    Raises
+    ------
+    TypeError
+        ``scheme`` is not a ``Scheme``.
+    ValueError
+        Its name is taken, or a counter is not among ``SCHEME_STATS``.
+    """
+    global SCHEMES, NAMES
+    if not isinstance(scheme, Scheme):
+        raise TypeError(f"register takes a registry.Scheme, not {type(scheme).__name__}")
+    if scheme.name in NAMES:
+        raise ValueError(f"time.integrator = {scheme.name!r} is already registered")
+    unknown = [c for c in scheme.counters if c not in SCHEME_STATS]
+    if unknown:
+        raise ValueError(f"scheme {scheme.name!r}: counters {unknown} are not among "
+                         f"{list(SCHEME_STATS)}")
+    module, params = load(scheme)      # imports the scheme's module (nothing compiled)
+    from . import registered           # how the compiled-code cache names its type
+    registered.adopt(params, scheme.name, module)
+    SCHEMES = SCHEMES + (scheme,)
+    NAMES = NAMES + (scheme.name,)
+    return scheme
 
 
 def get(name: str) -> Scheme:

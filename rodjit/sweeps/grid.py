@@ -16,7 +16,8 @@ from typing import Any, Iterator, Mapping
 
 import numpy as np
 
-from ..config import CROSS_CHECKS, Config, field_spec, number_with_unit, parse_value
+from ..config import (CROSS_CHECKS, RUN_CHECKS, Config, field_spec, number_with_unit,
+                      parse_value)
 
 __all__ = ["Grid", "parse_grid_option", "format_value", "MAX_POINTS"]
 
@@ -369,8 +370,9 @@ class Grid:
     def validate(self, base: Config) -> None:
         """Check every point's configuration before anything runs or is written, in time
         that grows with the values, not the points: each key's values were checked on
-        their own when the grid was made; the checks that relate keys (``CROSS_CHECKS``)
-        run over the combinations of the swept keys they name.
+        their own when the grid was made; the checks that relate keys (``CROSS_CHECKS``,
+        and ``RUN_CHECKS``: what a run refuses) run over the combinations of the swept
+        keys they name.
 
         Parameters
         ----------
@@ -383,7 +385,10 @@ class Grid:
             The first invalid point, naming it, the field and its range.
         """
         flat = base.flat()
-        for keys, check in CROSS_CHECKS:
+        for keys, check in RUN_CHECKS:   # what every point runs unless a key is swept
+            if not set(keys) & set(self.keys):
+                check(*(flat[k] for k in keys))
+        for keys, check in CROSS_CHECKS + RUN_CHECKS:
             if not set(keys) & set(self.keys):
                 continue
             for index, over in self.combinations(keys):

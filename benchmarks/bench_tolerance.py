@@ -1,0 +1,113 @@
+"""What a tolerance buys: the first restitution's error of each integrator under tolerance
+control, against dop853 at rtol 1e-12, with its steps and time.
+
+    python benchmarks/bench_tolerance.py [--no-docs]
+
+Six integrators × tol ∈ {1e-3, 1e-5, 1e-7} (rtol = tol, atol = 1e-3·tol), paper-mu0 and
+paper-mu100 at T = 2 (no snapshots).  The error is that of ``rodjit.observables``'s
+``restitution_first``; a cell above 10 × tol is marked ``!``; an integrator that refuses the
+tolerance (``Config.check_runnable``) is ``refused``.  Writes
+benchmarks/results/tolerance.json and the table between the markers of
+docs/integrators.md.
+"""
+import json
+import math
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import rodjit
+from rodjit.presets import load_preset
+
+INTEGRATORS = ("verlet", "semi-implicit", "energy", "dp54", "dop853", "radau5")
+TOLS = (1e-3, 1e-5, 1e-7)
+PRESETS = ("paper-mu0", "paper-mu100")
+ROOT = Path(__file__).resolve().parent.parent
+BEGIN, END = "<!-- bench_tolerance: begin -->", "<!-- bench_tolerance: end -->"
+
+
+def _config(preset, integrator, rtol, atol):
+    return load_preset(preset).override({
+        "time.t_end": 2.0, "time.integrator": integrator, "time.control": "tolerance",
+        "time.rtol": rtol, "time.atol": atol, "output.snapshot_interval": 0.0})
+
+
+def _restitution(cfg):
+    t0 = time.perf_counter()
+    res = rodjit.simulate(cfg)
+    wall = time.perf_counter() - t0
+    return rodjit.observables(res)["restitution_first"], res.stats["steps"], wall
+
+
+def measure():
+    rows = []
+    for preset in PRESETS:
+        ref, _, _ = _restitution(_config(preset, "dop853", 1e-12, 1e-15))
+        for integrator in INTEGRATORS:
+            for tol in TOLS:
+                cfg = _config(preset, integrator, tol, 1e-3 * tol)
+                try:
+                    cfg.check_runnable()
+                except ValueError:
+                    rows.append(dict(preset=preset, integrator=integrator, tol=tol,
+                                     refused=True))
+                    continue
+                _restitution(cfg)                      # compiled and warm
+                e, steps, wall = _restitution(cfg)
+                err = abs(e - ref)
+                rows.append(dict(preset=preset, integrator=integrator, tol=tol, refused=False,
+                                 restitution=e, reference=ref, error=err, steps=steps,
+                                 seconds=wall, over=err > 10 * tol))
+                print(f"{preset} {integrator:13s} {tol:.0e} err {err:.2g} steps {steps} "
+                      f"{wall:.3f} s", flush=True)
+    return rows
+
+
+def table(rows) -> str:
+    lines = []
+    for preset in PRESETS:
+        lines += [f"`{preset}`, T = 2 s: first-restitution error against dop853 at rtol "
+                  f"1e-12 / accepted steps / wall time", "",
+                  "| integrator | " + " | ".join(f"tol {t:.0e}" for t in TOLS) + " |",
+                  "|---|" + "---|" * len(TOLS)]
+        for integrator in INTEGRATORS:
+            cells = []
+            for tol in TOLS:
+                r = next(r for r in rows if (r["preset"], r["integrator"], r["tol"]) ==
+                         (preset, integrator, tol))
+                cells.append("refused" if r["refused"] else
+                             f"{r['error']:.1e}{' !' if r['over'] else ''} / {r['steps']:,} / "
+                             f"{r['seconds'] * 1e3:.3g} ms")
+            lines.append(f"| `{integrator}` | " + " | ".join(cells) + " |")
+        lines.append("")
+    lines.append("`!`: above 10 × tol.  `refused`: the integrator refuses the tolerance "
+                 "there (`verlet` above `rod.mu = 1`).  Remade by "
+                 "`python benchmarks/bench_tolerance.py`.")
+    return "\n".join(lines)
+
+
+def main():
+    from rodjit.config import ModelWarning
+    warnings.simplefilter("ignore", ModelWarning)
+    rows = measure()
+    out = ROOT / "benchmarks" / "results" / "tolerance.json"
+    out.write_text(json.dumps(rows, indent=1))
+    text = table(rows)
+    print(text)
+    over = [r for r in rows if not r["refused"] and r["over"]]
+    print(f"{len(over)} cells above 10 x tol: " + ", ".join(
+        f"{r['preset']} {r['integrator']} {r['tol']:.0e} ({r['error']:.2g})" for r in over))
+    if "--no-docs" not in sys.argv:
+        doc = ROOT / "docs" / "integrators.md"
+        s = doc.read_text()
+        if BEGIN in s and END in s:
+            head, rest = s.split(BEGIN, 1)
+            s = head + BEGIN + "\n" + text + "\n" + END + rest.split(END, 1)[1]
+        else:
+            s += f"\n## What a tolerance buys\n\n{BEGIN}\n{text}\n{END}\n"
+        doc.write_text(s)
+
+
+if __name__ == "__main__":
+    main()

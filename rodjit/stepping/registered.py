@@ -1,0 +1,39 @@
+"""The namespace through which compiled-code caches name the parameter types of integrators
+registered from outside (``registry.register``).
+
+Numba's on-disk cache index pickles the types of every signature it has compiled, so it
+names each scheme's parameter class by module and qualified name.  ``adopt`` moves a
+registered scheme's parameter class here, under a name that identifies its implementation;
+a process that lacks the scheme (a user's script, a test module) then unpickles a
+placeholder class instead of failing to import it, and the foreign entry is just a cache
+miss (as ``model.laws.registered`` does for laws).
+"""
+import hashlib
+
+_placeholders: dict[str, type] = {}
+
+
+def adopt(params: type, name: str, module) -> str:
+    """Name ``params`` (the parameter class of scheme ``name`` in ``module``) through this
+    namespace; returns its alias there."""
+    h = hashlib.sha1(f"{module.__name__}.{params.__qualname__}".encode())
+    for part in (getattr(module, "initial", None), getattr(module, "step", None)):
+        code = getattr(getattr(part, "py_func", part), "__code__", None)
+        if code is not None:
+            h.update(code.co_code)
+            h.update(repr(code.co_consts).encode())
+            h.update(repr(code.co_names).encode())
+    alias = f"{''.join(c if c.isalnum() else '_' for c in name)}_{h.hexdigest()[:16]}"
+    params.__module__ = __name__
+    params.__qualname__ = alias
+    globals()[alias] = params
+    return alias
+
+
+def __getattr__(name: str) -> type:
+    if name.startswith("__"):
+        raise AttributeError(name)
+    if name not in _placeholders:
+        _placeholders[name] = type(name, (tuple,), {"__module__": __name__,
+                                                     "__doc__": "an unregistered scheme"})
+    return _placeholders[name]
