@@ -283,13 +283,14 @@ def run_command(config, output, sets, t_end, overwrite, resume, quiet, flush_int
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite")) from None
     except RunInterrupted as exc:
         _close(progress)
-        _say_run(exc.summary, quiet)
+        if not quiet:           # its warnings in the report: stderr is the one line below
+            click.echo(exc.summary.report())
         click.echo(str(exc), err=True)
         sys.exit(EXIT_SIGNAL + exc.signum)
     except SimulationError as exc:
         _close(progress)
-        if getattr(exc, "summary", None) is not None:
-            _say_run(exc.summary, quiet)
+        if not quiet and getattr(exc, "summary", None) is not None:
+            click.echo(exc.summary.report())      # (as above)
         raise RunFailed(str(exc)) from None
     except ValueError as exc:       # configuration, path and file errors: nothing written
         raise UsageError(str(exc)) from None
