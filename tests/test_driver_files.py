@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import rodjit
+from rodjit.output import run_layout
 from rodjit.output import h5files, hdf5, writer_id
 from rodjit.stepping import layout as L
 
@@ -168,6 +169,9 @@ def test_resume_maps_the_scheme_counters_by_name(tmp_path, small_config, many_ca
             ds = g.create_dataset("sstats", data=np.array(
                 [99] + [old[n] for n in reversed(SCHEME_STATS)], np.int64))
             ds.attrs["names"] = np.array(names, dtype=h5py.string_dtype())
+            if g["digest"][()].any():      # that rodjit's digest covers its own layout
+                g["digest"][...] = run_layout.digest_rows(
+                    {n: g[n][()] for n in run_layout.CK_DATASETS}, f.attrs["config_toml"])
         at_cut = old
     assert at_cut["newton_iterations"] > 0
     back = rodjit.load_file(cut).stats
