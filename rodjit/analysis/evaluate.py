@@ -12,9 +12,7 @@ import math
 import os
 import tempfile
 
-__all__ = ["evaluate", "check_limits", "Extractor", "MAX_POINTS"]
-
-from ..sweeps.grid import MAX_POINTS   # runs one study may ask for (a sweep's limit)
+__all__ = ["evaluate", "check_limits", "Extractor"]
 
 # an observable beside the built-in ones: name -> function(Result) -> float
 Extractor = "Callable[[rodjit.Result], float]"
@@ -48,13 +46,17 @@ def _failed(message: str, extra=None) -> dict:
 
 
 def check_limits(configs, *, max_output: float | None = None, max_steps: float | None = None,
-                 max_points: float = MAX_POINTS) -> None:
+                 max_points: float | None = None) -> None:
     """ValueError (one line) unless every configuration passes the limits a new run or
     sweep passes (``output.estimate.check_run``, the one estimate): at most
-    ``max_points`` of them, each finishing in at most ``max_steps`` fixed steps and
+    ``max_points`` (default: a sweep's limit) of them, each finishing in at most
+    ``max_steps`` fixed steps and
     holding at most ``max_output`` bytes of output (in memory, or in the temporary file
     a pool worker writes)."""
     from ..output.estimate import ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, check_run
+    from ..sweeps.grid import MAX_POINTS
+
+    max_points = MAX_POINTS if max_points is None else max_points
 
     if len(configs) > max_points:
         raise ValueError(f"{len(configs):,} runs are more than the limit of "

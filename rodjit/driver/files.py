@@ -253,7 +253,7 @@ def resume_file(path, *, t_end: float | None = None, command: str | None = None,
     """
     path = Path(path)
     _check_interval(flush_interval)
-    if not path.is_file():
+    if not os.path.isfile(path):     # (False for a name too long: open_file says so)
         open_file(path).close()      # the one-line reason: missing, a directory, ...
     with WriterLock(path):
         return _resume_locked(path, t_end, command, progress, flush_interval,

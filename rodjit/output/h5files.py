@@ -19,7 +19,7 @@ import h5py
 
 from ..config import MissingFile
 from .cf import LIBVER
-from .lock import FileBusy, is_locked
+from .lock import FileBusy, is_link, is_locked
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
 __all__ = ["NotARunFile", "FileMissing", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
@@ -206,7 +206,7 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
     configuration, an image or anyone else's data.  ``held``: the caller holds the writer
     lock of ``path`` (``output.lock``)."""
     path = Path(path)
-    real = Path(os.path.realpath(path)) if path.is_symlink() else path   # written through
+    real = Path(os.path.realpath(path)) if is_link(path) else path   # written through
     parent = real.parent if str(real.parent) else Path(".")
     parent_mode = _mode(parent)
     if parent_mode is None:

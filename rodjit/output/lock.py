@@ -30,9 +30,18 @@ def lock_path(path) -> Path:
     """The lock file of the output ``path``: ``.NAME.lock`` beside it (beside the file a
     symbolic link names: the link and its target are one output)."""
     path = Path(path)
-    if path.is_symlink():
+    if is_link(path):
         path = Path(os.path.realpath(path))
     return path.with_name(f".{path.name}.lock")
+
+
+def is_link(path) -> bool:
+    """Whether ``path`` is a symbolic link (False for a name the system refuses, too long
+    or under a file: the checks of the output path say why)."""
+    try:
+        return os.path.islink(path)
+    except (OSError, ValueError):
+        return False
 
 
 class WriterLock:

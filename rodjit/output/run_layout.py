@@ -4,7 +4,8 @@ creates it.
 Format 2 (format 1 is still read and continued): root attributes, the tables ``/snapshots``, ``/diagnostics``, ``/episodes``,
 ``/bounces`` (one dataset per column, growing along axis 0, with dimension scales so xarray
 sees coordinates; ``/snapshots/x`` is the node coordinate) and ``/checkpoint`` (two slots written alternately; ``/checkpoint/current``
-names the valid one).  Everything is created before SWMR writing starts, which cannot add
+names the valid one; each slot's ``digest`` proves its content and the stored
+configuration, ``run_reader.verify_checkpoint``).  Everything is created before SWMR writing starts, which cannot add
 objects.  The file is netCDF-4 / CF where that fits (``cf``): every dataset has a
 ``long_name`` (and a ``units`` where one unit applies), every axis a dimension, booleans are
 flagged ``int8``.  Format 1 also had ``/grid/x``, the same values as ``/snapshots/x``.
