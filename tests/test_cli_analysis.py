@@ -74,3 +74,23 @@ def test_fit_table_on_the_command_line(tmp_path):
              "-j", "1")
     assert r.exit_code == 0, r.output
     assert "rod.mu = 0.7" in r.output and "row 2 restitution_first" in r.output
+
+
+def test_converge_refuses_a_time_ladder_that_sets_no_steps_and_prints_predictability():
+    common = ["paper-mu100", "--ladder", "rod.N=5,10", "--set", "time.t_end=0.6",
+              "--set", "output.snapshot_interval=0.01", "--observable", "restitution_first",
+              "-j", "1"]
+    for integrator in ("dp54", "radau5"):
+        r = _run("converge", *common, "--set", f"time.integrator={integrator}",
+                 "--set", "time.control=cfl", "--also", "time.cfl=0.05,0.0125,0.003125")
+        assert r.exit_code == 2 and r.output.count("\n") == 1, r.output
+        assert "ladder time.rtol instead" in r.output
+    r = _run("converge", *common, "--set", "time.integrator=verlet")
+    assert r.exit_code == 2 and r.output.count("\n") == 1
+    assert "time.control = 'cfl' and refine time.cfl" in r.output
+    r = _run("converge", *common)
+    assert r.exit_code == 0, r.output
+    assert "time.rtol = 1e-06, 2.5e-07, 6.25e-08" in r.output
+    assert "predictability_time: none before t_end = 0.6 s" in r.output
+    r = _run("converge", *common, "--also", "none")
+    assert r.exit_code == 0 and "predictability_time" not in r.output

@@ -182,9 +182,11 @@ class Convergence:
 
     def save(self, path, overwrite: bool = False) -> None:
         """Write an HDF5 file (root attribute ``rodjit_kind = "convergence"``): root
-        attributes key, levels, time key/levels, config (TOML), warnings; one group per
-        observable with datasets ``h``, ``values``, ``orders`` (and ``time_h``,
-        ``time_values``) and attributes value, error, order, status, message, time_error.
+        attributes key, levels, time key/levels, config (TOML), warnings,
+        predictability_time and time_steps (format 2); one group per observable with
+        datasets ``h``, ``values``, ``orders`` (and ``time_h``, ``time_values``) and
+        attributes value, error, order, status, message, time_error and
+        time_error_status (``"not measured"`` where the time ladder did not move it).
 
         Parameters
         ----------
