@@ -23,6 +23,7 @@ from ..config import ModelWarning
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
+from ..records.observables import flight_time
 from ..records.sink import Sink
 from ..records.stats import run_stats
 from ..stepping import aot, control
@@ -77,6 +78,7 @@ def _rows_needed(interval: float, span: float) -> int:
 
 
 _WRITE_BOUNCE = python_function(write_bounce)
+_EV_SIZE_FORMAT2 = 13       # ev entries of the checkpoints of run-file formats 1 and 2
 
 _BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
 
@@ -147,6 +149,7 @@ class Run:
         self.clock = np.zeros(L.CLOCK_SIZE)
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
         self.ev = np.zeros(L.EV_SIZE)
+        self.ev[L.FLIGHT_TIME] = flight_time(config)
         self.fail = np.zeros(L.FAIL_SIZE)
         out = config.output
         self.clock[L.T_END] = tc.t_end
@@ -453,6 +456,12 @@ class Run:
         for name in cls._CHECKPOINT_ARRAYS:
             src = np.asarray(ck[name])
             dst = getattr(run, name)
+            if name == "ev" and src.shape == (_EV_SIZE_FORMAT2,):
+                # a checkpoint of format 1 or 2 (bounces cut at apexes): the entries added
+                # since keep their fresh values, a pending bounce has no vibration energy
+                dst[:_EV_SIZE_FORMAT2] = src
+                dst[L.B_EV_IMPACT] = np.nan
+                continue
             if src.shape != dst.shape:
                 raise ValueError(f"checkpoint array {name!r} has shape {src.shape}, expected "
                                  f"{dst.shape} for this configuration")

@@ -106,7 +106,8 @@ EV_NAMES = _names(L.EV_SIZE, {
     L.B_W_RELEASE: "bounce_w_release", L.CUR_MIN_U0: "min_u0_since_impact",
     L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
     L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
-    L.REL_MIN_EPS: "min_strain_at_release"})
+    L.REL_MIN_EPS: "min_strain_at_release", L.B_EV_IMPACT: "bounce_energy_vibration_impact",
+    L.FLIGHT: "bounce_turned_over", L.FLIGHT_TIME: "flight_time"})
 SUMMARY_ATTRS = ("rodjit_version", "format_version", "created", "command",
                  "history")                                 # shown by ``info``
 CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")      # a checkpoint's arrays

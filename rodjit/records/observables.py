@@ -23,7 +23,7 @@ import numpy as np
 
 from .._jit import python_function
 
-__all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values",
+__all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values", "flight_time",
            "IMPACT_COLUMNS", "impact_line", "wave_speed", "lift_energy", "energy_vibration",
            "merge_episodes", "macroscopic_contacts", "FirstImpact", "first_impact",
            "observables", "OBSERVABLES", "STATUSES"]
@@ -103,6 +103,24 @@ def wave_speed(config) -> float:
 
     law = get_law("rod", config.rod.law)
     return math.sqrt(float(python_function(law.deriv)(0.0, law.from_config(config.rod))))
+
+
+def flight_time(config) -> float:
+    """τ = 2L/c, one round trip of a compression wave along the rod (L = 1, c the
+    ``wave_speed``): the bottom must stay off the floor this long after a release, with the
+    centre of mass turning over, for the rod to fly and its bounce to end (MODEL.md §3).
+
+    Parameters
+    ----------
+    config : Config
+        The configuration (its ``rod`` section).
+
+    Returns
+    -------
+    float
+        τ [s].
+    """
+    return 2.0 / wave_speed(config)
 
 
 def lift_energy(config) -> float:
