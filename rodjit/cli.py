@@ -586,8 +586,8 @@ def info_command(file):
                    "against the level, log-log).")
 @click.option("--quantity", metavar="COLUMN",
               help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
-                   "Sweep files: the summary column drawn [default: restitution_impact, the "
-                   "first-impact restitution, 0 without lift-off].")
+                   "Sweep files: the summary column drawn [default: restitution_first, the "
+                   "first bounce's restitution, 0 without lift-off].")
 @click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis "
               "[restitution: rod.mu if swept; heatmap: floor.kappa_b, then floor.beta].")
 @click.option("--y", "y_key", metavar="KEY", help="Sweep heatmaps: the key along the y axis.")

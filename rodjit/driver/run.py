@@ -78,7 +78,6 @@ def _rows_needed(interval: float, span: float) -> int:
 
 
 _WRITE_BOUNCE = python_function(write_bounce)
-_EV_SIZE_FORMAT2 = 13       # ev entries of the checkpoints of run-file formats 1 and 2
 
 _BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
 
@@ -456,12 +455,6 @@ class Run:
         for name in cls._CHECKPOINT_ARRAYS:
             src = np.asarray(ck[name])
             dst = getattr(run, name)
-            if name == "ev" and src.shape == (_EV_SIZE_FORMAT2,):
-                # a checkpoint of format 1 or 2 (bounces cut at apexes): the entries added
-                # since keep their fresh values, a pending bounce has no vibration energy
-                dst[:_EV_SIZE_FORMAT2] = src
-                dst[L.B_EV_IMPACT] = np.nan
-                continue
             if src.shape != dst.shape:
                 raise ValueError(f"checkpoint array {name!r} has shape {src.shape}, expected "
                                  f"{dst.shape} for this configuration")

@@ -210,9 +210,12 @@ def write_bounce(row, ev, is_open):
     row[L.BC_N_EPISODES] = ev[L.B_NEP]
     row[L.BC_W_IMPACT] = w_i
     row[L.BC_ENERGY_VIBRATION_IMPACT] = e_vib
-    scale = np.sqrt(w_i * w_i + 2.0 * max(e_vib, 0.0))   # speed of the energy brought in
+    # NaN: not known (a bounce open at a checkpoint of run-file format 1 or 2)
+    known = e_vib == e_vib
+    e_pos = e_vib if e_vib > 0.0 else 0.0
+    scale = np.sqrt(w_i * w_i + 2.0 * e_pos) if known else np.nan   # speed brought in
     ambiguous = (is_open or not w_i < 0.0
-                 or -w_i < AMBIGUOUS_SPEED * np.sqrt(2.0 * max(e_vib, 0.0)))
+                 or (known and -w_i < AMBIGUOUS_SPEED * np.sqrt(2.0 * e_pos)))
     row[L.BC_AMBIGUOUS] = 1.0 if ambiguous else 0.0
     if is_open:
         row[L.BC_T_RELEASE] = np.nan
@@ -227,7 +230,7 @@ def write_bounce(row, ev, is_open):
         row[L.BC_W_RELEASE] = ev[L.B_W_RELEASE]
         row[L.BC_RESTITUTION] = (-ev[L.B_W_RELEASE] / w_i if w_i != 0.0 else np.nan)
         row[L.BC_RESTITUTION_ENERGY] = (ev[L.B_W_RELEASE] / scale if scale > 0.0
-                                        else np.nan)
+                                        else np.nan)   # NaN > 0 is false
         row[L.BC_MIN_U0] = ev[L.REL_MIN_U0]
         row[L.BC_MAX_FLOOR_FORCE] = ev[L.REL_MAX_FF]
         row[L.BC_MIN_STRAIN] = ev[L.REL_MIN_EPS]

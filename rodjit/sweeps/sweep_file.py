@@ -1,12 +1,18 @@
 """The sweep file: one HDF5 file per sweep, a summary row per grid point (public contract).
 
-Layout (README "Sweeps"), format 2: root attributes (``rodjit_kind = "sweep"``, version,
+Layout (README "Sweeps"), format 3: root attributes (``rodjit_kind = "sweep"``, version,
 base configuration as TOML, the grid as JSON, command, status, the CF ones);
 ``/summary/<column>``, 1-D along the dimension ``/summary/point`` (the point's index), one
 row per point in grid order (the swept keys, which are the data's coordinates, then
 ``point.SUMMARY_COLUMNS``); and ``/points/<index>/bounces/<column>``, the bounce table of
-each point that ran, along its ``t_impact``.  Format 1, still read and continued, had no
-``point`` dimension and stored ``open`` as bool.
+each point that ran, along its ``t_impact``.  Formats 1 and 2 are still read (not
+continued): format 1 had no ``point`` dimension and stored ``open`` as bool; both cut
+bounces at every centre-of-mass apex, so their bounce rows read with the columns added
+since at ``run_layout.OLD_BOUNCE_FILL`` (``ambiguous`` true), and their summary columns of
+other meanings read renamed (``OLD_SUMMARY``): format 2's ``restitution_impact`` and
+``contact_time_impact`` are today's ``restitution_first`` and ``contact_time_first``, its
+``restitution_first``, ``restitution_mean`` and ``contact_time_first`` (of the first apex
+bounce, over every apex bounce) read as ``*_apex_bounces`` columns.
 
 Every row exists from the start, ``status = "pending"`` until its point reports.  The parent
 process is the only writer; it opens the file for each batch of results and closes it
@@ -33,6 +39,7 @@ from ..output import cf
 from ..output.h5files import (FileBusy, NotARunFile, WriteFailed, abandon, check_kind,
                               disk_cause, history_with, now, open_file, reserve_space,
                               stamp_writer, writer_attrs)
+from ..output.run_layout import OLD_BOUNCE_FILL
 from ..records.bounces import empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
 from ..version import __version__
@@ -41,11 +48,18 @@ from .point import SUMMARY_COLUMNS, empty_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
            "read_header", "read_summary", "read_bounces", "check_sweep_file", "key_columns",
-           "open_sweep", "reopen"]
+           "open_sweep", "reopen", "OLD_SUMMARY", "check_continuable"]
 
 KIND = "sweep"
-FORMAT_VERSION = 2
-READS = (1, 2)          # the formats this version reads and continues
+FORMAT_VERSION = 3
+READS = (1, 2, 3)       # the formats this version reads
+CONTINUES = (3,)        # and those it continues (--resume)
+# format 1 and 2 summary columns whose meaning has a new name: old name -> name read
+OLD_SUMMARY = {"restitution_first": "restitution_first_apex_bounces",
+               "restitution_mean": "restitution_mean_apex_bounces",
+               "contact_time_first": "contact_time_first_apex_bounces",
+               "restitution_impact": "restitution_first",
+               "contact_time_impact": "contact_time_first"}
 POINT = "point"         # the summary's dimension
 STATUSES = ("running", "completed", "interrupted", "failed")
 LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file before failing
@@ -164,6 +178,15 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
         p.attrs["description"] = "per point: its bounce table (the run file's /bounces columns)"
 
 
+def check_continuable(f: h5py.File, path=None) -> None:
+    """ValueError unless this version continues the sweep file's format (``CONTINUES``)."""
+    version = _format(f)
+    if version not in CONTINUES:
+        raise ValueError(f"{str(path or f.filename)!r} is a sweep file of format {version}, "
+                         f"whose bounces and summary columns have older meanings; --resume "
+                         f"continues format {FORMAT_VERSION} only: start a new sweep")
+
+
 def reopen(path, *, history: str) -> None:
     """Mark a sweep file running again (resume), recording who continues it."""
     with _writing(path, "r+", reserve=RESERVE_BASE) as f:
@@ -193,10 +216,6 @@ def write_results(path, results, wait: float = LOCK_WAIT) -> None:
             if key in p:
                 del p[key]
             b = p.create_group(key).create_group("bounces", track_order=True)
-            if "format_version" in f.attrs and int(f.attrs["format_version"]) == 1:
-                for name in BOUNCE_COLUMNS:
-                    b.create_dataset(name, data=np.asarray(r.bounces[name]))
-                continue
             _bounce_table(b, r.bounces)
         s["status"][idx] = np.array([r.status for r in results], dtype=object)
 
@@ -212,8 +231,9 @@ def _batch_bytes(results) -> int:
 
 
 def _bounce_table(g: h5py.Group, bounces: dict) -> None:
-    """A point's bounce table as the run file's ``/bounces`` (format 2): columns along the
-    dimension ``t_impact``, ``open`` as flagged int8, long names and units."""
+    """A point's bounce table as the run file's ``/bounces`` (format 3): columns along the
+    dimension ``t_impact``, ``open`` and ``ambiguous`` as flagged int8, long names and
+    units."""
     scale = None
     for name in BOUNCE_COLUMNS:
         data = np.asarray(bounces[name])
@@ -251,14 +271,26 @@ def read_header(f: h5py.File) -> dict:
             "grid": Grid.from_json(f.attrs["grid"]), "attrs": attrs}
 
 
+def _format(f: h5py.File) -> int:
+    return int(f.attrs.get("format_version", FORMAT_VERSION))
+
+
 def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
-    """The summary columns, in file order; text columns as arrays of str."""
+    """The summary columns, in file order; text columns as arrays of str.  A format 1 or 2
+    file's columns of another meaning read under their ``OLD_SUMMARY`` names, and the
+    columns it lacks as NaN."""
     out = {}
+    old = _format(f) < 3
     for name, ds in f["summary"].items():
         if name == POINT and ds.is_scale:
             continue                      # the dimension, not a column
-        out[name] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
-                     else ds[()])
+        out[OLD_SUMMARY.get(name, name) if old else name] = (
+            ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype) else ds[()])
+    if old:
+        n = len(next(iter(out.values()))) if out else 0
+        for name, (kind, _) in SUMMARY_COLUMNS.items():
+            if name not in out and kind == "float":
+                out[name] = np.full(n, np.nan)
     return out
 
 
@@ -267,8 +299,17 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
     g = f["points"].get(str(index))
     if g is None:
         return empty_bounces()
-    out = {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
+    b = g["bounces"]
+    n = b["t_impact"].shape[0]
+    out = {}
+    for name in BOUNCE_COLUMNS:
+        if name in b:
+            out[name] = b[name][()]
+        else:                       # a column formats 1 and 2 lack
+            value, dtype = OLD_BOUNCE_FILL[name]
+            out[name] = np.full(n, value, dtype)
     out["open"] = cf.as_bool(out["open"])
+    out["ambiguous"] = cf.as_bool(out["ambiguous"])
     return out
 
 

@@ -23,7 +23,8 @@ TABLE_COLUMNS = ("status", "n_bounces", "restitution_first", "restitution_mean",
 
 # units of the numeric summary columns (records.metadata's unit system)
 SUMMARY_UNITS = {"n_bounces": "1", "n_complete_bounces": "1", "restitution_first": "1",
-                 "restitution_mean": "1", "contact_time_first": "s", "min_u0": "m",
+                 "restitution_mean": "1", "restitution_energy_mean": "1",
+                 "contact_time_first": "s", "min_u0": "m",
                  "max_floor_force": "N", "min_strain": "1", "energy_error": "1",
                  "steps": "1", "rejected_steps": "1", "wall_time": "s", "compile_time": "s",
                  "run_time": "s", "t_final": "s"}
