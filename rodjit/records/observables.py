@@ -101,9 +101,10 @@ def wave_speed(config) -> float:
 
 
 def flight_time(config) -> float:
-    """τ = 2L/c, one round trip of a compression wave along the rod (L = 1, c the
-    ``wave_speed``): the bottom must stay off the floor this long after a release, with the
-    centre of mass turning over, for the rod to fly and its bounce to end (MODEL.md §3).
+    """τ = π h/c, the period of the highest mode of the semi-discrete rod (ω_max = 2c/h,
+    c the ``wave_speed``, h = 1/N): the shortest time the discretisation resolves.  A
+    release ends a bounce only if the bottom then stays off the floor at least this long
+    and the centre of mass turns over (MODEL.md §3).
 
     Parameters
     ----------
@@ -115,7 +116,7 @@ def flight_time(config) -> float:
     float
         τ [s].
     """
-    return 2.0 / wave_speed(config)
+    return math.pi / (config.rod.N * wave_speed(config))
 
 
 def lift_energy(config) -> float:

@@ -18,7 +18,7 @@ from .._jit import kernel, step_kernel
 # a bounce is ambiguous (its restitution says more about the rod's vibration than about the
 # impact) when its approach speed |w_impact| is below this fraction of the vibrational
 # velocity scale sqrt(2 E_vib/m) at the impact (MODEL.md §3)
-AMBIGUOUS_SPEED = 0.1
+AMBIGUOUS_SPEED = 0.2
 
 
 @kernel
