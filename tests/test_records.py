@@ -32,8 +32,11 @@ def test_bounce_table_columns_dtypes_and_the_pending_bounce():
     assert t["ambiguous"].tolist() == [False, True, True, True]
     whole = np.vstack(blocks + [pending[0][None, :]])
     for j, c in enumerate(BOUNCE_ROW_COLUMNS):
-        if c != "ambiguous":
+        if c not in ("ambiguous", "restitution_energy"):
             assert np.array_equal(t[c], whole[:, j].astype(t[c].dtype)), c
+    e_energy = whole[:, BOUNCE_ROW_COLUMNS.index("restitution_energy")]
+    assert np.array_equal(t["restitution_energy"][:-1], e_energy[:-1])
+    assert np.isnan(t["restitution_energy"][-1])             # the pending bounce
     blocks[0][:] = -1.0                          # the table owns its arrays
     assert t["t_impact"][0] == 0.0
     closed = B.bounce_table(blocks[1:], (rows(1)[0], False))
