@@ -581,7 +581,7 @@ def observables(result, merge_time: float | None = None) -> dict:
     result : Result
         A run, from ``simulate`` or ``load_file``.
     merge_time : float, optional
-        The flight time τ [s] that ends a macroscopic contact; by default 2L/c, the one
+        The flight time τ [s] that ends a macroscopic contact; by default π h/c, the one
         the bounce table uses (``physics_of``).
     """
     phys = physics_of(result, merge_time)
