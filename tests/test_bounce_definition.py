@@ -148,3 +148,14 @@ def test_apex_sweep_file_reads_with_todays_names_and_refuses_to_continue(tmp_pat
         rodjit.sweep(output=path, resume=True, jobs=1, scheduler="inline",
                      handle_signals=False)
     assert sweep_file.FORMAT_VERSION not in (1, 2)
+
+
+def test_a_point_without_diagnostics_takes_the_first_bounce_from_its_table():
+    from rodjit.sweeps.point import PointTask, run_point
+
+    cfg = stiff(1e6, 0.05, 5, t_end=1.2).override({"output.diagnostics_interval": 0.0})
+    got = run_point(PointTask(0, cfg, None, ()))
+    b = got.bounces
+    assert got.values["impact_status"] == "undefined"
+    assert got.values["restitution_first"] == b["restitution"][0]
+    assert got.values["contact_time_first"] == b["t_release"][0] - b["t_impact"][0]

@@ -214,6 +214,13 @@ def run_point(task: PointTask) -> PointResult:
             got, bounces = _run_to_file(task.config, task.save_path)
         values.update(got)
         values.update(_bounce_values(bounces))
+        if values["impact_status"] == "undefined" and bounces["t_impact"].size \
+                and not bounces["open"][0]:
+            # no diagnostics to read the first impact from: the bounce table's first row,
+            # the same bounce (its status and apex values stay undefined)
+            values["restitution_first"] = float(bounces["restitution"][0])
+            values["contact_time_first"] = float(bounces["t_release"][0]
+                                                 - bounces["t_impact"][0])
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
         disk = (disk_cause(exc) or "") if task.save_path is not None else ""
         if disk:               # the run file: removed (the point runs again on --resume)
