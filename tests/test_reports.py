@@ -25,7 +25,8 @@ def test_both_kinds_share_the_layout(files, kind, title):
     path = str(files / f"{kind}.h5")
     text = reports.info(path)
     lines = text.splitlines()
-    assert lines[0].startswith(f"rodjit {kind} file {path} (format 2, written by rodjit ")
+    version = 3   # run and sweep files: format 3
+    assert lines[0].startswith(f"rodjit {kind} file {path} (format {version}, written by rodjit ")
     assert lines[1].startswith("created   ") and lines[2] == f"command   rodjit {kind} test"
     assert lines[3] == "status    completed"
     _, about = reports.about(path)
