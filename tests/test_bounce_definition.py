@@ -75,6 +75,10 @@ def test_stiff_floor_bounces_are_impacts(kb, beta, n):
     assert b["t_impact"].size >= 3
     assert b["restitution"][0] == pytest.approx(rodjit.observables(r)["restitution_first"],
                                                 rel=1e-9)
+    # the Python rule over the episodes groups them as the compiled tracker did
+    c = rodjit.analysis.macroscopic_contacts(r.diagnostics, r.episodes, b,
+                                             rodjit.analysis.physics_of(r))
+    assert c["n_episodes"].tolist() == b["n_episodes"].tolist()
     e_energy = b["restitution_energy"][~np.isnan(b["restitution_energy"])]
     assert e_energy.size >= b["t_impact"].size - 1
     assert np.all((e_energy >= 0) & (e_energy <= 1.001))
