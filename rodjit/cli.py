@@ -693,8 +693,8 @@ def info_command(file):
                    "against the level, log-log).")
 @click.option("--quantity", metavar="COLUMN",
               help="Run files: what spacetime colours (strain, u, v) [default: strain].  "
-                   "Sweep files: the summary column drawn [default: restitution_impact, the "
-                   "first-impact restitution, 0 without lift-off].")
+                   "Sweep files: the summary column drawn [default: restitution_first, the "
+                   "first bounce's restitution, 0 without lift-off].")
 @click.option("--x", "x_key", metavar="KEY", help="Sweep files: the key along the x axis, as "
               "the key (rod.mu) or its to_xarray dimension name (mu) [restitution: rod.mu "
               "if swept; heatmap: floor.kappa_b, then floor.beta].")

@@ -129,7 +129,7 @@ def test_sweep_table_to_xarray_selects_by_identifier():
     assert ds.restitution_first.dims == ("mu", "kappa_b")
     assert ds.mu.attrs["key"] == "rod.mu" and ds.kappa_b.attrs["key"] == "floor.kappa_b"
     assert ds.restitution_first.attrs["units"] == "1"
-    assert "first complete bounce" in ds.restitution_first.attrs["description"]
+    assert "first bounce" in ds.restitution_first.attrs["description"]
     cell = ds.sel(mu=10, kappa_b=500).restitution_first.item()
     row = [i for i in range(len(t)) if t["rod.mu"][i] == 10 and t["floor.kappa_b"][i] == 500]
     assert cell == t["restitution_first"][row[0]] or (np.isnan(cell) and

@@ -21,10 +21,13 @@ def _same(a, b) -> bool:
     return a == b or (isinstance(a, float) and math.isnan(a) and math.isnan(b))
 
 
-def test_summary_columns_keep_the_per_bounce_ones_and_add_the_impact_ones():
+def test_summary_columns_have_one_name_per_meaning():
     names = list(SUMMARY_COLUMNS)
-    for old in ("restitution_first", "restitution_mean", "contact_time_first"):
-        assert old in names
+    for name in ("restitution_first", "restitution_mean", "restitution_energy_mean",
+                 "contact_time_first"):
+        assert names.count(name) == 1
+    for gone in ("restitution_impact", "contact_time_impact"):   # the first bounce's now
+        assert gone not in names
     assert set(IMPACT_COLUMNS) <= set(names)
 
 
@@ -40,22 +43,24 @@ def test_paper_point_has_a_defined_restitution_in_memory_and_saved(mu, tmp_path)
     res = rodjit.simulate(cfg)
     fi = first_impact(res.diagnostics, res.episodes, res.bounces, physics_of(res))
     assert mem["impact_status"] == fi.status
-    assert mem["restitution_impact"] == fi.restitution
-    assert mem["contact_time_impact"] == fi.contact_time
+    assert mem["restitution_first"] == fi.restitution
+    assert mem["contact_time_first"] == fi.contact_time
     assert mem["rebound_speed"] == fi.rebound_speed
     assert mem["min_u0_impact"] == fi.min_u0
     if mu == 10.0:
-        # the first contact never ends: per-bounce values are missing, the defined one is 0
-        assert math.isnan(mem["restitution_first"])
+        # the first contact never ends: the restitution is 0, the bounce open and ambiguous
         assert mem["impact_status"] == "no lift-off"
-        assert mem["restitution_impact"] == 0.0 and mem["restitution_apex"] == 0.0
-        assert mem["contact_time_impact"] == math.inf
+        assert mem["restitution_first"] == 0.0 and mem["restitution_apex"] == 0.0
+        assert mem["contact_time_first"] == math.inf
+        assert math.isnan(mem["restitution_mean"])
         assert "never leaves the floor" in mem["impact_reason"]
         assert 0.1 < mem["rebound_speed"] / -mem["w_impact"] < 0.25
     else:
         assert mem["impact_status"] == "lift-off" and mem["impact_reason"] == ""
-        assert 0.05 < mem["restitution_impact"] < 0.3
-        assert 0 < mem["contact_time_impact"] < 0.1
+        assert 0.05 < mem["restitution_first"] < 0.3
+        assert 0 < mem["contact_time_first"] < 0.1
+        assert mem["restitution_first"] == pytest.approx(res.bounces["restitution"][0],
+                                                         rel=1e-12)
 
 
 def test_stiff_floor_row_has_no_restitution_above_the_energy_bound():
@@ -69,14 +74,16 @@ def test_stiff_floor_row_has_no_restitution_above_the_energy_bound():
     bound = math.sqrt(1 + 2 * (c["ev_impact"][0] + g * (c["z_release"][0] - c["z_impact"][0]))
                       / w_i ** 2)
     assert row["impact_status"] == "lift-off"
-    assert row["restitution_impact"] == pytest.approx(c["restitution"][0], rel=1e-14)
-    assert row["restitution_impact"] <= bound * (1 + 1e-9)
+    assert row["restitution_first"] == pytest.approx(c["restitution"][0], rel=1e-14)
+    assert row["restitution_first"] <= bound * (1 + 1e-9)
     # dropped at rest: no vibration is brought into the first impact, and μ = 0 keeps
     # (almost) all the energy
     assert row["vibration_ratio"] < 1e-12
-    assert 0.5 < row["restitution_impact"] <= 1 + 1e-6
-    # the per-bounce bookkeeping this replaces reads far above 1 on this run
-    assert row["restitution_mean"] > 2
+    assert 0.5 < row["restitution_first"] <= 1 + 1e-6
+    # the mean over the bounces not marked ambiguous (the apex bookkeeping read above 2)
+    b = res.bounces
+    assert row["restitution_mean"] == pytest.approx(b["restitution"][~b["ambiguous"]].mean())
+    assert row["restitution_mean"] < 1.5 and 0 < row["restitution_energy_mean"] < 1
 
 
 def test_run_report_and_info_show_the_first_impact(tmp_path):
@@ -94,8 +101,8 @@ def test_run_report_and_info_show_the_first_impact(tmp_path):
     rodjit.run_to_file(PAPER.override({"time.t_end": 1.0}), path2)
     s2 = summarize(path2)
     line = next(ln for ln in s2.report().splitlines() if "first impact" in ln)
-    assert f"e = {s2.impact['restitution_impact']:.4g} (lift-off)" in line
-    assert f"contact {s2.impact['contact_time_impact']:.4g} s" in line
+    assert f"e = {s2.impact['restitution_first']:.4g} (lift-off)" in line
+    assert f"contact {s2.impact['contact_time_first']:.4g} s" in line
 
 
 def test_sweep_plot_draws_a_no_lift_off_point(tmp_path):
@@ -106,13 +113,14 @@ def test_sweep_plot_draws_a_no_lift_off_point(tmp_path):
     rodjit.sweep(PAPER.override({"time.t_end": 2.0}), {"rod.mu": [1.0, 10.0, 100.0]},
                  output=path, scheduler="inline")
     table = rodjit.load_sweep(path)
-    assert math.isnan(table["restitution_first"][1])        # the per-bounce value
+    assert table["restitution_first"][1] == 0.0        # no lift-off: the bounce is open
+    assert table.bounces(1)["open"][-1] and table.bounces(1)["ambiguous"][-1]
     ax = sweep_figure(path).axes[0]
     lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == 3]   # not the e = 1 rule
     assert len(lines) == 1
     assert np.array_equal(lines[0].get_xdata(), [1.0, 10.0, 100.0])
     y = np.asarray(lines[0].get_ydata(), float)
-    assert np.array_equal(y, table["restitution_impact"])
+    assert np.array_equal(y, table["restitution_first"])
     assert np.all(np.isfinite(y)) and y.size == 3 and y[1] == 0.0
 
 

@@ -13,6 +13,7 @@ from click.testing import CliRunner
 
 import rodjit
 from rodjit.cli import main
+from rodjit.sweeps import sweep_file
 
 from test_sweep_driver import same_values
 
@@ -58,7 +59,7 @@ def test_info_and_plot_of_a_sweep_file(tmp_path, monkeypatch):
     r = invoke("info", "sweep.h5")
     assert r.exit_code == 0
     out = r.stdout
-    assert out.startswith("rodjit sweep file sweep.h5 (format 3")
+    assert out.startswith(f"rodjit sweep file sweep.h5 (format {sweep_file.FORMAT_VERSION}")
     assert "status    completed" in out and "points    4 (4 completed, 0 failed, 0 not run)" in out
     assert "  rod.mu = 0, 10\n  floor.beta = 0.01, 0.05\n" in out
     assert "t_end = 0.8" in out and "restitution_first" in out

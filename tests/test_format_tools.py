@@ -190,18 +190,19 @@ def test_xarray_opens_every_group_of_a_sweep_file(sweep_file):
 def test_a_killed_writers_file_reads_with_swmr_as_it_is(run_files):
     """Before any clearing: h5py in SWMR-read mode (and so rodjit) reads every group."""
     with h5py.File(run_files["killed_raw"], "r", swmr=True) as f:
-        assert f.attrs["format_version"] == 2
+        assert f.attrs["format_version"] == hdf5.FORMAT_VERSION
         assert f["snapshots/u"].shape[0] >= hdf5.read_checkpoint(f)["lengths"]["snapshots"]
     assert rodjit.load_file(run_files["killed_raw"]).t.size > 3
 
 
-def test_run_file_layout_format_2(run_files):
+def test_run_file_layout_format_3(run_files):
     import xarray as xr
     path = run_files["completed"]
     with h5py.File(path, "r") as f:
-        assert f.attrs["format_version"] == 2
+        assert f.attrs["format_version"] == 3
         assert "grid" not in f                          # one x coordinate, /snapshots/x
         assert f["bounces/open"].dtype == np.int8
+        assert f["bounces/ambiguous"].dtype == np.int8
         assert list(f["bounces/open"].attrs["flag_values"]) == [0, 1]
         assert f["diagnostics/energy_total"].attrs["units"] == "J"
         assert f["snapshots/u"].attrs["units"] == "m"

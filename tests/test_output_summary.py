@@ -34,11 +34,16 @@ def test_report_lists_open_bounces_and_shortens_long_tables(tmp_path):
     s.bounces["open"][-1] = True
     s.bounces["restitution"][-1] = math.nan
     s.bounces["t_release"][-1] = math.nan
+    s.bounces["ambiguous"][-1] = True
+    s.bounces["restitution_energy"][-1] = math.nan
+
     def rows(text):
-        return [ln for ln in text.splitlines() if len(ln.split()) == 7 and ln.split()[0].isdigit()]
+        return [ln for ln in text.splitlines() if len(ln.split()) >= 8 and ln.split()[0].isdigit()]
 
     full = rows(s.report())
-    assert len(full) == n and full[-1].endswith("open") and " - " in full[-1]
+    assert len(full) == n and full[-1].split()[-3:] == ["open", "-", "?"] and " - " in full[-1]
+    assert all(len(r.split()) == 8 for r in full[:-1] if not r.endswith("?"))
+    assert "?: ambiguous" in s.report()
     short = s.report(max_bounces=2)
     assert "    ..." in short.splitlines() and rows(short) == [full[0], full[-1]]
     assert np.all(np.isfinite(s.bounces["restitution"][:-1]))

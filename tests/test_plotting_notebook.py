@@ -264,7 +264,7 @@ def test_sweep_panels_one_per_value(sweep_file, tmp_path):
             [ln for ln in ax.get_lines() if ln.get_marker() != "None"]
         mask = table["floor.beta"] == beta
         np.testing.assert_array_equal(line[0].get_ydata(),
-                                      table["restitution_impact"][mask])   # the default
+                                      table["restitution_first"][mask])   # the default
     r = CliRunner().invoke(main, ["plot", str(sweep_file), "--panels", "floor.beta", "-o",
                                   str(tmp_path / "p.png")])
     assert r.exit_code == 0, r.output

@@ -28,7 +28,7 @@ def test_restitution_against_mu_one_line_per_floor(sweep_path):
     for ln, (kb, beta) in zip(lines, [(1e3, 0.01), (1e3, 0.05), (1e4, 0.01), (1e4, 0.05)]):
         mask = (table["floor.kappa_b"] == kb) & (table["floor.beta"] == beta)
         assert np.array_equal(ln.get_xdata(), table["rod.mu"][mask])
-        assert np.array_equal(ln.get_ydata(), table["restitution_impact"][mask], equal_nan=True)
+        assert np.array_equal(ln.get_ydata(), table["restitution_first"][mask], equal_nan=True)
     assert ax.get_xscale() == "linear"          # 0, 1, 10: less than two decades
 
 

@@ -19,19 +19,29 @@ def rows(n, start=0.0):
 
 def test_bounce_table_columns_dtypes_and_the_pending_bounce():
     blocks = [rows(2), rows(1, 100.0)]
+    blocks[0][0, BOUNCE_ROW_COLUMNS.index("ambiguous")] = 0.0    # the loop writes 0 or 1
     pending = (rows(1, 200.0)[0], True)
     t = B.bounce_table(blocks, pending)
     assert tuple(t) == BOUNCE_COLUMNS and BOUNCE_COLUMNS[-1] == "open"
     assert t["n_episodes"].dtype == np.int64 and t["open"].dtype == bool
-    assert all(t[c].dtype == np.float64 for c in BOUNCE_ROW_COLUMNS if c != "n_episodes")
+    assert t["ambiguous"].dtype == bool
+    assert all(t[c].dtype == np.float64 for c in BOUNCE_ROW_COLUMNS
+               if c not in ("n_episodes", "ambiguous"))
     assert t["open"].tolist() == [False, False, False, True]
+    # the row's flag, and the pending bounce always (it may not be over)
+    assert t["ambiguous"].tolist() == [False, True, True, True]
     whole = np.vstack(blocks + [pending[0][None, :]])
     for j, c in enumerate(BOUNCE_ROW_COLUMNS):
-        assert np.array_equal(t[c], whole[:, j].astype(t[c].dtype)), c
+        if c not in ("ambiguous", "restitution_energy"):
+            assert np.array_equal(t[c], whole[:, j].astype(t[c].dtype)), c
+    e_energy = whole[:, BOUNCE_ROW_COLUMNS.index("restitution_energy")]
+    assert np.array_equal(t["restitution_energy"][:-1], e_energy[:-1])
+    assert np.isnan(t["restitution_energy"][-1])             # the pending bounce
     blocks[0][:] = -1.0                          # the table owns its arrays
     assert t["t_impact"][0] == 0.0
     closed = B.bounce_table(blocks[1:], (rows(1)[0], False))
     assert closed["open"].tolist() == [False, False]   # a pending bounce need not be open
+    assert closed["ambiguous"].tolist() == [True, True]
 
 
 def test_empty_bounces_have_the_columns_and_dtypes_of_a_full_table():

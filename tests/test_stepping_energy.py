@@ -96,14 +96,15 @@ def record_steps(cfg, max_steps, max_bounces=10**9, u0=None, v0=None):
 
 
 @pytest.mark.parametrize("mu", [0.0, 0.005])
-def test_energy_identity_holds_at_every_step_over_100_bounces(mu):
+def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
     """E^{n+1} − E^n = −μ dt Σ h ((v̄_{i+1} − v̄_i)/h)² at every accepted step of the real
     loop (crossing refinements, landings, rejections included), and the loop's dissipation
     grows by exactly that sum."""
     cfg = energy_config(**{"rod.mu": mu, "time.rtol": 1e-4, "time.t_end": 1000.0})
     run, rec = record_steps(cfg, 2_000_000, max_bounces=100)
     dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
-    assert nb[-1] >= 100
+    # 100 bounces at μ = 0; at μ = 0.005 the rod comes to rest on the floor after 47
+    assert nb[-1] >= (100 if mu == 0 else 45)
     assert (u0 < 0).sum() > 1000                       # many steps in contact
     resid = np.abs(e1 - e0 + diss) / scale
     assert resid.max() < 1e-12, resid.max()

@@ -73,7 +73,7 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
     same_values(loaded, inline_table)
     with h5py.File(path, "r") as f:
         a = f.attrs
-        assert a["rodjit_kind"] == "sweep" and a["format_version"] == 3
+        assert a["rodjit_kind"] == "sweep" and a["format_version"] == sweep_file.FORMAT_VERSION
         assert a["status"] == "completed" and a["command"] == "test sweep"
         assert rodjit.Config.from_toml_string(a["base_config_toml"]) == BASE
         assert Grid.from_json(a["grid"]) == Grid.from_spec(GRID)

@@ -1,6 +1,7 @@
 """Sweep-file format 3: every point's bounce rows in one table (a CF indexed ragged array),
 so the file's number of HDF5 objects does not grow with the number of points; format-2
-files (tests/fixtures, made by make_format2.py) still read, resume and equal a sweep today.
+files (tests/fixtures/apex_sweep.h5, one group per point) still read, point by point and as
+one table, and are not continued.
 """
 import shutil
 from pathlib import Path
@@ -13,7 +14,6 @@ import rodjit
 from rodjit.sweeps import sweep_file
 
 FIXTURES = Path(__file__).parent / "fixtures"
-# the configuration and grid of the format-2 fixtures (make_format2.py)
 BASE = rodjit.load_preset("paper-mu100").override({"rod.N": 5, "time.t_end": 1.5})
 GRID = {"rod.mu": [0.0, 100.0], "floor.kappa_b": [1000.0, 3000.0]}
 
@@ -59,27 +59,30 @@ def test_each_points_rows_are_where_the_summary_says(today):
             assert np.all(g["point_index"][a:a + c] == i)
 
 
-def test_format_2_files_read_as_the_same_tables(today):
-    old = rodjit.load_sweep(FIXTURES / "format2_sweep.h5")
-    assert old.attrs["format_version"] == 2
-    for i in range(len(today)):
-        assert same_bounces(old.bounces(i), today.bounces(i))
-    assert same_bounces(old.bounce_rows(), today.bounce_rows())
+def test_the_rows_read_as_one_table_ordered_by_point(today):
     rows = today.bounce_rows()
-    assert np.all(np.diff(rows["point"]) >= 0)                 # ordered by point
-    assert rows["point"].size == sum(today.bounces(i)["t_impact"].size
-                                     for i in range(len(today)))
-
-
-def test_an_interrupted_format_2_sweep_continues_in_its_own_format(tmp_path, today):
-    path = tmp_path / "p.h5"
-    shutil.copy(FIXTURES / "format2_sweep_partial.h5", path)
-    table = rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
-    assert table.stats["points_run"] == 2 and table.status == "completed"
-    with h5py.File(path, "r") as f:
-        assert f.attrs["format_version"] == 2 and sorted(f["points"]) == ["0", "1", "2", "3"]
+    assert np.all(np.diff(rows["point"]) >= 0)
     for i in range(len(today)):
-        assert same_bounces(table.bounces(i), today.bounces(i))
+        one = today.bounces(i)
+        assert same_bounces({k: v[rows["point"] == i] for k, v in rows.items() if k != "point"},
+                            one)
+    assert rows["ambiguous"].dtype == bool and rows["open"].dtype == bool
+
+
+def test_a_format_2_file_reads_as_one_table_and_is_not_continued(tmp_path):
+    path = tmp_path / "old.h5"
+    shutil.copy(FIXTURES / "apex_sweep.h5", path)
+    old = rodjit.load_sweep(path)
+    assert old.attrs["format_version"] == 2
+    rows = old.bounce_rows()
+    assert rows["point"].size == sum(old.bounces(i)["t_impact"].size for i in range(len(old))) > 0
+    for i in range(len(old)):
+        assert same_bounces({k: v[rows["point"] == i] for k, v in rows.items() if k != "point"},
+                            old.bounces(i))
+    before = path.read_bytes()
+    with pytest.raises(ValueError, match="continues format 3 only"):
+        rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
+    assert path.read_bytes() == before
 
 
 def test_rows_a_cut_write_left_are_dropped_on_resume(tmp_path, today):

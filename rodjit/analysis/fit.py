@@ -224,7 +224,8 @@ def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=No
     scheduler : str, optional
         Executor, as for ``rodjit.sweep``.
     merge_time : float, optional
-        Contact episodes closer than this [s] are one macroscopic contact.
+        The flight time τ [s] that ends a bounce (``records.observables.flight_groups``;
+        default π h/c, the bounce table's).
 
     Returns
     -------

@@ -165,7 +165,8 @@ def fit_table(keys, table, config=None, *, start=None, bounds=None, jobs=None,
     step : float
         Relative forward-difference step of the Jacobian.
     merge_time : float, optional
-        Contact episodes closer than this [s] are one macroscopic contact.
+        The flight time τ [s] that ends a bounce (``records.observables.flight_groups``;
+        default π h/c, the bounce table's).
 
     Returns
     -------

@@ -6,11 +6,11 @@ them as its run drains; this module re-exports them and adds ``observables(resul
 """
 from __future__ import annotations
 
-from ..records.observables import (FLIGHT_RATIO, MERGE_PERIODS, OBSERVABLES, STATUSES,
-                                   FirstImpact, Physics, energy_vibration, first_impact,
+from ..records.observables import (OBSERVABLES, STATUSES, FirstImpact, Physics,
+                                   energy_vibration, first_impact, flight_groups, flight_time,
                                    lift_energy, macroscopic_contacts, merge_episodes,
                                    observables, physics_of, wave_speed)
 
 __all__ = ["Physics", "physics_of", "wave_speed", "lift_energy", "energy_vibration",
            "merge_episodes", "macroscopic_contacts", "FirstImpact", "first_impact",
-           "observables", "OBSERVABLES", "STATUSES", "MERGE_PERIODS", "FLIGHT_RATIO"]
+           "observables", "OBSERVABLES", "STATUSES", "flight_time", "flight_groups"]

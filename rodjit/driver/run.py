@@ -23,6 +23,7 @@ from ..config import ModelWarning
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
 from ..model.system import build_system, check_admissible, initial_state
+from ..records.observables import flight_time
 from ..records.sink import Sink
 from ..records.stats import run_stats
 from ..stepping import aot, control
@@ -148,6 +149,7 @@ class Run:
         self.clock = np.zeros(L.CLOCK_SIZE)
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
         self.ev = np.zeros(L.EV_SIZE)
+        self.ev[L.FLIGHT_TIME] = flight_time(config)
         self.fail = np.zeros(L.FAIL_SIZE)
         out = config.output
         self.clock[L.T_END] = tc.t_end

@@ -1,7 +1,7 @@
 """The run file's layout (the public contract; README "HDF5 layout") and the builder that
 creates it.
 
-Format 2 (format 1 is still read and continued): root attributes, the tables ``/snapshots``, ``/diagnostics``, ``/episodes``,
+Format 3 (formats 1 and 2 are still read; continuing one rebuilds it in format 3): root attributes, the tables ``/snapshots``, ``/diagnostics``, ``/episodes``,
 ``/bounces`` (one dataset per column, growing along axis 0, with dimension scales so xarray
 sees coordinates; ``/snapshots/x`` is the node coordinate) and ``/checkpoint`` (two slots written alternately; ``/checkpoint/current``
 names the valid one; each slot's ``digest`` proves its content and the stored
@@ -9,6 +9,10 @@ configuration, ``run_reader.verify_checkpoint``).  Everything is created before 
 objects.  The file is netCDF-4 / CF where that fits (``cf``): every dataset has a
 ``long_name`` (and a ``units`` where one unit applies), every axis a dimension, booleans are
 flagged ``int8``.  Format 1 also had ``/grid/x``, the same values as ``/snapshots/x``.
+Formats 1 and 2 cut bounces at every apex of the centre of mass and had no
+``energy_vibration_impact``, ``restitution_energy`` and ``ambiguous`` columns: read, their
+rows have NaN and ``ambiguous`` true there (``OLD_BOUNCE_FILL``), and their checkpoints the
+bounce bookkeeping entries of format 3 at their fresh values (``current_checkpoint``).
 """
 from __future__ import annotations
 
@@ -28,13 +32,14 @@ from .growing_table import Table
 from .h5files import now, writer_attrs
 
 __all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
-            "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
+           "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
            "DIGEST_PARTS", "REQUIRED_ATTRS", "RunLayout", "build_layout", "add_digests",
-           "digest_rows", "overwrite", "CK_COUNTERS", "counter_names", "counters_by_name"]
+           "digest_rows", "overwrite", "CK_COUNTERS", "counter_names", "counters_by_name",
+           "OLD_BOUNCE_FILL", "current_checkpoint"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
-FORMAT_VERSION = 2
-READS = (1, 2)          # the formats this version reads and continues
+FORMAT_VERSION = 3
+READS = (1, 2, 3)       # the formats this version reads (and continues: 1 and 2 rebuilt in 3)
 STATUSES = ("running", "completed", "interrupted", "failed")
 
 SNAPSHOT_CHUNK_BYTES = 256 * 1024   # one chunk of u (or v) holds this many bytes of snapshots
@@ -59,7 +64,33 @@ _DESCRIPTIONS = {
     "episodes/t_start": "start of a contact episode (u_0 < 0)",
     "episodes/t_end": "end of the episode",
     "bounces/open": "true if the bounce's last episode had not ended when the run stopped",
+    "bounces/ambiguous": ("true if the bounce's restitution is not an impact's: open or not "
+                          "over when the run stopped, or an approach speed below 0.1 of the "
+                          "vibrational velocity scale sqrt(2 energy_vibration_impact)"),
+    "bounces/restitution_energy": ("w_release / sqrt(w_impact^2 + 2 energy_vibration_impact):"
+                                   " the rebound over the energy brought into the impact"),
 }
+
+# the bounce columns formats 1 and 2 lack, as they read: (value, dtype)
+OLD_BOUNCE_FILL = {"energy_vibration_impact": (np.nan, np.float64),
+                   "restitution_energy": (np.nan, np.float64), "ambiguous": (True, bool)}
+_EV_SIZE_FORMAT2 = 13       # ev entries of a checkpoint of formats 1 and 2
+
+
+def current_checkpoint(ck: dict, config) -> dict:
+    """``ck`` (``read_checkpoint``) with its ``ev`` in the current layout: a format 1 or 2
+    checkpoint gains the entries added since at their fresh values (the flight time of
+    ``config``, no turn-over seen, no vibration energy of a pending bounce)."""
+    ev = np.asarray(ck["ev"])
+    if ev.shape != (_EV_SIZE_FORMAT2,):
+        return ck
+    from ..records.observables import flight_time
+
+    new = np.zeros(L.EV_SIZE)
+    new[:_EV_SIZE_FORMAT2] = ev
+    new[L.B_EV_IMPACT] = np.nan
+    new[L.FLIGHT_TIME] = flight_time(config)
+    return dict(ck, ev=new)
 
 
 def x_path(f: h5py.File) -> str:
@@ -109,7 +140,8 @@ EV_NAMES = _names(L.EV_SIZE, {
     L.B_W_RELEASE: "bounce_w_release", L.CUR_MIN_U0: "min_u0_since_impact",
     L.CUR_MAX_FF: "max_floor_force_since_impact", L.CUR_MIN_EPS: "min_strain_since_impact",
     L.REL_MIN_U0: "min_u0_at_release", L.REL_MAX_FF: "max_floor_force_at_release",
-    L.REL_MIN_EPS: "min_strain_at_release"})
+    L.REL_MIN_EPS: "min_strain_at_release", L.B_EV_IMPACT: "bounce_energy_vibration_impact",
+    L.FLIGHT: "bounce_turned_over", L.FLIGHT_TIME: "flight_time"})
 SUMMARY_ATTRS = ("rodjit_version", "format_version", "created", "command",
                  "history")                                 # shown by ``info``
 CK_ARRAYS = ("state", "clock", "count", "ev", "sstats")      # a checkpoint's arrays

@@ -16,9 +16,10 @@ from ..records.stats import run_stats
 from ..stepping import layout as L
 from .cf import as_bool
 from .h5files import NotARunFile, check_kind, damaged, open_file
-from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, KIND, READS,
-                         REQUIRED_ATTRS, STATUSES, TABLES, counter_names, counters_by_name,
-                         digest_rows, x_path)
+from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, KIND,
+                         OLD_BOUNCE_FILL, READS, REQUIRED_ATTRS, STATUSES, TABLES,
+                         counter_names, counters_by_name, current_checkpoint, digest_rows,
+                         x_path)
 
 __all__ = ["check_run_file", "check_not_lost", "read_config", "read_checkpoint", "read_table", "read_x",
            "load_file"]
@@ -89,7 +90,7 @@ def _read_checkpoint(f: h5py.File) -> dict:
     for name in CK_SCALARS:
         out[name] = float(values[name])
     out["lengths"] = dict(zip(TABLES, (int(n) for n in values["lengths"])))
-    return out
+    return current_checkpoint(out, read_config(f))
 
 
 _PART_NAMES = {"config_toml": "stored configuration (config_toml)"}
@@ -163,11 +164,16 @@ def read_table(f: h5py.File, group: str, rows: slice | None = None) -> dict[str,
     """Columns of one table (all rows, or ``rows``); a table still being written is cut to
     the rows present in every column."""
     g = f[group]
-    n = min(g[c].shape[0] for c in TABLES[group])
+    present = [c for c in TABLES[group] if c in g]
+    n = min(g[c].shape[0] for c in present)
     sel = slice(0, n) if rows is None else slice(*rows.indices(n))
-    out = {c: g[c][sel] for c in TABLES[group]}
-    for c in BOOL_COLUMNS.intersection(out):
-        out[c] = as_bool(out[c])
+    out = {}
+    for c in TABLES[group]:
+        if c in g:
+            out[c] = as_bool(g[c][sel]) if c in BOOL_COLUMNS else g[c][sel]
+        else:                  # a column formats 1 and 2 lack (run_layout.OLD_BOUNCE_FILL)
+            value, dtype = OLD_BOUNCE_FILL[c]
+            out[c] = np.full(len(range(*sel.indices(n))), value, dtype)
     return out
 
 

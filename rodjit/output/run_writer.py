@@ -23,9 +23,10 @@ from ..stepping import layout as L
 from .cf import LIBVER
 from .h5files import (WriteFailed, abandon, disk_cause, history_with, now, open_for_writing,
                       stamp_writer)
-from .run_layout import (CK_ARRAYS, CK_COUNTERS, CK_DATASETS, STATUSES, SUMMARY_ATTRS, TABLES,
-                         RunLayout, add_digests, build_layout, counter_names,
-                         counters_by_name, digest_rows, overwrite)
+from .run_layout import (CK_ARRAYS, CK_COUNTERS, CK_DATASETS, FORMAT_VERSION, OLD_BOUNCE_FILL,
+                         STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, add_digests,
+                         build_layout, counter_names, counters_by_name, digest_rows,
+                         overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
 from .writer_id import LEGACY_ATTRS, WRITER_ATTRS
 
@@ -209,6 +210,11 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     """Open a closed run file to continue it: cut every table to the checkpoint's lengths
     (dropping the provisional open bounce and rows written after the last checkpoint),
     mark it running, then switch to SWMR writing."""
+    with h5py.File(path, "r") as f:
+        old = int(f.attrs.get("format_version", FORMAT_VERSION)) < FORMAT_VERSION
+    if old:      # an older layout lacks columns this version writes: rebuild it first
+        _rebuild(path, swmr=False, status=None, message=None,
+                 note=f"rebuilt in format {FORMAT_VERSION} to be continued")
     f = open_for_writing(path, "r+")
     try:
         ck = read_checkpoint(f)
@@ -249,9 +255,23 @@ def recover(path) -> None:
     """Rebuild a file whose writer died without closing it (SWMR flags still set): copy the
     rows matched by its checkpoint into a fresh file, which then replaces it (the file a
     symbolic link names, keeping the link)."""
+    with h5py.File(path, "r", swmr=True) as src:
+        t = float(read_checkpoint(src)["clock"][L.T])
+    _rebuild(path, swmr=True, status="interrupted",
+             message=(f"the writing process stopped without closing the file (killed?); "
+                      f"recovered at the checkpoint t = {t!r}"),
+             note=(f"recovered at the checkpoint t = {t!r} after the writer stopped without "
+                   f"closing the file"))
+
+
+def _rebuild(path, *, swmr: bool, status, message, note: str) -> None:
+    """Copy the rows of ``path`` matched by its checkpoint into a fresh file in the current
+    layout, which then replaces it (the file a symbolic link names, keeping the link);
+    ``status`` and ``message`` (None: kept) are its new ones, ``note`` goes into its
+    history.  A column an older format lacks gets its ``OLD_BOUNCE_FILL`` value."""
     path = Path(os.path.realpath(path))
     tmp = path.with_name(path.name + ".recovering")
-    with h5py.File(path, "r", swmr=True) as src:
+    with h5py.File(path, "r", swmr=swmr) as src:
         check_run_file(src, path)
         config = read_config(src)
         ck = read_checkpoint(src)
@@ -259,19 +279,21 @@ def recover(path) -> None:
         attrs.pop("format_version")       # the rebuilt file has the current layout
         for name in LEGACY_ATTRS + WRITER_ATTRS:   # this process's record, not the old one
             attrs.pop(name, None)
-        t = float(ck["clock"][L.T])
-        attrs["history"] = history_with(src, f"recovered at the checkpoint t = {t!r} after the "
-                                         f"writer stopped without closing the file")
-        attrs["status"] = "interrupted"
-        attrs["message"] = (f"the writing process stopped without closing the file (killed?); "
-                            f"recovered at the checkpoint t = {t!r}")
+        attrs["history"] = history_with(src, note)
+        if status is not None:
+            attrs["status"] = status
+            attrs["message"] = message
         with h5py.File(tmp, "w", libver=LIBVER) as dst:
             build_layout(dst, config, ck, attrs)       # its checkpoint in slot 0
             for group, cols in TABLES.items():
                 n = ck["lengths"][group]
                 for col in cols:
-                    s, d = src[group][col], dst[group][col]
+                    d = dst[group][col]
                     d.resize(n, axis=0)
+                    if col not in src[group]:
+                        d[...] = OLD_BOUNCE_FILL[col][0]
+                        continue
+                    s = src[group][col]
                     step = d.chunks[0] * 16
                     for i in range(0, n, step):
                         d[i:min(n, i + step)] = s[i:min(n, i + step)]

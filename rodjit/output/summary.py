@@ -90,8 +90,8 @@ def summarize(path) -> RunSummary:
     """Read the summary of the run file at ``path`` (also while it is being written)."""
     with open_file(path) as f:
         check_run_file(f, path)
-        counts = {name: min(f[name][c].shape[0] for c in cols)
-                  for name, cols in TABLES.items()}
+        counts = {name: min(f[name][c].shape[0] for c in cols if c in f[name])
+                  for name, cols in TABLES.items()}      # older formats lack some columns
         extremes = Extremes()
         extremes.read(f["diagnostics"], counts["diagnostics"])
         track = ImpactTrack()

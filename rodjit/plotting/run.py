@@ -203,7 +203,14 @@ def _bounces(src, fig, ax, **_):
     if k.size == 0:
         ax.text(0.5, 0.5, "no bounces", transform=ax.transAxes, ha="center")
     else:
-        ax.plot(k[closed], b["restitution"][closed], "o-", ms=4, lw=1.0, label="restitution")
+        amb = np.asarray(b["ambiguous"], bool)
+        sure = closed & ~amb
+        ax.plot(k[sure], b["restitution"][sure], "o-", ms=4, lw=1.0, label="restitution")
+        ax.plot(k[closed], b["restitution_energy"][closed], "s", ms=3, mfc="none",
+                color="C2", label="restitution_energy")
+        if (closed & amb).any():   # shown apart: not an impact's restitution
+            ax.plot(k[closed & amb], b["restitution"][closed & amb], "x", color="0.5",
+                    label="ambiguous (not over, or approach below the vibration speed)")
         for j, kk in enumerate(k[~closed]):   # no release yet, so no restitution
             ax.axvline(kk, color="r", lw=0.8, ls=":",
                        label="open bounce (in contact at the end)" if j == 0 else None)

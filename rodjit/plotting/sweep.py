@@ -18,7 +18,7 @@ from .mpl import NothingToDraw, new_figure, save
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
 
 KINDS = ("restitution", "heatmap")
-DEFAULT_QUANTITY = "restitution_impact"
+DEFAULT_QUANTITY = "restitution_first"
 MAX_LINES = 24
 MAX_PANELS = 6
 MARKERS = "osD^vP*X"   # one per line, so lines can be told apart without colour
@@ -241,8 +241,6 @@ def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
-    if quantity is None and DEFAULT_QUANTITY not in table.columns:
-        quantity = "restitution_first"   # a sweep file older than the first-impact columns
     quantity = _check_quantity(quantity)
     at = {_check_key(table.grid, k, "--at"): v for k, v in (at or {}).items()}
     fig = ax.figure if ax is not None else new_figure(figsize=figsize or (7.5, 4.8),

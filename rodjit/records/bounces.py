@@ -2,7 +2,9 @@
 episodes when it stopped (the *pending* bounce), as columns with their dtypes.
 
 Every sink that keeps bounces (memory, the run file, a sweep point) builds its table here,
-so all of them agree on the ``open`` column and the integer ``n_episodes``.
+so all of them agree on the ``open`` and ``ambiguous`` columns and the integer
+``n_episodes``; the pending bounce is always ambiguous (it may not be over), its
+``restitution_energy`` NaN.
 """
 from __future__ import annotations
 
@@ -24,9 +26,15 @@ def bounce_table(blocks, pending=None) -> dict[str, np.ndarray]:
         else np.zeros((0, len(BOUNCE_ROW_COLUMNS)))
     out = columns_of(b, BOUNCE_ROW_COLUMNS)
     out["n_episodes"] = out["n_episodes"].astype(np.int64)
+    out["ambiguous"] = ambiguous = out["ambiguous"] != 0.0
     out["open"] = is_open = np.zeros(len(b), bool)
-    if pending is not None and pending[1]:
-        is_open[-1] = True           # only the pending bounce can be open
+    if pending is not None:
+        # not over yet: its flight (or its release) is still to come, so its restitution
+        # is provisional and the energy it takes away not known
+        ambiguous[-1] = True
+        out["restitution_energy"][-1] = np.nan
+        if pending[1]:
+            is_open[-1] = True       # only the pending bounce can be open
     return out
 
 

@@ -18,7 +18,7 @@ __all__ = ["DIAG_COLUMNS", "EPISODE_COLUMNS", "BOUNCE_ROW_COLUMNS", "BOUNCE_COLU
 # open (its last contact episode not ended) when the run stopped
 BOUNCE_COLUMNS = BOUNCE_ROW_COLUMNS + ("open",)
 INT_COLUMNS = frozenset({"step", "n_episodes"})      # integer columns of every table
-BOOL_COLUMNS = frozenset({"open"})
+BOOL_COLUMNS = frozenset({"open", "ambiguous"})
 
 
 def columns_of(rows: np.ndarray, names) -> dict[str, np.ndarray]:

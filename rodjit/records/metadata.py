@@ -64,6 +64,12 @@ COLUMN_MEANINGS: dict[str, dict[str, Meaning]] = {
         "min_u0": Meaning("lowest bottom height during the bounce", "m"),
         "max_floor_force": Meaning("largest floor force during the bounce", "N"),
         "min_strain": Meaning("smallest segment strain during the bounce", "1"),
+        "energy_vibration_impact": Meaning("vibration energy about the centre of mass at "
+                                           "impact", "J"),
+        "restitution_energy": Meaning("energy restitution w_release / sqrt(w_impact^2 + "
+                                      "2 energy_vibration_impact)", "1"),
+        "ambiguous": Meaning("restitution not an impact's (open, unfinished or approach "
+                             "slower than 0.1 of the vibration speed)", "1"),
         "open": Meaning("bounce still in contact when the run stopped", "1"),
     },
 }
@@ -84,9 +90,10 @@ COLUMN_MEANINGS["summary"] = {
     "message": Meaning("why the point failed", ""),
     "n_bounces": Meaning("bounces recorded", "1"),
     "n_complete_bounces": Meaning("bounces whose last contact episode ended", "1"),
-    "restitution_first": Meaning("restitution of the first complete bounce", "1"),
-    "restitution_mean": Meaning("mean restitution over the complete bounces", "1"),
-    "contact_time_first": Meaning("contact time of the first complete bounce", "s"),
+    "restitution_mean": Meaning("mean restitution over the bounces not marked ambiguous",
+                                "1"),
+    "restitution_energy_mean": Meaning("mean energy restitution over the bounces not "
+                                       "marked ambiguous", "1"),
     "min_u0": Meaning("lowest bottom height u_0", "m"),
     "max_floor_force": Meaning("largest floor force sigma_b(u_0)", "N"),
     "min_strain": Meaning("smallest segment strain", "1"),
@@ -98,19 +105,18 @@ COLUMN_MEANINGS["summary"] = {
     "run_time": Meaning("wall time stepping in compiled code", "s"),
     "t_final": Meaning("simulated time reached", "s"),
     "run_file": Meaning("the point's run file", ""),
-    # the first macroscopic contact (records.observables.IMPACT_COLUMNS)
-    "restitution_impact": Meaning("restitution of the first macroscopic contact "
-                                  "(0: no lift-off)", "1"),
-    "impact_status": Meaning("outcome of the first macroscopic contact (lift-off, no "
-                             "lift-off, open, no impact, undefined)", ""),
-    "impact_reason": Meaning("why restitution_impact is 0 or missing", ""),
-    "restitution_apex": Meaning("apex-height restitution of the first macroscopic contact",
-                                "1"),
-    "contact_time_impact": Meaning("duration of the first macroscopic contact", "s"),
+    # the first bounce (records.observables.IMPACT_COLUMNS)
+    "restitution_first": Meaning("restitution of the first bounce, the first physical "
+                                 "impact (0: no lift-off)", "1"),
+    "impact_status": Meaning("outcome of the first bounce (lift-off, no lift-off, open, no "
+                             "impact, undefined)", ""),
+    "impact_reason": Meaning("why restitution_first is 0 or missing", ""),
+    "restitution_apex": Meaning("apex-height restitution of the first bounce", "1"),
+    "contact_time_first": Meaning("contact time of the first bounce", "s"),
     "w_impact": Meaning("centre-of-mass velocity at the first impact", "m s-1"),
     "rebound_speed": Meaning("largest centre-of-mass velocity after the first impact",
                              "m s-1"),
-    "min_u0_impact": Meaning("deepest penetration in the first macroscopic contact", "m"),
+    "min_u0_impact": Meaning("deepest penetration in the first bounce", "m"),
     "vibration_ratio": Meaning("vibration energy over the rigid-body kinetic energy at the "
                                "first impact", "1"),
 }

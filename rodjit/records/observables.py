@@ -1,13 +1,13 @@
 """Observables of a run that are always defined (docs/MODEL.md §3).
 
 The compiled event tracking splits a run into contact *episodes* (``u_0 < 0``) and
-*bounces* (episodes between apexes of the centre of mass).  With few nodes the bottom node
-chatters, and an apex of the centre of mass between two micro-contacts splits one impact
-into "bounces" with a tiny impact velocity, whose restitutions are bookkeeping, not
-physics.  Here episodes closer than a resolved time (the period π h/c of the highest mode
-of the semi-discrete rod) are merged into *macroscopic contacts*, and the first-impact observables are read
-at their ends, with the centre-of-mass state carried to the contact's end points along the
-exact free-flight parabola from the nearest diagnostics sample in flight.
+*bounces*, one per physical impact: a bounce ends at a *flight*, a release after which the
+bottom stays off the floor for at least τ = 2L/c (``flight_time``, one round trip of a
+compression wave along the rod) and the centre of mass turns over (it leaves rising and
+comes back falling).  Here the same rule (``flight_groups``) groups a run's episodes into
+*macroscopic contacts*, one per bounce, for any τ, and the first-impact observables are
+read at their ends, with the centre-of-mass state carried to the contact's end points along
+the exact free-flight parabola from the nearest diagnostics sample in flight.
 
 Everything here is plain NumPy over a run's diagnostics, episode and bounce arrays; the
 few numbers that come from the configuration (gravity, wave speed, the energy needed to
@@ -23,24 +23,18 @@ import numpy as np
 
 from .._jit import python_function
 
-__all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values",
+__all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values", "flight_time",
            "IMPACT_COLUMNS", "impact_line", "wave_speed", "lift_energy", "energy_vibration",
-           "merge_episodes", "macroscopic_contacts", "FirstImpact", "first_impact",
+           "merge_episodes", "flight_groups", "macroscopic_contacts", "FirstImpact", "first_impact",
            "observables", "OBSERVABLES", "STATUSES"]
 
-# gaps shorter than this many periods π h/c of the highest semi-discrete mode are merged
-MERGE_PERIODS = 1.0
-# a flight separates two macroscopic contacts only if the bottom stays off the floor at
-# most this many times the rigid-body flight time 2 w_release/|g| (vibration may lengthen
-# a flight of the rod as a whole a little; a hop of the bottom it drives lasts far longer)
-FLIGHT_RATIO = 1.25
 # a contact still open at the end with E(t_end) below the lift-off energy can never end
 STATUSES = ("lift-off", "no lift-off", "open", "no impact")
 
 # name -> description of the scalar observables ``observables`` returns
 OBSERVABLES: dict[str, str] = {
-    "restitution_first": "-w_release/w_impact of the first macroscopic contact; 0 if the rod "
-                         "never leaves the floor",
+    "restitution_first": "-w_release/w_impact of the first bounce (the first physical "
+                         "impact); 0 if the rod never leaves the floor",
     "restitution_apex_first": "sqrt of rebound over drop apex height of the centre of mass "
                               "above 1/2 (g < 0; kinetic-energy ratio at g = 0)",
     "contact_time_first": "t_release - t_impact of the first macroscopic contact (inf: no "
@@ -69,8 +63,9 @@ class Physics(NamedTuple):
         Least energy of a state with u_0 >= 0 [J] (−inf: no bound).
     t_final : float
         End of the run [s].
-    merge_time : float
-        Contact episodes closer than this [s] are one macroscopic contact.
+    flight_time : float
+        τ [s]: a release followed by this long off the floor, with the centre of mass
+        turning over, ends a macroscopic contact (a bounce).
     in_contact : bool
         u_0 < 0 at ``t_final``.
     contact_start : float
@@ -81,7 +76,7 @@ class Physics(NamedTuple):
     wave_speed: float     # c = sqrt(f'(0))
     lift_energy: float    # least energy of a state with u_0 >= 0 (-inf: no bound)
     t_final: float        # end of the run
-    merge_time: float     # episodes closer than this are one macroscopic contact
+    flight_time: float    # τ: a flight is this long off the floor (and a turn-over)
     in_contact: bool      # u_0 < 0 at t_final
     contact_start: float  # start of the episode still running at t_final (NaN: none)
 
@@ -103,6 +98,25 @@ def wave_speed(config) -> float:
 
     law = get_law("rod", config.rod.law)
     return math.sqrt(float(python_function(law.deriv)(0.0, law.from_config(config.rod))))
+
+
+def flight_time(config) -> float:
+    """τ = π h/c, the period of the highest mode of the semi-discrete rod (ω_max = 2c/h,
+    c the ``wave_speed``, h = 1/N): the shortest time the discretisation resolves.  A
+    release ends a bounce only if the bottom then stays off the floor at least this long
+    and the centre of mass turns over (MODEL.md §3).
+
+    Parameters
+    ----------
+    config : Config
+        The configuration (its ``rod`` section).
+
+    Returns
+    -------
+    float
+        τ [s].
+    """
+    return math.pi / (config.rod.N * wave_speed(config))
 
 
 def lift_energy(config) -> float:
@@ -166,9 +180,8 @@ def physics_of(result, merge_time: float | None = None) -> Physics:
     result : Result
         A run, from ``simulate`` or ``load_file``.
     merge_time : float, optional
-        Contact episodes closer than this [s] are one macroscopic contact; default
-        MERGE_PERIODS · π h/c, the period of the highest mode of the semi-discrete rod
-        (ω_max = 2c/h).
+        The flight time τ [s] that ends a macroscopic contact (``flight_groups``);
+        default ``flight_time(config)`` = 2L/c, the one the bounce table uses.
 
     Returns
     -------
@@ -188,8 +201,7 @@ def physics_for(config, t_final: float, u_final, diag, episodes, bounces,
     """The Physics of a run of ``config`` that reached ``t_final`` in state ``u_final``
     (``physics_of`` without a Result: a sweep point, a run file's summary)."""
     c = wave_speed(config)
-    tau = (MERGE_PERIODS * math.pi / (config.rod.N * c) if merge_time is None
-           else float(merge_time))
+    tau = flight_time(config) if merge_time is None else float(merge_time)
     if not tau > 0:
         raise ValueError(f"merge_time = {merge_time!r} is out of range (seconds > 0)")
     u_final = np.asarray(u_final)
@@ -266,27 +278,28 @@ def merge_episodes(t_start, t_end, merge_time: float) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(firsts, lasts)]
 
 
-def _join_without_apex(diag, phys: Physics, t_s, t_e, groups):
-    """Join consecutive groups unless the flight between them is one of the rod as a whole
-    (g < 0): the centre of mass reaches its apex in it (in free flight
-    w = w_release + g (t − t_release): iff w_release > 0 and t_release + w_release/|g|
-    comes before the next contact), and the bottom stays off the floor at most
-    FLIGHT_RATIO times the rigid-body flight time 2 w_release/|g|.  Otherwise the next
-    touch is a vibration of the bottom, not a new impact."""
-    if phys.g >= 0 or len(groups) < 2:
-        return groups
-    out = [groups[0]]
-    for a, b in groups[1:]:
-        a0, b0 = out[-1]
-        t_rel, t_next = float(t_e[b0]), float(t_s[a])
-        st = _flight_state(diag, phys.g, t_rel, t_rel, t_next, before=False)
-        w_r = st[0] if st is not None else -1.0
-        flight = (w_r > 0 and t_rel + w_r / -phys.g < t_next
-                  and t_next - t_rel <= FLIGHT_RATIO * 2.0 * w_r / -phys.g)
+def flight_groups(diag, phys: Physics, t_s, t_e) -> list[tuple[int, int]]:
+    """Groups ``(first, last)`` of episode indices, one per bounce: a group ends at a
+    release followed by a flight, the bottom off the floor for at least
+    ``phys.flight_time`` and the centre of mass turning over before the next contact (in
+    free flight w = w_release + g (t − t_release): w_release > 0 and, for g < 0, the
+    apex t_release + w_release/|g| before the next contact).  The rule of the compiled
+    tracker (``stepping.events``), here with the release velocity from the diagnostics
+    sample nearest after the release (a gap holding no sample is no flight)."""
+    if len(t_s) == 0:
+        return []
+    out = [(0, 0)]
+    for k in range(1, len(t_s)):
+        t_rel, t_next = float(t_e[k - 1]), float(t_s[k])
+        flight = False
+        if t_next - t_rel >= phys.flight_time:
+            st = _flight_state(diag, phys.g, t_rel, t_rel, t_next, before=False)
+            w_r = st[0] if st is not None else -1.0
+            flight = w_r > 0 and (phys.g >= 0 or t_rel + w_r / -phys.g < t_next)
         if flight:
-            out.append((a, b))
+            out.append((k, k))
         else:
-            out[-1] = (a0, b)
+            out[-1] = (out[-1][0], k)
     return out
 
 
@@ -323,8 +336,9 @@ def _check_sampling(diag) -> float:
 
 
 def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np.ndarray]:
-    """One row per macroscopic contact: episodes closer than ``phys.merge_time`` merged,
-    and groups joined while the centre of mass reaches no apex between them (g < 0), so
+    """One row per macroscopic contact, the episodes of one bounce (``flight_groups``:
+    a contact ends at a release followed by ``phys.flight_time`` off the floor and a
+    turn-over of the centre of mass), so
     every macroscopic impact has w_impact < 0; an episode still running at the end of the
     run belongs to the last, ``open``.  Columns: ``t_impact``, ``t_release`` (NaN if open),
     ``n_episodes``, ``w_impact``, ``w_release``, ``z_impact``, ``z_release``,
@@ -356,15 +370,13 @@ def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np
     ValueError
         Fewer than two diagnostics samples.
     """
-    # a gap holding no sample cannot be evaluated: gaps up to the sample spacing merge too
-    tau = max(phys.merge_time, _check_sampling(diag) * (1 + 1e-9))
+    _check_sampling(diag)
     t_s = np.asarray(episodes["t_start"], float)
     t_e = np.asarray(episodes["t_end"], float)
     if phys.in_contact:
         t_s = np.append(t_s, phys.contact_start)
         t_e = np.append(t_e, math.nan)
-    groups = _join_without_apex(diag, phys, t_s, t_e, merge_episodes(
-        t_s, np.where(np.isnan(t_e), math.inf, t_e), tau))
+    groups = flight_groups(diag, phys, t_s, t_e)
     names = ("t_impact", "t_release", "n_episodes", "w_impact", "w_release", "z_impact",
              "z_release", "ev_impact", "ev_release", "restitution", "restitution_apex",
              "rebound_speed", "min_u0", "max_floor_force", "vibration_ratio", "open")
@@ -569,8 +581,8 @@ def observables(result, merge_time: float | None = None) -> dict:
     result : Result
         A run, from ``simulate`` or ``load_file``.
     merge_time : float, optional
-        Contact episodes closer than this (s) count as one macroscopic contact; by default
-        a few periods of the rod's highest mode (``physics_of``).
+        The flight time τ [s] that ends a macroscopic contact; by default π h/c, the one
+        the bounce table uses (``physics_of``).
     """
     phys = physics_of(result, merge_time)
     d = result.diagnostics
@@ -640,23 +652,22 @@ class ImpactTrack:
                 {"t_start": e[:, 0], "t_end": e[:, 1]})
 
 
-# the sweep summary columns of the first macroscopic contact: name -> (dtype, description)
+# the sweep summary columns of the first bounce: name -> (dtype, description)
 IMPACT_COLUMNS: dict[str, tuple[str, str]] = {
-    "restitution_impact": ("float", "-w_release/w_impact of the first macroscopic contact "
-                                    "(micro-contacts merged); 0 for no lift-off, NaN if "
-                                    "open or no impact"),
-    "impact_status": ("str", "first macroscopic contact: lift-off | no lift-off | open | "
-                             "no impact | undefined"),
-    "impact_reason": ("str", "why restitution_impact is 0 or missing ('' for lift-off)"),
+    "restitution_first": ("float", "-w_release/w_impact of the first bounce (the first "
+                                   "physical impact); 0 for no lift-off, NaN if open or no "
+                                   "impact"),
+    "impact_status": ("str", "first bounce: lift-off | no lift-off | open | no impact | "
+                             "undefined"),
+    "impact_reason": ("str", "why restitution_first is 0 or missing ('' for lift-off)"),
     "restitution_apex": ("float", "sqrt of rebound over drop apex height of the centre of "
-                                  "mass above 1/2 for the first macroscopic contact"),
-    "contact_time_impact": ("float", "t_release - t_impact of the first macroscopic contact "
-                                     "(inf: no lift-off)"),
+                                  "mass above 1/2 for the first bounce"),
+    "contact_time_first": ("float", "t_release - t_impact of the first bounce (inf: no "
+                                    "lift-off)"),
     "w_impact": ("float", "centre-of-mass velocity at the first impact"),
     "rebound_speed": ("float", "largest centre-of-mass velocity from the first impact to "
                                "its release (to the end of the run without lift-off)"),
-    "min_u0_impact": ("float", "deepest penetration min u_0 in the first macroscopic "
-                               "contact"),
+    "min_u0_impact": ("float", "deepest penetration min u_0 in the first bounce"),
     "vibration_ratio": ("float", "energy_vibration / (w_impact^2/2) at the first impact"),
 }
 
@@ -664,9 +675,9 @@ IMPACT_COLUMNS: dict[str, tuple[str, str]] = {
 def impact_values(config, t_final: float, u_final, track: ImpactTrack, bounces) -> dict:
     """The IMPACT_COLUMNS of a run from what ``track`` kept and its bounce table; status
     ``undefined`` with the reason when they cannot be evaluated (no diagnostics)."""
-    out = {"restitution_impact": math.nan, "impact_status": "undefined",
+    out = {"restitution_first": math.nan, "impact_status": "undefined",
            "impact_reason": "", "restitution_apex": math.nan,
-           "contact_time_impact": math.nan, "w_impact": math.nan, "rebound_speed": math.nan,
+           "contact_time_first": math.nan, "w_impact": math.nan, "rebound_speed": math.nan,
            "min_u0_impact": math.nan, "vibration_ratio": math.nan}
     diag, episodes = track.arrays()
     try:
@@ -678,9 +689,9 @@ def impact_values(config, t_final: float, u_final, track: ImpactTrack, bounces) 
     ratio = math.nan
     if fi.status != "no impact" and fi.w_impact:
         ratio = fi.energy_vibration_impact / (0.5 * fi.w_impact * fi.w_impact)
-    out.update(restitution_impact=fi.restitution, impact_status=fi.status,
+    out.update(restitution_first=fi.restitution, impact_status=fi.status,
                impact_reason=fi.reason, restitution_apex=fi.restitution_apex,
-               contact_time_impact=fi.contact_time, w_impact=fi.w_impact, rebound_speed=fi.rebound_speed,
+               contact_time_first=fi.contact_time, w_impact=fi.w_impact, rebound_speed=fi.rebound_speed,
                min_u0_impact=fi.min_u0, vibration_ratio=ratio)
     return out
 
@@ -690,8 +701,8 @@ def impact_line(values: dict) -> str:
     or 'first impact: no lift-off (rebound speed 0.17 of impact)'."""
     st = values["impact_status"]
     if st == "lift-off":
-        return (f"e = {values['restitution_impact']:.4g} (lift-off), contact "
-                f"{values['contact_time_impact']:.4g} s, apex e = "
+        return (f"e = {values['restitution_first']:.4g} (lift-off), contact "
+                f"{values['contact_time_first']:.4g} s, apex e = "
                 f"{values['restitution_apex']:.4g}, penetration "
                 f"{-values['min_u0_impact']:.4g}")
     if st == "no lift-off":

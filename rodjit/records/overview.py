@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 from .._display import html_table, number, text
 from .observables import impact_line
 
@@ -42,7 +44,8 @@ class RunFacts:
     def rows(self) -> list[tuple[str, str]]:
         b = self.bounces
         n = int(b["t_impact"].size)
-        e = [("open" if b["open"][i] else number(b["restitution"][i], ".4f"))
+        e = [("open" if b["open"][i] else number(b["restitution"][i], ".4f")
+              + ("?" if b["ambiguous"][i] else ""))
              for i in range(min(n, SHOWN_RESTITUTIONS))]
         bounces = f"{n}" + (f" (restitution {', '.join(e)}{', ...' if n > len(e) else ''})"
                             if n else "")
@@ -79,7 +82,7 @@ class RunFacts:
                      f"{self.n_episodes} finished contact episodes")
         if n:
             lines.append("      #   t_impact  t_release  episodes   w_impact  w_release  "
-                         "restitution")
+                         "restitution  e_energy")
             show = list(range(n))
             if max_bounces is not None and n > max_bounces:
                 half = max_bounces // 2
@@ -92,7 +95,11 @@ class RunFacts:
                 lines.append(f"  {i + 1:5d} {_num(b['t_impact'][i], '10.4f')} "
                              f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
                              f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
-                             f"  {e:>11}")
+                             f"  {e:>11} {_num(b['restitution_energy'][i], '9.4f')}"
+                             f"{' ?' if b['ambiguous'][i] else ''}")
+            if np.asarray(b["ambiguous"], bool).any():
+                lines.append("      ?: ambiguous, not an impact's restitution (not over at the "
+                             "end, or the approach below 0.2 of the vibration speed)")
         if self.impact:
             lines.append(f"  {'first impact':<22}{impact_line(self.impact)}")
         label = energy_label(c.rod.mu)

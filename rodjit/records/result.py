@@ -41,8 +41,9 @@ class Result:
     episodes : dict
         ``t_start``, ``t_end`` arrays: the intervals with the bottom in contact.
     bounces : dict
-        ``records.bounces.bounce_table``: the MODEL.md §3 columns plus ``open``, one entry
-        per bounce.
+        ``records.bounces.bounce_table``: the MODEL.md §3 columns (``restitution``,
+        ``restitution_energy``, ``ambiguous``, ...) plus ``open``, one entry per bounce, a
+        physical impact.
     stats : dict
         Steps, rejected steps, wall/compile/run time, node-steps per second.
     status : str

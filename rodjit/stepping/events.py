@@ -1,13 +1,24 @@
 """Contact episodes and bounces (MODEL.md §3), tracked step by step inside the loop.
 
 An episode is a maximal interval with u_0 < 0; its ends are located inside the step from
-the side of the step that is out of contact (where the force is smooth).  A bounce collects the episodes between
-two apexes of the centre of mass (w from + to − with no contact active).
+the side of the step that is out of contact (where the force is smooth).  A bounce is one
+physical impact: the episodes from the first contact after a flight to the release after
+which the rod flies.  A *flight* follows a release when the bottom then stays off the floor
+for at least ``FLIGHT_TIME`` τ (the driver sets τ = 2L/c, one round trip of a compression
+wave along the rod) and the centre of mass turns over (w from + to −) before the next
+contact: the rod leaves rising and comes back falling.  So the bounce closes, online, at the
+first step that ends out of contact with both true; a contact before that continues it.
 """
 import numpy as np
 
+from ..kernels.forces import energies
 from . import layout as L
 from .._jit import kernel, step_kernel
+
+# a bounce is ambiguous (its restitution says more about the rod's vibration than about the
+# impact) when its approach speed |w_impact| is below this fraction of the vibrational
+# velocity scale sqrt(2 E_vib/m) at the impact (MODEL.md §3)
+AMBIGUOUS_SPEED = 0.2
 
 
 @kernel
@@ -110,13 +121,24 @@ def _update_extremes(ev, u0, ff, emin):
 
 
 @kernel
-def open_contact(ev, t, w, u0, ff, emin):
-    """A contact episode starts at t (also used when the run starts in contact)."""
+def vibration_energy(u, v, k, system, rod, floor):
+    """Kinetic + stretch + bend energy about the centre of mass (total mass 1), the
+    ``energy_vibration`` of the diagnostics; ``k`` is scratch for the curvatures."""
+    ke, st, be, fe, ge, emin, z, w = energies(u, v, k, system, rod, floor)
+    return ke - 0.5 * w * w + st + be
+
+
+@kernel
+def open_contact(ev, t, w, u0, ff, emin, evib):
+    """A contact episode starts at t (also used when the run starts in contact); ``evib``
+    is the vibration energy at t, read only if the episode opens a bounce."""
     ev[L.IN_CONTACT] = 1.0
     ev[L.EP_START] = t
+    ev[L.FLIGHT] = 0.0
     if ev[L.B_NEP] == 0.0:
         ev[L.B_T_IMPACT] = t
         ev[L.B_W_IMPACT] = w
+        ev[L.B_EV_IMPACT] = evib
         ev[L.B_T_RELEASE] = np.nan
         ev[L.B_W_RELEASE] = np.nan
         ev[L.CUR_MIN_U0] = u0
@@ -128,9 +150,12 @@ def open_contact(ev, t, w, u0, ff, emin):
 
 
 @step_kernel
-def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb):
+def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb,
+          evib):
     """Update the bookkeeping for the accepted step (t, t+dt]; write finished episodes
     and bounces into their buffers (the caller guarantees one free row in each).
+    ``evib``: the vibration energy at the step's start, needed (and computed by the
+    caller) only when the step touches down with no bounce open.
 
     Internal forces cancel in w = Σ m v, so out of contact w changes by g only: the
     centre-of-mass velocity at a crossing follows exactly from the step end that is out
@@ -138,7 +163,7 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
     if ev[L.IN_CONTACT] == 0.0:
         if u0b < 0.0:
             s = touchdown(u0a, v0a, u0b, dt)
-            open_contact(ev, t + s * dt, wa + g * s * dt, u0b, ffb, eminb)
+            open_contact(ev, t + s * dt, wa + g * s * dt, u0b, ffb, eminb, evib)
         elif ev[L.B_NEP] > 0.0:
             _update_extremes(ev, u0b, ffb, eminb)
     else:
@@ -154,37 +179,58 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
             ev[L.IN_CONTACT] = 0.0
             ev[L.B_T_RELEASE] = tc
             ev[L.B_W_RELEASE] = wb - g * (1.0 - s) * dt
+            # without gravity pulling it back, the rod flies if it leaves rising
+            ev[L.FLIGHT] = 1.0 if (g >= 0.0 and ev[L.B_W_RELEASE] > 0.0) else 0.0
             ev[L.REL_MIN_U0] = ev[L.CUR_MIN_U0]
             ev[L.REL_MAX_FF] = ev[L.CUR_MAX_FF]
             ev[L.REL_MIN_EPS] = ev[L.CUR_MIN_EPS]
-    # an apex closes the bounce (its last episode has ended: no contact is active)
-    if ev[L.IN_CONTACT] == 0.0 and wa > 0.0 and wb <= 0.0 and ev[L.B_NEP] > 0.0:
-        j = count[L.N_BOUNCE]
-        write_bounce(bounces[j], ev, bool(False))   # the type Python calls it with
-        count[L.N_BOUNCE] += 1
-        count[L.BOUNCES_TOTAL] += 1
-        ev[L.B_NEP] = 0.0
+    if ev[L.IN_CONTACT] == 0.0 and ev[L.B_NEP] > 0.0:
+        if wa > 0.0 and wb <= 0.0:
+            ev[L.FLIGHT] = 1.0          # the centre of mass turned over off the floor
+        # a flight: τ off the floor since the release and the turn-over; the bounce is over
+        if ev[L.FLIGHT] != 0.0 and t + dt - ev[L.B_T_RELEASE] >= ev[L.FLIGHT_TIME]:
+            j = count[L.N_BOUNCE]
+            write_bounce(bounces[j], ev, bool(False))   # the type Python calls it with
+            count[L.N_BOUNCE] += 1
+            count[L.BOUNCES_TOTAL] += 1
+            ev[L.B_NEP] = 0.0
+            ev[L.FLIGHT] = 0.0
 
 
 @kernel
 def write_bounce(row, ev, is_open):
     """One bounce record (layout.BOUNCE_COLUMNS) from the bookkeeping; an open bounce has
-    no release yet, so its release fields are NaN and its extremes run to now."""
+    no release yet, so its release fields are NaN and its extremes run to now.  It is
+    ambiguous if open, if it did not start falling (w_impact >= 0: the run started in
+    contact) or if its approach speed is below AMBIGUOUS_SPEED of the vibrational velocity
+    scale sqrt(2 E_vib) at the impact."""
+    w_i = ev[L.B_W_IMPACT]
+    e_vib = ev[L.B_EV_IMPACT]
     row[L.BC_T_IMPACT] = ev[L.B_T_IMPACT]
     row[L.BC_N_EPISODES] = ev[L.B_NEP]
-    row[L.BC_W_IMPACT] = ev[L.B_W_IMPACT]
+    row[L.BC_W_IMPACT] = w_i
+    row[L.BC_ENERGY_VIBRATION_IMPACT] = e_vib
+    # NaN: not known (a bounce open at a checkpoint of run-file format 1 or 2)
+    known = e_vib == e_vib
+    e_pos = e_vib if e_vib > 0.0 else 0.0
+    scale = np.sqrt(w_i * w_i + 2.0 * e_pos) if known else np.nan   # speed brought in
+    ambiguous = (is_open or not w_i < 0.0
+                 or (known and -w_i < AMBIGUOUS_SPEED * np.sqrt(2.0 * e_pos)))
+    row[L.BC_AMBIGUOUS] = 1.0 if ambiguous else 0.0
     if is_open:
         row[L.BC_T_RELEASE] = np.nan
         row[L.BC_W_RELEASE] = np.nan
         row[L.BC_RESTITUTION] = np.nan
+        row[L.BC_RESTITUTION_ENERGY] = np.nan
         row[L.BC_MIN_U0] = ev[L.CUR_MIN_U0]
         row[L.BC_MAX_FLOOR_FORCE] = ev[L.CUR_MAX_FF]
         row[L.BC_MIN_STRAIN] = ev[L.CUR_MIN_EPS]
     else:
         row[L.BC_T_RELEASE] = ev[L.B_T_RELEASE]
         row[L.BC_W_RELEASE] = ev[L.B_W_RELEASE]
-        row[L.BC_RESTITUTION] = (-ev[L.B_W_RELEASE] / ev[L.B_W_IMPACT]
-                                 if ev[L.B_W_IMPACT] != 0.0 else np.nan)
+        row[L.BC_RESTITUTION] = (-ev[L.B_W_RELEASE] / w_i if w_i != 0.0 else np.nan)
+        row[L.BC_RESTITUTION_ENERGY] = (ev[L.B_W_RELEASE] / scale if scale > 0.0
+                                        else np.nan)   # NaN > 0 is false
         row[L.BC_MIN_U0] = ev[L.REL_MIN_U0]
         row[L.BC_MAX_FLOOR_FORCE] = ev[L.REL_MAX_FF]
         row[L.BC_MIN_STRAIN] = ev[L.REL_MIN_EPS]

@@ -53,7 +53,11 @@ CUR_MIN_EPS = 9
 REL_MIN_U0 = 10    # the same, frozen at its latest release
 REL_MAX_FF = 11
 REL_MIN_EPS = 12
-EV_SIZE = 13
+B_EV_IMPACT = 13   # vibration energy (energy_vibration) at the current bounce's impact
+FLIGHT = 14        # 1 once the centre of mass turned over (w from + to −) after the release
+FLIGHT_TIME = 15   # τ: a bounce ends once its release is followed by τ off the floor and a
+                   # turn-over of the centre of mass (MODEL.md §3; set by the driver)
+EV_SIZE = 16
 
 # ---- fail: float64 -----------------------------------------------------------------------
 F_CODE = 0
@@ -78,7 +82,8 @@ DIAG_COLUMNS = (
 EPISODE_COLUMNS = ("t_start", "t_end")
 BOUNCE_COLUMNS = (
     "t_impact", "t_release", "n_episodes", "w_impact", "w_release", "restitution",
-    "min_u0", "max_floor_force", "min_strain",
+    "min_u0", "max_floor_force", "min_strain", "energy_vibration_impact",
+    "restitution_energy", "ambiguous",
 )
 
 
@@ -110,6 +115,9 @@ BC_RESTITUTION = BOUNCE_COLUMNS.index("restitution")
 BC_MIN_U0 = BOUNCE_COLUMNS.index("min_u0")
 BC_MAX_FLOOR_FORCE = BOUNCE_COLUMNS.index("max_floor_force")
 BC_MIN_STRAIN = BOUNCE_COLUMNS.index("min_strain")
+BC_ENERGY_VIBRATION_IMPACT = BOUNCE_COLUMNS.index("energy_vibration_impact")
+BC_RESTITUTION_ENERGY = BOUNCE_COLUMNS.index("restitution_energy")
+BC_AMBIGUOUS = BOUNCE_COLUMNS.index("ambiguous")
 
 _PREFIXES = {"D_": DIAG_COLUMNS, "EC_": EPISODE_COLUMNS, "BC_": BOUNCE_COLUMNS}
 

@@ -52,7 +52,7 @@ from . import control as C
 from . import layout as L
 from . import registry
 from .energy import full_accel
-from .events import crossing, hermite_exit, open_contact, track
+from .events import crossing, hermite_exit, open_contact, track, vibration_energy
 from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
                       step)
 from .._jit import kernel, overload, step_kernel
@@ -275,7 +275,7 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     clock[L.DT] = C.propose(ctrl, r.dt_suggest, np.inf, bool(False))
     clock[L.EMIN] = emin
     if u[0] < 0.0:
-        open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin)
+        open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin, ke - 0.5 * w * w + st + be)
     _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
           count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
     count[L.STARTED] = 1
@@ -436,8 +436,11 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
                        work[0], work[1], bool(False))
         forced = 0
         t_new = target if land else t + dt
+        evib = 0.0     # the vibration energy at a new bounce's impact (its step's start)
+        if ev[L.B_NEP] == 0.0 and ev[L.IN_CONTACT] == 0.0 and u2[0] < 0.0:
+            evib = vibration_energy(u, v, work[1], system, rod, floor)
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
-              w, r.w, r.floor_force, emin)
+              w, r.w, r.floor_force, emin, evib)
         diss_old = diss
         diss += r.dissipated
         w = r.w

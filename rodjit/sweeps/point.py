@@ -42,11 +42,11 @@ SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
     "message": ("str", "why the point failed ('' if it completed)"),
     "n_bounces": ("int", "bounces recorded, an unfinished last one included"),
     "n_complete_bounces": ("int", "bounces whose last contact episode ended"),
-    "restitution_first": ("float", "restitution -w_release/w_impact of the first complete "
-                                   "bounce (NaN if none)"),
-    "restitution_mean": ("float", "mean restitution over the complete bounces (NaN if none)"),
-    "contact_time_first": ("float", "t_release - t_impact of the first complete bounce"),
     **IMPACT_COLUMNS,
+    "restitution_mean": ("float", "mean restitution over the bounces not marked ambiguous "
+                                  "(NaN if none)"),
+    "restitution_energy_mean": ("float", "mean restitution_energy over the bounces not "
+                                         "marked ambiguous (NaN if none)"),
     "min_u0": ("float", "lowest bottom height u_0 (deepest penetration if < 0)"),
     "max_floor_force": ("float", "largest floor force sigma_b(u_0)"),
     "min_strain": ("float", "smallest segment strain"),
@@ -143,16 +143,17 @@ class _PointSink(Sink):
 
 
 def _bounce_values(bounces: dict) -> dict:
+    """The summary columns of a bounce table: counts, and means over the rows not marked
+    ambiguous (an open or unfinished bounce is always ambiguous)."""
     done = ~bounces["open"]
-    e = bounces["restitution"][done]
-    first = int(np.argmax(done)) if done.any() else -1
+    sure = ~np.asarray(bounces["ambiguous"], bool)
+    e = bounces["restitution"][sure]
+    e_energy = bounces["restitution_energy"][sure]
     return {
         "n_bounces": int(bounces["t_impact"].size),
         "n_complete_bounces": int(done.sum()),
-        "restitution_first": float(e[0]) if e.size else math.nan,
         "restitution_mean": float(np.mean(e)) if e.size else math.nan,
-        "contact_time_first": (float(bounces["t_release"][first] - bounces["t_impact"][first])
-                               if first >= 0 else math.nan),
+        "restitution_energy_mean": float(np.mean(e_energy)) if e_energy.size else math.nan,
     }
 
 
@@ -225,6 +226,13 @@ def run_point(task: PointTask) -> PointResult:
             said = _pass_on(caught)
         values.update(got)
         values.update(_bounce_values(bounces))
+        if values["impact_status"] == "undefined" and bounces["t_impact"].size \
+                and not bounces["open"][0]:
+            # no diagnostics to read the first impact from: the bounce table's first row,
+            # the same bounce (its status and apex values stay undefined)
+            values["restitution_first"] = float(bounces["restitution"][0])
+            values["contact_time_first"] = float(bounces["t_release"][0]
+                                                 - bounces["t_impact"][0])
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
         disk = (disk_cause(exc) or "") if task.save_path is not None else ""
         if disk:               # the run file: removed (the point runs again on --resume)

@@ -127,6 +127,7 @@ def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
 def _open_resume(output, config, grid, max_points):
     """Base config, grid, columns and attributes of the sweep file to continue."""
     with sweep_file.open_sweep(output) as f:
+        sweep_file.check_continuable(f, output)
         header = sweep_file.read_header(f)
         columns = sweep_file.read_summary(f)
         alive = (writer_alive(f, lock=False) if header["attrs"].get("status") == "running"

@@ -12,9 +12,15 @@ are contiguous) but not in point order; ``/summary/bounce_start`` and
 ``/summary/bounce_count`` locate a point's rows without a search.  The number of HDF5
 objects is fixed by the columns, whatever the number of points.
 
-Format 2, still read and continued in its own layout, kept each point's bounce table in a
+Formats 1 and 2 are still read (not continued).  They kept each point's bounce table in a
 group ``/points/<index>/bounces/<column>`` of its own (ten datasets a point); format 1 had
-no ``point`` dimension either and stored ``open`` as bool.
+no ``point`` dimension either and stored ``open`` as bool.  Both cut bounces at every
+centre-of-mass apex, so their bounce rows read with the columns added since at
+``run_layout.OLD_BOUNCE_FILL`` (``ambiguous`` true), and their summary columns of other
+meanings read renamed (``OLD_SUMMARY``): format 2's ``restitution_impact`` and
+``contact_time_impact`` are today's ``restitution_first`` and ``contact_time_first``, its
+``restitution_first``, ``restitution_mean`` and ``contact_time_first`` (of the first apex
+bounce, over every apex bounce) read as ``*_apex_bounces`` columns.
 
 Every row exists from the start, ``status = "pending"`` until its point reports.  The parent
 process is the only writer; it opens the file for each batch of results and closes it
@@ -42,19 +48,28 @@ from ..output import cf
 from ..output.h5files import (FileBusy, NotARunFile, WriteFailed, abandon, check_kind,
                               damaged, disk_cause, history_with, now, open_file, reserve_space,
                               stamp_writer, writer_attrs)
+from ..output.run_layout import OLD_BOUNCE_FILL
 from ..records.bounces import empty_bounces
-from ..records.columns import BOUNCE_COLUMNS
+from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS
 from ..version import __version__
 from .grid import Grid
 from .point import SUMMARY_COLUMNS, empty_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
-           "read_header", "read_summary", "read_bounces", "read_all_bounces", "join_bounces", "check_sweep_file", "key_columns",
-           "open_sweep", "reopen"]
+           "read_header", "read_summary", "read_bounces", "read_all_bounces", "join_bounces",
+           "check_sweep_file", "key_columns", "open_sweep", "reopen", "OLD_SUMMARY",
+           "check_continuable"]
 
 KIND = "sweep"
 FORMAT_VERSION = 3
-READS = (1, 2, 3)       # the formats this version reads and continues
+READS = (1, 2, 3)       # the formats this version reads
+CONTINUES = (3,)        # and those it continues (--resume)
+# format 1 and 2 summary columns whose meaning has a new name: old name -> name read
+OLD_SUMMARY = {"restitution_first": "restitution_first_apex_bounces",
+               "restitution_mean": "restitution_mean_apex_bounces",
+               "contact_time_first": "contact_time_first_apex_bounces",
+               "restitution_impact": "restitution_first",
+               "contact_time_impact": "contact_time_first"}
 POINT = "point"         # the summary's dimension
 BOUNCES = "bounces"     # format 3: the group of the one bounce table of every point
 ROW = "bounce"          # its dimension (the row number)
@@ -225,14 +240,19 @@ def _create_bounces(f: h5py.File) -> None:
         ds.dims[0].attach_scale(row)
 
 
-def _version(f: h5py.File) -> int:
-    return int(f.attrs.get("format_version", 1))
+def check_continuable(f: h5py.File, path=None) -> None:
+    """ValueError unless this version continues the sweep file's format (``CONTINUES``)."""
+    version = _format(f)
+    if version not in CONTINUES:
+        raise ValueError(f"{str(path or f.filename)!r} is a sweep file of format {version}, "
+                         f"whose bounces and summary columns have older meanings; --resume "
+                         f"continues format {FORMAT_VERSION} only: start a new sweep")
 
 
 def reopen(path, *, history: str) -> None:
     """Mark a sweep file running again (resume), recording who continues it."""
     with _writing(path, "r+", reserve=RESERVE_BASE) as f:
-        if _version(f) >= 3:
+        if _format(f) >= 3:
             _cut_bounces(f)
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
@@ -254,10 +274,7 @@ def write_results(path, results, wait: float = LOCK_WAIT) -> None:
                 continue      # last: a row counts as done only once all of it is there
             vals = [r.values[name] for r in results]
             s[name][idx] = np.array(vals, dtype=object if kind == "str" else _DTYPES[kind])
-        if _version(f) >= 3:
-            _append_bounces(f, idx, [r.bounces for r in results])
-        else:
-            _point_groups(f, results)
+        _append_bounces(f, idx, [r.bounces for r in results])
         s["status"][idx] = np.array([r.status for r in results], dtype=object)
 
 
@@ -297,21 +314,6 @@ def _cut_bounces(f: h5py.File) -> None:
     g.attrs["rows"] = rows
 
 
-def _point_groups(f: h5py.File, results) -> None:
-    """Formats 1 and 2: each point's bounce table in a group of its own."""
-    p = f["points"]
-    for r in results:
-        key = str(r.index)
-        if key in p:
-            del p[key]
-        b = p.create_group(key).create_group("bounces", track_order=True)
-        if _version(f) == 1:
-            for name in BOUNCE_COLUMNS:
-                b.create_dataset(name, data=np.asarray(r.bounces[name]))
-            continue
-        _bounce_table(b, r.bounces)
-
-
 def _batch_bytes(results) -> int:
     """Disk space to reserve for writing ``results``: more than they can take."""
     total = RESERVE_BASE
@@ -320,23 +322,6 @@ def _batch_bytes(results) -> int:
                                          if isinstance(v, str))
         total += 2 * sum(np.asarray(col).nbytes for col in r.bounces.values())
     return total
-
-
-def _bounce_table(g: h5py.Group, bounces: dict) -> None:
-    """A point's bounce table as the run file's ``/bounces`` (format 2): columns along the
-    dimension ``t_impact``, ``open`` as flagged int8, long names and units."""
-    scale = None
-    for name in BOUNCE_COLUMNS:
-        data = np.asarray(bounces[name])
-        if data.dtype == bool:
-            data = data.astype(cf.BOOL_DTYPE)
-        ds = g.create_dataset(name, data=data)
-        ds.attrs.update(cf.column_attrs("bounces", name))
-        if scale is None:
-            ds.make_scale(name)
-            scale = ds
-        else:
-            ds.dims[0].attach_scale(scale)
 
 
 def finish(path, status: str, message: str = "", attrs: dict | None = None) -> None:
@@ -384,11 +369,18 @@ def read_header(f: h5py.File) -> dict:
     return {"base": Config.from_stored_toml(base_toml), "grid": grid, "attrs": attrs}
 
 
+def _format(f: h5py.File) -> int:
+    return int(f.attrs.get("format_version", FORMAT_VERSION))
+
+
 def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
     """The summary columns, in file order; text columns as arrays of str.  NotARunFile if
-    a column is missing or its rows are not the points the file claims."""
+    a column is missing or its rows are not the points the file claims.  A format 1 or 2
+    file's columns of another meaning read under their ``OLD_SUMMARY`` names, and the
+    columns it lacks as NaN."""
     name = f.filename
     out = {}
+    old = _format(f) < 3
     with damaged(name):
         n = int(f.attrs["n_points"])
         for col, ds in f["summary"].items():
@@ -400,18 +392,23 @@ def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
                                   f"the {n} points it claims")
             if col in RAGGED:
                 continue                      # where the bounce rows are, not a column
-            out[col] = (ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
-                        else ds[()])
+            out[OLD_SUMMARY.get(col, col) if old else col] = (
+                ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
+                else ds[()])
     for col in ("status",):     # (format 1 lacks columns added since)
         if col not in out:
             raise NotARunFile(f"{name!r} is not a complete rodjit file (its summary column "
                               f"{col!r} is missing)")
+    if old:
+        for col, (kind, _) in SUMMARY_COLUMNS.items():
+            if col not in out and kind == "float":
+                out[col] = np.full(n, np.nan)
     return out
 
 
 def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
     """Point ``index``'s bounce table (empty columns if the point has not run)."""
-    if _version(f) >= 3:
+    if _format(f) >= 3:
         start = int(f["summary/bounce_start"][index])
         count = int(f["summary/bounce_count"][index])
         if start < 0 or count == 0:
@@ -421,21 +418,33 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
             raise NotARunFile(f"{f.filename!r} fails its integrity check: point {index}'s "
                               f"bounce rows {start}..{start + count - 1} lie outside its "
                               f"bounce table ({g[ROW].shape[0]} rows)")
-        out = {name: g[name][start:start + count] for name in BOUNCE_COLUMNS}
-        out["open"] = cf.as_bool(out["open"])
-        return out
+        return _as_read({name: g[name][start:start + count] for name in BOUNCE_COLUMNS})
     g = f["points"].get(str(index))
     if g is None:
         return empty_bounces()
-    out = {name: g["bounces"][name][()] for name in BOUNCE_COLUMNS}
-    out["open"] = cf.as_bool(out["open"])
-    return out
+    b = g["bounces"]
+    n = b["t_impact"].shape[0]
+    out = {}
+    for name in BOUNCE_COLUMNS:
+        if name in b:
+            out[name] = b[name][()]
+        else:                       # a column formats 1 and 2 lack
+            value, dtype = OLD_BOUNCE_FILL[name]
+            out[name] = np.full(n, value, dtype)
+    return _as_read(out)
+
+
+def _as_read(table: dict) -> dict[str, np.ndarray]:
+    """A bounce table as rodjit hands it out: its flag columns as bool."""
+    for name in BOOL_COLUMNS:
+        table[name] = cf.as_bool(table[name])
+    return table
 
 
 def read_all_bounces(f: h5py.File) -> dict[str, np.ndarray]:
     """Every point's bounce rows in one table, ordered by point (then by time), with the
     column ``point``: each row's grid point.  Any format."""
-    if _version(f) < 3:
+    if _format(f) < 3:
         return join_bounces((i, read_bounces(f, i)) for i in range(int(f.attrs["n_points"])))
     s, g = f["summary"], f[BOUNCES]
     done = s["status"].asstr()[()] != "pending"
@@ -447,8 +456,7 @@ def read_all_bounces(f: h5py.File) -> dict[str, np.ndarray]:
     out = {"point": np.repeat(points, c)}
     for name in BOUNCE_COLUMNS:
         out[name] = g[name][()][take]
-    out["open"] = cf.as_bool(out["open"])
-    return out
+    return _as_read(out)
 
 
 def join_bounces(tables) -> dict[str, np.ndarray]:
