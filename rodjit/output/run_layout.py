@@ -328,14 +328,19 @@ def add_digests(ckg: h5py.Group, slots: list, first=None) -> None:
     """Create the ``digest`` dataset of both slots (``first``: slot 0's rows; slot 1 and a
     missing ``first`` stay zeros, which match no content), adding them to ``slots``.  Run
     files written before digests existed lack them and get them when continued."""
+    shape = (len(DIGEST_PARTS), DIGEST_SIZE)
+    # its axes are netCDF dimensions without values, as the other checkpoint datasets'
+    dims = [ckg[d] if d in ckg else cf.pure_dimension(ckg, d, n)
+            for d, n in zip(("digest_part", "digest_byte"), shape)]
     for slot, datasets in enumerate(slots):
         g = ckg[f"slot{slot}"]
-        shape = (len(DIGEST_PARTS), DIGEST_SIZE)
         ds = (g.create_dataset("digest", data=first) if slot == 0 and first is not None
               else g.create_dataset("digest", shape, np.uint8))
         _attr(ds, "names", DIGEST_PARTS)
         _attr(ds, "long_name", "checkpoint: BLAKE2b-128 of each of the slot's datasets and "
                                "of the root attribute config_toml (in 'names' order)")
+        for axis, dim in enumerate(dims):
+            ds.dims[axis].attach_scale(dim)
         datasets["digest"] = ds
 
 

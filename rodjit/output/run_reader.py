@@ -40,7 +40,9 @@ def check_run_file(f: h5py.File, path=None) -> None:
         if status not in STATUSES:
             raise NotARunFile(f"{name!r} is not a complete rodjit file (status {status!r} "
                               f"is not one of {', '.join(STATUSES)})")
-        needed = [f"{t}/{c}" for t, cols in TABLES.items() for c in cols] + [x_path(f)]
+        old = int(f.attrs.get("format_version", 1)) < 3    # without the newer columns
+        needed = [f"{t}/{c}" for t, cols in TABLES.items() for c in cols
+                  if not (old and t == "bounces" and c in OLD_BOUNCE_FILL)] + [x_path(f)]
         needed += ["checkpoint/current"] + [f"checkpoint/slot{i}/{d}" for i in (0, 1)
                                             for d in CK_DATASETS]
         for obj in needed:
@@ -124,7 +126,7 @@ def verify_checkpoint(f: h5py.File, slot: int, values: dict, digest) -> None:
         raise NotARunFile(f"{name!r} fails its integrity check: {where} claims "
                           f"{lengths.size} table lengths, not {len(TABLES)}")
     for table, n in zip(TABLES, lengths):
-        rows = min(f[table][c].shape[0] for c in TABLES[table])
+        rows = min(f[table][c].shape[0] for c in TABLES[table] if c in f[table])
         if not 0 <= int(n) <= rows:
             raise NotARunFile(f"{name!r} fails its integrity check: {where} claims {int(n)} "
                               f"rows of /{table}, which holds {rows}")
