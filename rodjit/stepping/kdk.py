@@ -53,6 +53,7 @@ from typing import NamedTuple
 from ..kernels.banded import tridiag_solve
 from ..kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
 from ..kernels.mass import node_mass
+from ..kernels.reduce import nan_max
 from . import workspace as W
 from .beam import beam_midpoint
 from .control import STABILITY_CFL
@@ -192,7 +193,9 @@ def _error_ratio(scheme, u, u2, a, a2, dt):
     r = 0.0
     for i in range(u.size):
         su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
-        r = max(r, c * abs(a2[i] - a[i]) / su)
+        # a NaN-propagating max (``kernels.reduce``): the reduction vectorises, with the
+        # same result (a max does not depend on the order), a NaN term included
+        r = nan_max(r, c * abs(a2[i] - a[i]) / su)
     return r
 
 
@@ -242,6 +245,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     hdt = 0.5 * dt
     diss = 0.0
     imex = st.viscous == IMEX_KICK and system.mu > 0.0
+    beam = st.drift == BEAM_MIDPOINT and system.gamma > 0.0
     if imex:
         _imex_first(scheme, v, a, v2, hdt, system, work)
         diss += hdt * system.mu * _stiffness(v2, h, n)
@@ -249,12 +253,19 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         diss += _viscous(scheme, st, v, v2, hdt, system, work)
         for i in range(n + 1):
             v2[i] += hdt * a[i]
+    elif not beam:
+        # no viscous sub-step and a plain drift: the kick and the drift in one pass
+        # (each value as the two passes make it)
+        for i in range(n + 1):
+            vi = v[i] + hdt * a[i]
+            v2[i] = vi
+            u2[i] = u[i] + dt * vi
     else:
         for i in range(n + 1):
             v2[i] = v[i] + hdt * a[i]
-    if st.drift == BEAM_MIDPOINT and system.gamma > 0.0:
+    if beam:
         _beam_drift(scheme, system, u, v2, u2, dt, work)
-    else:
+    elif imex or system.mu > 0.0:
         for i in range(n + 1):
             u2[i] = u[i] + dt * v2[i]
     status, val, emin, fl, om2 = accel(u2, a2, work[W.S], work[W.K], system, rod, floor,
