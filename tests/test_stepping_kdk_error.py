@@ -6,6 +6,12 @@ SciPy solution of the NumPy right-hand side) with constant 1 as dt → 0.
 """
 from __future__ import annotations
 
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
@@ -103,3 +109,68 @@ def test_tighter_tolerance_gives_a_smaller_first_bounce_error(integrator):
 def test_config_refuses_an_unknown_control():
     with pytest.raises(ValueError, match="time.control"):
         rodjit.Config().override({"time.control": "fast"})
+
+
+def test_fixed_steps_leave_the_error_estimate_off():
+    """Under fixed steps (time.dt) the tolerances choose nothing: the parameters the loop
+    takes have the estimate off whatever time.control says, and adaptive steps keep it."""
+    from rodjit.stepping import registry
+    for integrator in ("verlet", "semi-implicit"):
+        tc = rodjit.Config().override({"time.integrator": integrator,
+                                       "time.control": "tolerance"}).time
+        assert registry.make_scheme(tc).tolerance
+        assert not registry.make_scheme(dataclasses.replace(tc, dt=1e-4)).tolerance
+
+
+_COUNT_ESTIMATES = """
+import json, sys, rodjit
+from rodjit.stepping import kdk
+calls = [0]
+estimate = kdk._error_ratio
+def counted(*args):
+    calls[0] += 1
+    return estimate(*args)
+kdk._error_ratio = counted
+r = rodjit.simulate(rodjit.Config().override(json.loads(sys.argv[1])))
+print(json.dumps({"calls": calls[0], "steps": r.stats["steps"], "u": r.u_final.tolist()}))
+"""
+
+
+def _plain_python_run(over):
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    proc = subprocess.run([sys.executable, "-c", _COUNT_ESTIMATES, json.dumps(over)], env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    return json.loads(proc.stdout)
+
+
+@pytest.mark.parametrize("integrator", ["verlet", "semi-implicit"])
+def test_a_fixed_step_run_never_evaluates_the_error_estimate(integrator):
+    """The kernels as plain Python (NUMBA_DISABLE_JIT=1), the estimate counted: a fixed-step
+    run under time.control = "tolerance" takes its steps without it (the same steps and bits
+    as under "cfl"), an adaptive one evaluates it on every trial."""
+    over = {"time.integrator": integrator, "rod.N": 4, "rod.mu": 0.5, "initial.height": 0.02,
+            "initial.velocity": -1.0, "time.t_end": 0.03, "time.control": "tolerance",
+            "output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
+    fixed = _plain_python_run({**over, "time.dt": 1e-3})
+    assert fixed["steps"] == 30 and fixed["calls"] == 0
+    adaptive = _plain_python_run(over)
+    assert adaptive["calls"] >= adaptive["steps"] > 0
+    cfl = rodjit.simulate(rodjit.Config().override({**over, "time.dt": 1e-3,
+                                                    "time.control": "cfl"}))
+    np.testing.assert_allclose(fixed["u"], cfl.u_final, rtol=1e-12, atol=1e-14)
+
+
+@pytest.mark.parametrize("integrator", ["verlet", "semi-implicit"])
+def test_fixed_steps_take_the_same_bits_under_either_control(integrator):
+    """Compiled: a fixed-step run is the same under time.control = "tolerance" and "cfl",
+    bit for bit (snapshots, diagnostics, contact episodes)."""
+    over = {"time.integrator": integrator, "rod.N": 12, "rod.mu": 1.0, "time.dt": 2e-4,
+            "time.t_end": 0.6, "output.snapshot_interval": 0.05}
+    a = rodjit.simulate(rodjit.Config().override({**over, "time.control": "tolerance"}))
+    b = rodjit.simulate(rodjit.Config().override({**over, "time.control": "cfl"}))
+    assert a.stats["steps"] == b.stats["steps"] == 3000
+    assert a.episodes["t_start"].size > 0
+    for x, y in [(a.u, b.u), (a.v, b.v), (a.episodes["t_end"], b.episodes["t_end"]),
+                 *((a.diagnostics[k], b.diagnostics[k]) for k in a.diagnostics)]:
+        assert np.array_equal(x, y, equal_nan=True)

@@ -75,8 +75,10 @@ class Scheme:
 
 
 def _kdk(tc, P):
-    """Kick–drift–kick parameters: cfl, tolerances, and whether the tolerances choose."""
-    return P(float(tc.cfl), float(tc.rtol), float(tc.atol), tc.control == "tolerance")
+    """Kick–drift–kick parameters: cfl, tolerances, and whether the tolerances choose (not
+    under fixed steps, ``time.dt``: the step then skips the error estimate)."""
+    return P(float(tc.cfl), float(tc.rtol), float(tc.atol),
+             tc.control == "tolerance" and tc.dt is None)
 
 
 _ENERGY_WORK_ROWS = 17   # rows S … D of stepping/energy.py (tests check it)
