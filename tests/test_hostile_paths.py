@@ -14,7 +14,7 @@ import h5py
 import pytest
 from click.testing import CliRunner
 
-from conftest import datasets, rodjit_cli
+from conftest import assert_same_files, rodjit_cli
 from rodjit import cli
 
 TINY = ["--set", "time.t_end=0.3", "--set", "rod.N=3", "--set", "rod.mu=1", "-q",
@@ -145,8 +145,7 @@ def test_crash_recovery_through_a_symbolic_link(tmp_path, monkeypatch):
     assert os.path.islink("link.h5") and os.readlink("link.h5") == "real.h5"
     with h5py.File("real.h5", "r") as f:
         assert f.attrs["status"] == "completed"
-    got, ref = datasets("real.h5"), datasets("ref.h5")
-    assert got.keys() == ref.keys() and all((got[k] == ref[k]).all() for k in ref)
+    assert_same_files("real.h5", "ref.h5")       # NaN (a pending bounce's) equal to NaN
     assert sorted(p for p in os.listdir(".") if not p.startswith(".")) == [
         "link.h5", "real.h5", "ref.h5"]
 

@@ -76,7 +76,7 @@ def test_titles_fit_and_every_axis_has_its_unit(sweep_path, kind, options):
                        **options)
     for ax in fig.axes:
         if ax.get_label() == "<colorbar>":
-            assert ax.get_ylabel() == "restitution_impact [1]"
+            assert ax.get_ylabel() == "restitution_first [1]"
             continue
         assert _inside_the_figure(fig, ax.title), ax.get_title()
         labels = {ax.get_xlabel(), ax.get_ylabel()} - {""}
@@ -89,4 +89,4 @@ def test_titles_fit_and_every_axis_has_its_unit(sweep_path, kind, options):
                                                       "β (floor.beta) [m]")
     else:
         assert ax.get_xlabel() == "μ (rod.mu) [N s]"
-        assert ax.get_ylabel() == "restitution_impact [1]"
+        assert ax.get_ylabel() == "restitution_first [1]"

@@ -21,11 +21,11 @@ from .grid import MAX_POINTS, Grid
 
 __all__ = ["SweepPlan", "plan_sweep", "check_runs_dir", "SWEEP_OVERHEAD", "POINT_BYTES"]
 
-# a sweep file's layout and attributes, and what each point adds to it besides its bounce
-# rows (a summary row, its bounce group with one empty dataset per column); measured on
-# files of 1 to 64 points
-SWEEP_OVERHEAD = 48 * 2**10
-POINT_BYTES = 8 * 2**10
+# a sweep file's layout and attributes (its fixed set of datasets), and what each point
+# adds to it besides its bounce rows (a summary row: ~640 bytes measured on files of 1 to
+# 512 points, rounded up)
+SWEEP_OVERHEAD = 52 * 2**10
+POINT_BYTES = 2**10
 
 
 @dataclass
