@@ -322,8 +322,8 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         Executor, as for ``rodjit.sweep`` (``"processes"``, ``"local"``,
         ``"tcp://HOST:PORT"``, ``"inline"``).
     merge_time : float, optional
-        Contact episodes closer than this [s] are one macroscopic contact (default: a few
-        periods of the rod's highest mode).
+        The flight time τ [s] after which a release ends a bounce (``flight_groups``;
+        default: π h/c, the period of the rod's highest mode, as the bounce table).
 
     Returns
     -------

@@ -2,8 +2,8 @@
 
 The compiled event tracking splits a run into contact *episodes* (``u_0 < 0``) and
 *bounces*, one per physical impact: a bounce ends at a *flight*, a release after which the
-bottom stays off the floor for at least τ = 2L/c (``flight_time``, one round trip of a
-compression wave along the rod) and the centre of mass turns over (it leaves rising and
+bottom stays off the floor for at least τ = π h/c (``flight_time``, the period of the
+highest mode of the semi-discrete rod) and the centre of mass turns over (it leaves rising and
 comes back falling).  Here the same rule (``flight_groups``) groups a run's episodes into
 *macroscopic contacts*, one per bounce, for any τ, and the first-impact observables are
 read at their ends, with the centre-of-mass state carried to the contact's end points along
@@ -181,7 +181,7 @@ def physics_of(result, merge_time: float | None = None) -> Physics:
         A run, from ``simulate`` or ``load_file``.
     merge_time : float, optional
         The flight time τ [s] that ends a macroscopic contact (``flight_groups``);
-        default ``flight_time(config)`` = 2L/c, the one the bounce table uses.
+        default ``flight_time(config)`` = π h/c, the one the bounce table uses.
 
     Returns
     -------

@@ -4,8 +4,8 @@ An episode is a maximal interval with u_0 < 0; its ends are located inside the s
 the side of the step that is out of contact (where the force is smooth).  A bounce is one
 physical impact: the episodes from the first contact after a flight to the release after
 which the rod flies.  A *flight* follows a release when the bottom then stays off the floor
-for at least ``FLIGHT_TIME`` τ (the driver sets τ = 2L/c, one round trip of a compression
-wave along the rod) and the centre of mass turns over (w from + to −) before the next
+for at least ``FLIGHT_TIME`` τ (the driver sets τ = π h/c, the period of the highest mode
+of the semi-discrete rod) and the centre of mass turns over (w from + to −) before the next
 contact: the rod leaves rising and comes back falling.  So the bounce closes, online, at the
 first step that ends out of contact with both true; a contact before that continues it.
 """

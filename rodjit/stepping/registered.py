@@ -10,8 +10,7 @@ miss (as ``model.laws.registered`` does for laws).
 """
 import hashlib
 
-_placeholders: dict[str, type] = {}
-
+from .._cache_names import placeholder_getattr
 
 def adopt(params: type, name: str, module) -> str:
     """Name ``params`` (the parameter class of scheme ``name`` in ``module``) through this
@@ -30,10 +29,4 @@ def adopt(params: type, name: str, module) -> str:
     return alias
 
 
-def __getattr__(name: str) -> type:
-    if name.startswith("__"):
-        raise AttributeError(name)
-    if name not in _placeholders:
-        _placeholders[name] = type(name, (tuple,), {"__module__": __name__,
-                                                     "__doc__": "an unregistered scheme"})
-    return _placeholders[name]
+__getattr__ = placeholder_getattr(__name__, "an unregistered scheme")

@@ -6,13 +6,6 @@ parameter class here; a process that lacks a law some earlier process registered
 script, a test module) then unpickles a placeholder class instead of failing to import it,
 and the foreign entry is just a cache miss.
 """
-_placeholders: dict[str, type] = {}
+from ..._cache_names import placeholder_getattr
 
-
-def __getattr__(name: str) -> type:
-    if name.startswith("__"):
-        raise AttributeError(name)
-    if name not in _placeholders:
-        _placeholders[name] = type(name, (tuple,), {"__module__": __name__,
-                                                     "__doc__": "an unregistered law"})
-    return _placeholders[name]
+__getattr__ = placeholder_getattr(__name__, "an unregistered law")
