@@ -80,7 +80,7 @@ import os
 import sys
 import threading
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, cast
 
 # Filled in by ``load_numba`` from what the installed Numba's CPU target offers (module
 # docstring); read them through this module (``_jit.JIT_OPTIONS``) once Numba is loaded.
@@ -255,10 +255,10 @@ class Kernel:
 
 
 def _kernel_named(module: str, qualname: str) -> Kernel:
-    obj = importlib.import_module(module)
+    obj: Any = importlib.import_module(module)
     for part in qualname.split("."):
         obj = getattr(obj, part)
-    return obj
+    return cast(Kernel, obj)
 
 
 def kernel(func) -> Kernel:
@@ -342,17 +342,25 @@ def _source_dirs(root: Path) -> list[Path]:
 def _cache_dirs(root: Path) -> list[Path]:
     """Where Numba keeps rodjit's cache files: next to the sources, or in NUMBA_CACHE_DIR
     one directory per source directory, named by Numba as ``<name>_<sha1 of its path>``."""
-    import numba
     from numba.core import caching
 
     dirs = [p for p in root.rglob("__pycache__") if p.is_dir()]
-    if numba.config.CACHE_DIR:
+    cache_dir = _numba_cache_dir()
+    if cache_dir:
         for d in _source_dirs(root):
             sub = caching._CacheLocator.get_suitable_cache_subpath(str(d / "__init__.py"))
-            p = Path(numba.config.CACHE_DIR) / sub
+            p = Path(cache_dir) / sub
             if p.is_dir():
                 dirs.append(p)
     return dirs
+
+
+def _numba_cache_dir() -> str:
+    """``NUMBA_CACHE_DIR`` as Numba read it ("" when unset); ``numba.config`` sets its
+    attributes from the environment at run time, so a type checker cannot see them."""
+    import numba
+
+    return str(getattr(numba.config, "CACHE_DIR", "") or "")
 
 
 def _sources_digest(root: Path) -> str:
@@ -379,8 +387,9 @@ def _guard_cache() -> None:
 
     root = Path(__file__).resolve().parent
     made_from = f"{SOURCES_DIGEST} numba {numba.__version__}"
-    stamp_dir = (Path(numba.config.CACHE_DIR) / root.relative_to(root.anchor)
-                 if numba.config.CACHE_DIR else root / "__pycache__")
+    cache_dir = _numba_cache_dir()
+    stamp_dir = (Path(cache_dir) / root.relative_to(root.anchor)
+                 if cache_dir else root / "__pycache__")
     stamp = stamp_dir / "rodjit-sources.sha1"
     try:
         if stamp.read_text() == made_from:
@@ -416,13 +425,27 @@ def _tolerate_refused_cache_writes() -> None:
     directory would fail a run or a sweep point that has its machine code in hand.  The
     save is skipped instead, silently (a line on stderr would break the one-line report of
     the command that hit the full disk); the only cost is compiling again in the next
-    process.  Other errors of the save are Numba's to report."""
+    process.  Other errors of the save are Numba's to report.
+
+    Why a replaced method and not a supported mechanism: Numba (0.58 to 0.68) documents
+    only ``cache=True`` and ``NUMBA_CACHE_DIR``; everything else about its cache lives in
+    ``numba.core.caching``, which it does not document.  Its one registry,
+    ``_CacheImpl._locator_classes``, chooses *where* the files go and is asked before the
+    compile (``ensure_cache_path`` proves the directory writable with an empty file), not
+    when the write itself fails; a full disk or ``ulimit -f`` refuse the write, not the
+    directory.  A ``FunctionCache`` subclass per dispatcher would need the private
+    ``Dispatcher._cache`` and would not reach the overloads compiled with ``jit_options``
+    (``overload``), which Numba caches too.  So the smallest dependency is this one method:
+    ``Cache.save_overload(self, sig, data)``, inherited unchanged by ``FunctionCache``.
+    tests/test_jit_cache_guard.py fails when Numba changes its name, its signature, who
+    inherits it, or that it is what a compile calls to write the cache."""
     from numba.core import caching
 
     original = caching.Cache.save_overload
     if getattr(original, "rodjit_tolerant", False):
         return
 
+    @functools.wraps(original)        # keeps its name, doc and signature (``__wrapped__``)
     def save_overload(self, sig, data):
         try:
             original(self, sig, data)
@@ -430,9 +453,8 @@ def _tolerate_refused_cache_writes() -> None:
             if exc.errno not in _CACHE_REFUSALS:
                 raise
 
-    save_overload.rodjit_tolerant = True
-    save_overload.__doc__ = original.__doc__
-    caching.Cache.save_overload = save_overload
+    save_overload.rodjit_tolerant = True     # type: ignore[attr-defined]
+    caching.Cache.save_overload = save_overload    # type: ignore[method-assign]
 
 
 # Numba already imported (by the user, before rodjit): ready it now; otherwise when it is
