@@ -13,13 +13,14 @@ like a full disk, instead of killing the process.
 import os
 import signal
 import sys
+from typing import Any, NoReturn, TextIO
 
 from .driver.signals import Interrupted, install_early_handlers
 
 __all__ = ["main"]
 
 
-def _finish(code: int):
+def _finish(code: int) -> NoReturn:
     """Exit with ``code``. The command's work is over (its files are closed), so SIGINT and
     SIGTERM are ignored (process-wide, whichever thread the kernel picks) and blocked
     first: the interpreter's shutdown puts the default handlers back where Python had set
@@ -38,7 +39,7 @@ def _finish(code: int):
     sys.exit(code)
 
 
-def _exit_interrupted(signum: int):
+def _exit_interrupted(signum: int) -> NoReturn:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     print(f"Error: interrupted by {signal.Signals(signum).name}", file=sys.stderr)
@@ -50,28 +51,28 @@ class _PipeSafe:
     true``) cannot fail: what is left to print goes to /dev/null, and the command ends
     with the exit code of its work, as ``head``-style pipes expect."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: TextIO) -> None:
         self._stream = stream
 
-    def write(self, text):
+    def write(self, text: str) -> int:
         try:
             return self._stream.write(text)
         except BrokenPipeError:
             self._drop()
             return len(text)
 
-    def flush(self):
+    def flush(self) -> None:
         try:
             self._stream.flush()
         except BrokenPipeError:
             self._drop()
 
-    def _drop(self):
+    def _drop(self) -> None:
         null = os.open(os.devnull, os.O_WRONLY)
         os.dup2(null, self._stream.fileno())
         os.close(null)
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         return getattr(self._stream, name)
 
 

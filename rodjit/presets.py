@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from importlib import resources
+from importlib.resources.abc import Traversable
 from pathlib import Path
 
 from .config import Config
@@ -9,11 +10,12 @@ from .config import Config
 __all__ = ["preset_names", "preset_path", "load_preset"]
 
 
-def _files():
+def _files() -> dict[str, Traversable]:
     """Preset files from the installed package data, or from data/ in a source tree."""
     try:
         root = resources.files("rodjit.data")
-        found = {p.name: p for p in root.iterdir() if p.name.endswith(".toml")}
+        found: dict[str, Traversable] = {p.name: p for p in root.iterdir()
+                                         if p.name.endswith(".toml")}
         if found:
             return found
     except (ModuleNotFoundError, FileNotFoundError):
@@ -27,7 +29,7 @@ def preset_names() -> list[str]:
     return sorted(name[:-5].replace("_", "-") for name in _files())
 
 
-def preset_path(name: str):
+def preset_path(name: str) -> Traversable:
     """The TOML file of preset ``name`` (in the installed package data).
 
     Parameters

@@ -8,6 +8,7 @@ file kind is one reader and one ``READERS`` entry.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 from .output.h5files import NotARunFile, damaged, file_kind, writer_alive
 from .output.lock import failure_note
@@ -29,7 +30,7 @@ class About:
     status: str               # the status line, with what it means for a running file
     details: list[str] = field(default_factory=list)   # the kind's own lines
     config_title: str = "configuration:"
-    config: object = None     # the rodjit.Config shown as TOML
+    config: Any = None        # the rodjit.Config shown as TOML
     report: str = ""          # the kind's table (bounces of a run, points of a sweep)
 
 

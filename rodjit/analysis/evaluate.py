@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from typing import Any
 
 __all__ = ["evaluate", "check_limits", "Extractor"]
 
@@ -40,7 +41,7 @@ def _values(result, extra, merge_time, histories=False) -> dict:
 def _failed(message: str, extra=None) -> dict:
     from .observables import OBSERVABLES
 
-    out = {name: math.nan for name in (*OBSERVABLES, *(extra or {}))}
+    out: dict[str, Any] = {name: math.nan for name in (*OBSERVABLES, *(extra or {}))}
     out.update(status="failed", reason=message, run_status="failed", message=message)
     return out
 

@@ -5,10 +5,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
 import numpy as np
 
 from .evaluate import evaluate
+
+if TYPE_CHECKING:
+    from ..config import Config
 
 __all__ = ["fit", "FitResult", "FitError", "scan_points"]
 
@@ -29,7 +33,7 @@ class FitError(ValueError):
         The scanned ``(value, observable)`` pairs, kept as the ``samples`` attribute.
     """
 
-    def __init__(self, message: str, samples=()):
+    def __init__(self, message: str, samples: Iterable[tuple[float, Any]] = ()) -> None:
         super().__init__(message)
         self.samples = list(samples)
 
@@ -181,10 +185,12 @@ def _check_target(target) -> tuple[str, float]:
     return name, value
 
 
-def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=None,
+def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
+        bracket: tuple[float, float] = (0.0, 1000.0), points: int | None = None,
         ftol: float = 1e-4, xtol: float | None = None, max_iter: int = 60,
-        converged: bool = False, ladder=None, coarse=None, jobs=None, scheduler=None,
-        merge_time=None) -> FitResult:
+        converged: bool = False, ladder: Mapping[str, Any] | None = None,
+        coarse: Mapping[str, Any] | None = None, jobs: int | None = None,
+        scheduler: str | None = None, merge_time: float | None = None) -> FitResult:
     """The value of ``key`` in ``bracket`` at which ``target``'s observable (e.g.
     ``{"restitution_first": 0.8}``) takes its value, at the resolution of ``config``.
 

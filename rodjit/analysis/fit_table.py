@@ -12,11 +12,16 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
 
 from .evaluate import evaluate
+
+if TYPE_CHECKING:
+    from ..config import Config
 
 __all__ = ["fit_table", "TableFit", "read_measurements"]
 
@@ -131,9 +136,12 @@ class TableFit:
         return asdict(self)
 
 
-def fit_table(keys, table, config=None, *, start=None, bounds=None, jobs=None,
-              scheduler=None, max_iter: int = 20, rtol: float = 1e-6, step: float = 1e-3,
-              merge_time=None) -> TableFit:
+def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapping[str, Any]],
+              config: Config | None = None, *, start: Mapping[str, float] | None = None,
+              bounds: Mapping[str, tuple[float, float]] | None = None,
+              jobs: int | None = None, scheduler: str | None = None, max_iter: int = 20,
+              rtol: float = 1e-6, step: float = 1e-3,
+              merge_time: float | None = None) -> TableFit:
     """Least-squares values of ``keys`` that reproduce a table of measurements.
 
     Levenberg–Marquardt on the weighted residuals (model − measured)/σ; each iteration's

@@ -2,6 +2,8 @@
 fitted to a table of measurements."""
 from __future__ import annotations
 
+from typing import Any
+
 import click
 
 from . import options
@@ -45,6 +47,7 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     from ..analysis.fit import FitError, fit
     from ..analysis.fit_table import fit_table
 
+    result: Any
     try:
         cfg = options.base_config(config, sets)
         keys = [k.strip() for k in key.split(",") if k.strip()]

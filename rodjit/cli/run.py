@@ -117,8 +117,9 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
         sys.exit(EXIT_SIGNAL + exc.signum)
     except SimulationError as exc:
         close(bar)
-        if not quiet and getattr(exc, "summary", None) is not None:
-            click.echo(exc.summary.report())      # (as above)
+        failed_summary = getattr(exc, "summary", None)
+        if not quiet and failed_summary is not None:
+            click.echo(failed_summary.report())   # (as above)
         raise RunFailed(str(exc)) from None
     except ValueError as exc:       # configuration, path and file errors: nothing written
         raise UsageError(str(exc)) from None

@@ -108,7 +108,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
                           else default_name[:-3] + "_sweep.h5")
         from ..output.estimate import parse_size
 
-        limits = {"max_output": parse_size(max_output), "max_steps": max_steps,
+        limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps,
                   "max_points": max_points}
         if dry_run:
             from ..sweeps.executors import check_scheduler

@@ -241,9 +241,10 @@ class Config:
             if section not in sections:
                 sections[section] = dataclasses.asdict(getattr(self, section))
             sections[section][name] = value
-        return Config(**{name: (cls(**sections[name]) if name in sections
-                                else getattr(self, name))
-                         for name, cls in SECTIONS.items()})
+        rebuilt: dict[str, Any] = {name: (cls(**sections[name]) if name in sections
+                                          else getattr(self, name))
+                                   for name, cls in SECTIONS.items()}
+        return Config(**rebuilt)
 
     # ---- export -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, dict[str, Any]]:

@@ -15,6 +15,7 @@ import signal
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Callable
 
 from ..config import Config
 from ..output import run_writer
@@ -62,8 +63,9 @@ class RunInterrupted(RuntimeError):
         self.summary = summary
 
 
-def run_to_file(config, path, *, overwrite: bool = False,
-                command: str | None = None, progress=None, t_end: float | None = None,
+def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
+                overwrite: bool = False, command: str | None = None,
+                progress: bool | Callable[[Any], object] | None = None, t_end: float | None = None,
                 flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True,
                 overlap: bool | None = None, max_output: float = MAX_OUTPUT,
                 max_steps: float = MAX_STEPS) -> RunSummary:
@@ -179,7 +181,8 @@ class RunPlan:
         return "\n".join(lines)
 
 
-def plan_run(config=None, path=None, *, overwrite: bool = False, t_end: float | None = None,
+def plan_run(config: Config | None = None, path: str | os.PathLike[str] | None = None, *,
+             overwrite: bool = False, t_end: float | None = None,
              max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
              flush_interval: float = FLUSH_INTERVAL) -> RunPlan:
     """Check everything ``run_to_file`` checks before it writes, and say what it would
@@ -229,8 +232,8 @@ def plan_run(config=None, path=None, *, overwrite: bool = False, t_end: float | 
                    free_space(path) if path is not None else None, max_output)
 
 
-def resume_file(path, *, t_end: float | None = None, command: str | None = None,
-                progress=None, flush_interval: float = FLUSH_INTERVAL,
+def resume_file(path: str | os.PathLike[str], *, t_end: float | None = None,
+                command: str | None = None, progress: bool | Callable[[Any], object] | None = None, flush_interval: float = FLUSH_INTERVAL,
                 handle_signals: bool = True, overlap: bool | None = None,
                 max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS) -> RunSummary:
     """Continue the run in ``path`` from its checkpoint (to ``t_end`` if given, which also

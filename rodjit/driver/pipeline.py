@@ -91,6 +91,7 @@ class Pipeline:
             self._inline = False
             code = self.run.compute(self.max_steps)
         else:
+            assert self._future is not None   # launched by the last ``launch``
             code = self._future.result()      # a signal handler runs while this waits
             self._future = None
         self._call_time = self.run.run_time - before

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from ..model.system import build_system, check_admissible, initial_state
 from ..records.observables import flight_time
 from ..records.sink import Sink
 from ..records.stats import run_stats
+
+if TYPE_CHECKING:
+    from ..records.result import Result
 from ..stepping import aot, control
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
@@ -59,7 +63,9 @@ class SimulationError(RuntimeError):
         kept, e.g. a run streamed to a file, which holds it instead).
     """
 
-    def __init__(self, message: str, result=None):
+    summary: Any = None     # a streamed run's ``RunSummary`` (``driver.files``)
+
+    def __init__(self, message: str, result: Result | None = None) -> None:
         super().__init__(message)
         self.result = result
 

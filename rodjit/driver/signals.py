@@ -7,6 +7,7 @@ import signal
 import sys
 import threading
 from contextlib import contextmanager
+from typing import Any
 
 __all__ = ["StopFlag", "Interrupted", "raise_interrupted", "install_early_handlers",
            "hold_on_exit", "pending_signal", "deferred_signals"]
@@ -28,7 +29,7 @@ def _in_llvm_callback(frame) -> bool:
     notify and getbuffer): ctypes prints an exception raised there as "Exception ignored"
     with its traceback, and drops it."""
     engine = sys.modules.get("llvmlite.binding.executionengine")
-    if engine is None:
+    if engine is None or engine.__file__ is None:
         return False
     binding = os.path.dirname(engine.__file__)
     while frame is not None:
@@ -77,7 +78,7 @@ class StopFlag:
         self.install = install and threading.current_thread() is threading.main_thread()
         self.signum: int | None = None
         self.abort = True
-        self._old = {}
+        self._old: dict[int, Any] = {}
 
     def _handler(self, signum, frame):
         if self.signum is not None and self.abort:

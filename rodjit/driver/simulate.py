@@ -2,6 +2,9 @@
 from __future__ import annotations
 
 import math
+from typing import Any, Callable
+
+from numpy.typing import ArrayLike
 
 from ..config import Config
 from ..output.estimate import check_fixed_step
@@ -14,7 +17,9 @@ from .run import Run, SimulationError, warn_config
 __all__ = ["simulate"]
 
 
-def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
+def simulate(config: Config | None = None, *, u0: ArrayLike | None = None,
+             v0: ArrayLike | None = None,
+             progress: bool | Callable[[Any], object] | None = None) -> Result:
     """Run ``config`` (default: the built-in run) to ``time.t_end`` and return the Result.
 
     Parameters
@@ -54,15 +59,15 @@ def simulate(config=None, *, u0=None, v0=None, progress=None) -> Result:
     run = Run(config, u0=u0, v0=v0)
     warn_config(config)
     sink = MemorySink()
-    progress = run_progress(progress)
+    bar = run_progress(progress)
     try:
         run.start(None)   # the outputs at t0 wait in the buffers: one block, one copy
         while run.advance(sink) != L.DONE:
-            if progress is not None:
-                progress(run)
+            if bar is not None:
+                bar(run)
     except SimulationError as exc:
         exc.result = sink.result(run, status="failed", message=str(exc))
         raise
     finally:
-        close_progress(progress, run)
+        close_progress(bar, run)
     return sink.result(run)

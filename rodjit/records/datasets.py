@@ -8,6 +8,8 @@ x_{i+1/2}, where the strain ε_{i+1/2} = (u_{i+1} − u_i)/h − 1 lives, MODEL.
 """
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from .._extras import need
@@ -33,7 +35,7 @@ def run_dataset(*, x, t, u, v, strain, diagnostics: dict, episodes: dict, bounce
     xr = need("xarray", "analysis", what)
     n = len(x) - 1
     x = np.asarray(x, float)
-    data = {
+    data: dict[str, tuple[Any, Any, dict[str, Any]]] = {
         "u": (("t", "x"), u, _attrs("snapshots", "u")),
         "v": (("t", "x"), v, _attrs("snapshots", "v")),
         "strain": (("t", "x_segment"), strain,

@@ -3,6 +3,7 @@ the sink that collects it."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -14,6 +15,9 @@ from .extremes import Extremes
 from .observables import ImpactTrack, impact_values
 from .overview import RunFacts
 from .sink import Sink
+
+if TYPE_CHECKING:
+    from ..config import Config
 
 __all__ = ["Result", "MemorySink"]
 
@@ -61,7 +65,7 @@ class Result:
         Energy dissipated by the viscosity up to ``t_final`` [J].
     """
 
-    config: object
+    config: Config
     x: np.ndarray
     t: np.ndarray
     u: np.ndarray
@@ -147,7 +151,7 @@ class Result:
         return self.facts().html()
 
     # ---- converting it ------------------------------------------------------------------
-    def to_xarray(self):
+    def to_xarray(self) -> Any:
         """An ``xarray.Dataset``: ``u``, ``v`` on (``t``, ``x``), ``strain`` on (``t``,
         ``x_segment``), the diagnostics on ``t_diag``, episodes along ``episode``, bounces
         along ``bounce`` (``records.datasets``); every variable with units and long_name."""
