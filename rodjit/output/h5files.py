@@ -39,8 +39,14 @@ class FileMissing(NotARunFile, MissingFile):
 
 
 class OutputExists(ValueError):
-    """The output file exists and overwriting was not asked for; ``path`` is the file (the
-    command line words its own advice from it)."""
+    """The output file exists and overwriting was not asked for.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file, kept as the ``path`` attribute (the command line words its own advice
+        from it: ``use --overwrite``).
+    """
 
     def __init__(self, path: str | os.PathLike[str]) -> None:
         self.path = str(path)
