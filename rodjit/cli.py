@@ -818,8 +818,12 @@ def _base_config(config, sets):
               help="As for rodjit sweep: Dask 'local', tcp://HOST:PORT, or 'inline'.")
 @click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
               help="Override a key of the configuration (repeatable).")
+@click.option("--max-output", default="10GiB", show_default=True, metavar="SIZE",
+              help="Refuse a run whose output would exceed SIZE (e.g. 500M, 50GiB, inf).")
+@click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
+              help="Refuse a fixed time.dt that needs more than N steps.")
 def converge_command(config, ladder, also, observables, output, overwrite, jobs, scheduler,
-                     sets):
+                     sets, max_output, max_steps):
     """Run CONFIG.toml, a preset or the default along a resolution ladder and report, per
     observable, the values, the observed order of convergence, the Richardson-extrapolated
     continuum value and an error estimate; warns when the ladder is not in the asymptotic
@@ -835,16 +839,18 @@ def converge_command(config, ladder, also, observables, output, overwrite, jobs,
     import os
 
     from .analysis.converge import converge
+    from .output.estimate import parse_size
 
     try:
         cfg = _base_config(config, sets)
+        limits = {"max_output": parse_size(max_output), "max_steps": max_steps}
         if output and os.path.exists(output) and not overwrite:
             raise ValueError(f"{output!r} exists; use --overwrite to replace it")
         names = [o.strip() for o in observables.split(",") if o.strip()]
         result = converge(cfg, _key_values("--ladder", ladder),
                           also=(False if also is not None and also.strip() == "none"
                                 else _key_values("--also", also) if also else None),
-                          observables=names, jobs=jobs, scheduler=scheduler)
+                          observables=names, jobs=jobs, scheduler=scheduler, **limits)
         if output:
             result.save(output, overwrite=True)
     except ValueError as exc:
@@ -877,8 +883,12 @@ def converge_command(config, ladder, also, observables, output, overwrite, jobs,
               help="As for rodjit sweep: Dask 'local', tcp://HOST:PORT, or 'inline'.")
 @click.option("--set", "sets", multiple=True, metavar="KEY=VALUE",
               help="Override a key of the configuration (repeatable).")
+@click.option("--max-output", default="10GiB", show_default=True, metavar="SIZE",
+              help="Refuse a run whose output would exceed SIZE (e.g. 500M, 50GiB, inf).")
+@click.option("--max-steps", type=float, default=1e10, show_default=True, metavar="N",
+              help="Refuse a fixed time.dt that needs more than N steps.")
 def fit_command(key, config, target, bracket, points, ftol, converged, ladder, table, jobs,
-                scheduler, sets):
+                scheduler, sets, max_output, max_steps):
     """Find the value of KEY for which an observable takes a target (--target), or fit
     several KEYs to a table of measurements (--table).
 
@@ -887,14 +897,16 @@ def fit_command(key, config, target, bracket, points, ftol, converged, ladder, t
     """
     from .analysis.fit import FitError, fit
     from .analysis.fit_table import fit_table
+    from .output.estimate import parse_size
 
     try:
         cfg = _base_config(config, sets)
+        limits = {"max_output": parse_size(max_output), "max_steps": max_steps}
         keys = [k.strip() for k in key.split(",") if k.strip()]
         if table:
             if target:
                 raise ValueError("--target and --table exclude each other")
-            result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler)
+            result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler, **limits)
         else:
             if not target:
                 raise ValueError("fit needs --target OBSERVABLE=VALUE (or --table FILE.csv)")
@@ -912,7 +924,7 @@ def fit_command(key, config, target, bracket, points, ftol, converged, ladder, t
             result = fit(keys[0], goal, cfg, bracket=(lo, hi), points=points, ftol=ftol,
                          converged=converged,
                          ladder=_key_values("--ladder", ladder) if ladder else None,
-                         jobs=jobs, scheduler=scheduler)
+                         jobs=jobs, scheduler=scheduler, **limits)
     except FitError as exc:
         raise RunFailed(str(exc)) from None
     except ValueError as exc:

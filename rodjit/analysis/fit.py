@@ -124,8 +124,9 @@ class _Objective:
     """observable(key = x) at the given resolution, or its extrapolated continuum value
     along ``ladder``; cached, evaluated in parallel batches."""
 
-    def __init__(self, base, key, name, ladder, jobs, scheduler, merge_time):
+    def __init__(self, base, key, name, ladder, jobs, scheduler, merge_time, limits=None):
         self.base, self.key, self.name = base, key, name
+        self.limits = limits or {}      # max_output, max_steps for ``evaluate``
         self.ladder, self.jobs, self.scheduler = ladder, jobs, scheduler
         self.merge_time = merge_time
         self.cache: dict[float, tuple[float, str]] = {}
@@ -140,7 +141,8 @@ class _Objective:
         if todo:
             if self.ladder is None:
                 runs = evaluate([self.config(x) for x in todo], jobs=self.jobs,
-                                scheduler=self.scheduler, merge_time=self.merge_time)
+                                scheduler=self.scheduler, merge_time=self.merge_time,
+                                **self.limits)
                 for x, r in zip(todo, runs):
                     self.cache[x] = (float(r.get(self.name, math.nan)), r.get("reason", ""))
             else:
@@ -150,7 +152,7 @@ class _Objective:
                 lkey, levels = _check_ladder("ladder", self.ladder, self.base)
                 cfgs = [self.config(x).override({lkey: v}) for x in todo for v in levels]
                 runs = evaluate(cfgs, jobs=self.jobs, scheduler=self.scheduler,
-                                merge_time=self.merge_time)
+                                merge_time=self.merge_time, **self.limits)
                 n = len(levels)
                 for i, x in enumerate(todo):
                     part = runs[i * n:(i + 1) * n]
@@ -184,7 +186,7 @@ def _check_target(target) -> tuple[str, float]:
 def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=None,
         ftol: float = 1e-4, xtol: float | None = None, max_iter: int = 60,
         converged: bool = False, ladder=None, coarse=None, jobs=None, scheduler=None,
-        merge_time=None) -> FitResult:
+        merge_time=None, max_output=None, max_steps=None) -> FitResult:
     """The value of ``key`` in ``bracket`` at which ``target``'s observable (e.g.
     ``{"restitution_first": 0.8}``) takes its value, at the resolution of ``config``.
 
@@ -226,6 +228,9 @@ def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=No
     merge_time : float, optional
         The flight time τ [s] that ends a bounce (``records.observables.flight_groups``;
         default π h/c, the bounce table's).
+    max_output, max_steps : float, optional
+        The limits of a new run (``rodjit.run_to_file``), checked on every run before it
+        runs (default: the same defaults).
 
     Returns
     -------
@@ -262,7 +267,7 @@ def fit(key: str, target: dict, config=None, *, bracket=(0.0, 1000.0), points=No
         n = base.rod.N
         ladder = {"rod.N": [max(1, n // 2), n, 2 * n]}
     obj = _Objective(base, key, name, ladder if converged else None, jobs, scheduler,
-                     merge_time)
+                     merge_time, {"max_output": max_output, "max_steps": max_steps})
     xs = scan_points(lo, hi, n_scan)
     fs = obj.batch(xs)
     bad = [(x, obj.reason(x)) for x, f in zip(xs, fs) if not math.isfinite(f)]
@@ -349,7 +354,7 @@ def _resolution_shift(out: FitResult, obj, base, key, name, coarse, ladder, jobs
     if coarse is None:
         coarse = {"rod.N": max(1, base.rod.N // 2)}
     cfg = base.override({key: out.value}).override(coarse)
-    r = evaluate([cfg], jobs=1, merge_time=merge_time)[0]
+    r = evaluate([cfg], jobs=1, merge_time=merge_time, **obj.limits)[0]
     f_c = float(r.get(name, math.nan))
     if math.isfinite(f_c):
         out.resolution_shift = float((f_c - out.target) / out.sensitivity)
