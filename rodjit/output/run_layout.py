@@ -33,9 +33,9 @@ from .h5files import now, writer_attrs
 
 __all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
            "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
-           "DIGEST_PARTS", "DIGESTS_SINCE", "REQUIRED_ATTRS", "RunLayout", "build_layout", "add_digests",
-           "digest_rows", "overwrite", "CK_COUNTERS", "counter_names", "counters_by_name",
-           "OLD_BOUNCE_FILL", "current_checkpoint"]
+           "DIGEST_PARTS", "DIGESTS_SINCE", "REQUIRED_ATTRS", "RunLayout", "build_layout",
+           "add_digests", "digest_rows", "overwrite", "CK_COUNTERS", "counter_names",
+           "counters_by_name", "OLD_BOUNCE_FILL", "current_checkpoint"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
 FORMAT_VERSION = 3
