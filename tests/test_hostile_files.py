@@ -225,6 +225,10 @@ def _edit(kind):
                 del f[f"checkpoint/slot{i}/digest"]
         elif kind == "idle digest deleted":
             del f[f"checkpoint/slot{1 - int(f['checkpoint/current'][()])}/digest"]
+        elif kind == "history a number":
+            f.attrs["history"] = 12345
+        elif kind == "history one text":
+            f.attrs["history"] = "one line"
         elif kind == "snapshots cut":
             f["snapshots/u"].resize(1, axis=0)
         else:
@@ -244,6 +248,8 @@ EDITS = [
     ("del CUR/state", True), ("del CUR/lengths", True), ("del snapshots/u", True),
     ("del checkpoint/current", True), ("del bounces", True),
     # a file of a format that has digests without them: not complete, never unchecked
+    # a history that is not a list of lines is kept as one: continued, never half-opened
+    ("history a number", False), ("history one text", False),
     ("both digests deleted", True), ("del CUR/digest", True), ("idle digest deleted", True),
 ]
 

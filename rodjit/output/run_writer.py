@@ -218,6 +218,8 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     f = open_for_writing(path, "r+")
     try:
         ck = read_checkpoint(f)
+        # whatever reading can refuse, before the first write: a refusal leaves the file
+        history = history_with(f, history)
         lengths = ck["lengths"]
         for name, cols in TABLES.items():
             for col in cols:
@@ -227,7 +229,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         if config_toml is not None:
             f.attrs["config_toml"] = config_toml
         _sign_current(f)
-        f.attrs["history"] = history_with(f, history)
+        f.attrs["history"] = history
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         stamp_writer(f.attrs)
