@@ -89,10 +89,13 @@ def _timed(args, cwd, out) -> float:
 
 def _interrupt(args, cwd, out, sig: int, delay: float) -> subprocess.Popen:
     """Start ``args`` and send ``sig`` ``delay`` seconds after its file ``out`` appears
-    (or after it has ended); checks the exit code and stderr against the contract."""
+    (or after it has ended); checks the exit code and stderr against the contract.  An
+    ``out`` that exists already (a resume) counts from the moment the command takes its
+    writer lock (``.NAME.lock`` beside it), when it starts to work on the file."""
+    ready = out.with_name(f".{out.name}.lock") if out.exists() else out
     p = _start(args, cwd)
     deadline = time.monotonic() + TIMEOUT
-    while not out.exists() and p.poll() is None:
+    while not ready.exists() and p.poll() is None:
         assert time.monotonic() < deadline, "the output file never appeared"
         time.sleep(0.002)
     time.sleep(delay)
