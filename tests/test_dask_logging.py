@@ -80,7 +80,8 @@ def test_a_local_clusters_silence_logs_still_sets_the_level(routed):
 def test_a_dask_sweep_with_a_dead_worker_speaks_in_rodjit_lines(tmp_path, quiet):
     """A LocalCluster sweep whose point kills its worker: the scheduler's log records are
     ``warning:`` lines (none in Dask's own format), the failure one ``Error:`` line; under
-    ``-q`` that line alone."""
+    ``-q`` that line alone.  (The records themselves are checked in this process
+    above: the scheduler logs them or not depending on when it notices the death.)"""
     code = ("import sys\nsys.path.insert(0, %r)\nimport killer_law\nsys.argv[0] = 'rodjit'\n"
             "from rodjit.entry import main\nmain()" % str(TESTS))
     args = ["sweep", "--grid", "rod.kappa=10,13", "--set", "rod.law=kill-test", "--set",
@@ -97,5 +98,6 @@ def test_a_dask_sweep_with_a_dead_worker_speaks_in_rodjit_lines(tmp_path, quiet)
     if quiet:
         assert len(lines) == 1, r.stderr
     else:
+        # the scheduler's records of the death (whether it logs them depends on when it
+        # notices), each one warning line
         assert all(line.startswith("warning: distributed.") for line in lines[:-1]), r.stderr
-        assert any("(ERROR): Task" in line for line in lines[:-1]), r.stderr
