@@ -313,3 +313,13 @@ def test_sigkill_of_a_dask_sweep_leaves_nothing_on_stderr(sweep_ref, tmp_path):
                    0.3)
     assert p.returncode in (0, -signal.SIGKILL)
     _complete_sweep(out, sweep_ref[0])
+
+
+def test_the_resource_trackers_note_is_ignored_beside_the_users_filters(monkeypatch):
+    """The filter joins the user's own PYTHONWARNINGS (once), never replaces it."""
+    from rodjit import entry
+
+    monkeypatch.setenv("PYTHONWARNINGS", "error::DeprecationWarning")
+    entry._quiet_resource_tracker()
+    entry._quiet_resource_tracker()
+    assert os.environ["PYTHONWARNINGS"] == f"error::DeprecationWarning,{entry._QUIET_TRACKER}"
