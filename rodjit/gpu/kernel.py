@@ -11,7 +11,9 @@ parameters stay run-time values and one compile serves the whole grid.
 The kernel's source is made here (``_source``) because the tuples' classes and field counts
 are the family's; the model in it is the CPU's own code, retargeted (``retarget``).  Under
 numba-cuda's simulator (``NUMBA_ENABLE_CUDASIM=1``) the same kernel runs as Python, and
-``run_one`` and the loop are the CPU's functions themselves.
+``run_one`` and the loop are the CPU's compiled functions themselves: the simulator checks
+the kernel's set-up, the drains and the host side; ``compile_ptx`` checks that all of it
+compiles for the GPU.
 """
 from __future__ import annotations
 
@@ -144,13 +146,20 @@ def make_kernel(family: Family):
         got = _KERNELS.get(family)
         if got is None:
             if simulated():
-                run_one = T.run_one
+                run_one = _simulated_run_one
             else:
                 from .retarget import Retarget
 
                 run_one = Retarget(cuda).device(T.run_one)
             got = _KERNELS[family] = cuda.jit(kernel_function(family, cuda, run_one))
         return got
+
+
+def _simulated_run_one(*args):
+    """``run_one`` in the simulator: its device arrays unwrapped to the NumPy arrays they
+    hold, so the loop's kernels run compiled for the CPU (they cannot take the simulator's
+    array objects), on the thread's own rows."""
+    return T.run_one(*(getattr(a, "_ary", a) for a in args))
 
 
 class _Device(NamedTuple):
