@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import socket
 import time
 import types
@@ -38,13 +39,13 @@ from ..sweeps.batch import BatchResult
 from ..sweeps.point import bounce_values, empty_columns, pass_on
 from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
-from .kernel import N_MAX, family_of, make_kernel, pack, simulated
+from .kernel import N_MAX, family_of, make_kernel, pack, signature, simulated
 
 __all__ = ["run_batch", "check_device", "check_point", "resolve_device", "GPU_INTEGRATORS",
            "GpuUnsupported", "N_MAX"]
 
 # the integrators whose loop compiles for the GPU (tests/test_gpu_ptx.py compiles each)
-GPU_INTEGRATORS = ("energy", "dp54", "verlet")
+GPU_INTEGRATORS = ("energy", "dp54", "dop853", "verlet", "semi-implicit", "radau5")
 BOUNCE_ROWS = 64            # bounce rows kept per point (more are counted and warned of)
 EVENT_ROWS = 16             # local buffer rows of episodes and of bounces between drains
 THREADS = 128               # threads per block
@@ -128,7 +129,6 @@ def _launch(runs, cuda):
     state0 = np.ascontiguousarray(np.stack([r.state[:2] for r in runs]))
     clock0 = np.stack([r.clock for r in runs])
     ev0 = np.stack([r.ev for r in runs])
-    t0 = time.perf_counter()
     k = make_kernel(fam)
     d = cuda.to_device
     out = [d(params), d(state0), d(clock0), d(ev0),
@@ -141,19 +141,30 @@ def _launch(runs, cuda):
            cuda.device_array((n, T.F_SIZE)), cuda.device_array((n, T.I_SIZE), np.int64)]
     threads = min(THREADS, n) if not simulated() else min(32, n)
     max_steps = max(1, NODE_STEPS_PER_CALL // n1)
-    sig_key = ("compiled", fam)
-    first = sig_key not in _COMPILED
+    t0 = time.perf_counter()
+    if not simulated():
+        try:
+            k.compile(signature(fam))      # once per process and family: timed apart
+        except Exception as exc:
+            c = runs[0].config
+            raise GpuUnsupported(f"the GPU cannot compile this model (rod.law = "
+                                 f"{c.rod.law!r}, floor.law = {c.floor.law!r}, "
+                                 f"time.integrator = {c.time.integrator!r}): {reason(exc)}; use "
+                                 f"device = 'cpu'") from None
+    t1 = time.perf_counter()
     k[(n + threads - 1) // threads, threads](*out, max_steps)
     cuda.synchronize()
-    elapsed = time.perf_counter() - t0
-    _COMPILED.add(sig_key)
+    t2 = time.perf_counter()
     fout, iout, brows = out[12].copy_to_host(), out[13].copy_to_host(), out[11].copy_to_host()
-    # the first launch of a family includes its compile: measured apart on a second launch
-    # would cost a second run; the benchmark (bench_gpu.py) separates them
-    return fout, iout, brows, (elapsed if first else 0.0), (0.0 if first else elapsed)
+    return fout, iout, brows, t1 - t0, t2 - t1
 
 
-_COMPILED: set = set()
+def reason(exc) -> str:
+    """The line of a Numba compile error that says what failed (its first lines name the
+    compiler pass; colour codes removed)."""
+    lines = [re.sub(r"\x1b\[[0-9;]*m", "", x).strip() for x in str(exc).splitlines()]
+    lines = [x for x in lines if x and not x.startswith(("Failed in", "During:"))]
+    return lines[0] if lines else type(exc).__name__
 
 
 def _message(run, fout, code) -> str:

@@ -272,7 +272,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
         table.stats = _stats(0.0, 0, 0, None)
         sweep_file.finish(output, "completed")
         return table
-    if scheduler != "inline":
+    if scheduler != "inline" and device != "cuda":    # the GPU engine starts no workers
         check_main()
     t_start = time.perf_counter()
     first = grid.config(base, todo[0])
