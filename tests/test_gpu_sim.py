@@ -94,8 +94,8 @@ def test_gpu_sweep_matches_cpu(tmp_path, integrator):
 
 
 def test_cli_device_cuda(tmp_path):
-    """``rodjit sweep --device cuda`` writes the sweep file; N above the limit is refused
-    with one line and exit code 2, before any file is made."""
+    """``rodjit sweep --device cuda`` writes the sweep file; N above the limit and run files
+    are refused with one line and exit code 2, before any file is made."""
     out = tmp_path / "c.h5"
     p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--set", "time.t_end=0.2",
                     "--grid", "floor.kappa_b=1000,3000", "-o", str(out), "-q"])
@@ -111,4 +111,10 @@ def test_cli_device_cuda(tmp_path):
     assert p.returncode == 2
     err = p.stderr.strip().splitlines()
     assert len(err) == 1 and "rod.N = 65" in err[0] and "1 to 64" in err[0], p.stderr
+    assert not bad.exists()
+    p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--save-runs",
+                    str(tmp_path / "runs"), "--grid", "floor.kappa_b=1000,3000", "-o", str(bad)])
+    assert p.returncode == 2
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "--save-runs" in err[0], p.stderr
     assert not bad.exists()

@@ -14,10 +14,10 @@ that copy with ``cuda.jit(device=True)``:
   implementation (``_jit.OVERLOADS``) and retargets the implementation it returns;
 - a rodjit module used by attribute (``control as C``, ``layout as L``) -> a proxy module
   whose attributes are mapped the same way;
-- ``numpy`` -> a proxy that is NumPy except the scalar ufuncs the kernels call that
-  numba-cuda does not lower, ``np.cbrt`` and ``np.sqrt``, which become libdevice's
-  ``cbrt`` and ``sqrt`` (``sqrt`` correctly rounded, as the CPU's; ``cbrt`` within 1 ulp
-  of it, used only for a first step proposal).
+- ``numpy`` -> a proxy that is NumPy except the scalar ufuncs that numba-cuda does not
+  lower (``np.cbrt``, ``np.sqrt``, ``np.exp``, ...: ``_scalar_functions``), which become
+  the same functions of libdevice or ``math`` (``sqrt`` correctly rounded, as the CPU's;
+  the kernels' one ``cbrt`` is a first step proposal).
 
 Nothing of the model is written twice.  A law registered from outside is retargeted the
 same way; one whose functions do something CUDA cannot compile is refused when its kernel
@@ -149,19 +149,35 @@ class Retarget:
         return got
 
     def numpy(self):
-        """NumPy with ``cbrt`` from libdevice (module docstring)."""
+        """NumPy with its scalar ufuncs that numba-cuda does not lower replaced by the
+        same functions of ``math`` or libdevice (module docstring)."""
         if self._numpy is None:
             cuda = self.cuda
             proxy = types.ModuleType("numpy[cuda]")
-
-            def cbrt(x):
-                return cuda.libdevice.cbrt(x)
-
-            def sqrt(x):
-                return cuda.libdevice.sqrt(x)
-
-            proxy.cbrt = cuda.jit(device=True)(cbrt)
-            proxy.sqrt = cuda.jit(device=True)(sqrt)
+            for name, fn in _scalar_functions(cuda).items():
+                setattr(proxy, name, cuda.jit(device=True)(_calling(fn)))
             proxy.__getattr__ = lambda name: getattr(np, name)
             self._numpy = proxy
         return self._numpy
+
+
+def _calling(fn):
+    def call(x):
+        return fn(x)
+    return call
+
+
+def _scalar_functions(cuda) -> dict:
+    """NumPy's name -> the function a device function computes it with, for the scalar
+    ufuncs that the kernels and laws may call: libdevice's ``sqrt`` (correctly rounded, as
+    the CPU's) and ``cbrt``, ``math``'s others (libdevice's, within their ulp bounds)."""
+    import math
+
+    lib = cuda.libdevice
+    out = {"sqrt": lib.sqrt, "cbrt": lib.cbrt, "abs": abs, "absolute": abs,
+           "fabs": math.fabs, "arctan": math.atan, "arcsin": math.asin,
+           "arccos": math.acos, "arctanh": math.atanh, "arcsinh": math.asinh}
+    for name in ("exp", "expm1", "log", "log1p", "log2", "log10", "sin", "cos", "tan",
+                 "sinh", "cosh", "tanh", "floor", "ceil"):
+        out[name] = getattr(math, name)
+    return out
