@@ -153,9 +153,8 @@ def _launch(runs, cuda):
                                  f"device = 'cpu'") from None
     t1 = time.perf_counter()
     k[(n + threads - 1) // threads, threads](*out, max_steps)
-    cuda.synchronize()
-    t2 = time.perf_counter()
     fout, iout, brows = out[12].copy_to_host(), out[13].copy_to_host(), out[11].copy_to_host()
+    t2 = time.perf_counter()
     return fout, iout, brows, t1 - t0, t2 - t1
 
 
@@ -213,7 +212,10 @@ def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
 
 def run_batch(configs, index) -> BatchResult:
     """Run the points ``configs`` (grid indices ``index``) on the GPU; a point that cannot
-    start (its set-up raises) is failed with the reason, as a CPU point is.
+    start (its set-up raises) is failed with the reason, as a CPU point is.  ``worker``
+    holds the device and the batch's seconds: ``setup_time`` (the points' ``Run`` set-up
+    on the host), ``compile_time`` (the kernels, first batch of a family in a process),
+    ``kernel_time`` (the launches and the copies of their results back) and ``wall_time``.
 
     Raises CudaUnavailable or GpuUnsupported (one line) before anything runs."""
     cuda = import_cuda()
@@ -232,6 +234,7 @@ def run_batch(configs, index) -> BatchResult:
         except Exception as exc:     # as run_point: the point fails, the batch goes on
             cols["status"][j] = "failed"
             cols["message"][j] = f"{type(exc).__name__}: {exc}"
+    t_setup = time.perf_counter() - t_start
     groups: dict = {}
     for j, r in enumerate(runs):
         if r is not None:
@@ -260,8 +263,10 @@ def run_batch(configs, index) -> BatchResult:
     cols["compile_time"][:] = compile_s / max(n, 1)
     cols["run_time"][:] = run_s / max(n, 1)
     cols["wall_time"][:] = wall / max(n, 1)
+    worker = {**_worker(cuda), "points": n, "setup_time": t_setup,
+              "compile_time": compile_s, "kernel_time": run_s, "wall_time": wall}
     return BatchResult(np.asarray(index, dtype=np.int64), cols, bounces, counts,
-                       tuple(dict.fromkeys(said)), _worker(cuda))
+                       tuple(dict.fromkeys(said)), worker)
 
 
 def _bytes_per_point(run) -> int:
