@@ -24,6 +24,7 @@ import socket
 import time
 import types
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 
@@ -104,12 +105,33 @@ def check_point(config) -> None:
                                  f"compiled for the GPU; use device = 'cpu'")
 
 
+class _Start(NamedTuple):
+    """What a thread starts from, made by the driver's ``Run`` (which is not kept: a batch
+    holds many thousand points)."""
+
+    config: object
+    scheme: object
+    ctrl: object
+    system: object
+    rod: object
+    floor: object
+    state: np.ndarray          # u, v rows
+    clock: np.ndarray
+    ev: np.ndarray
+
+    def params(self):
+        """The loop's parameter tuples (``driver.run.parameters``)."""
+        return (self.scheme, self.ctrl, self.system, self.rod, self.floor)
+
+
 def _setup(config):
-    """``(Run, warnings)`` of a point: the driver's initial arrays and parameters."""
+    """``(_Start, warnings)`` of a point: the driver's initial arrays and parameters."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelWarning)
         run = Run(config, snapshot_capacity=1, diag_capacity=1, event_capacity=1)
-    return run, pass_on(caught)
+    start = _Start(config, run.scheme, run.ctrl, run.system, run.rod, run.floor,
+                   run.state[:2].copy(), run.clock.copy(), run.ev.copy())
+    return start, pass_on(caught)
 
 
 def _capacities(run) -> tuple[int, int]:
@@ -121,12 +143,12 @@ def _capacities(run) -> tuple[int, int]:
 def _launch(runs, cuda):
     """Run points of one family on the device; ``(fout, iout, bounce rows, compile s,
     run s)``."""
-    fam = family_of(runs[0]._args())
+    fam = family_of(runs[0].params())
     n1 = fam.n1
     cs, cd = _capacities(runs[0])
     n = len(runs)
-    params = np.array([pack(r._args()) for r in runs], dtype=np.float64).reshape(n, -1)
-    state0 = np.ascontiguousarray(np.stack([r.state[:2] for r in runs]))
+    params = np.array([pack(r.params()) for r in runs], dtype=np.float64).reshape(n, -1)
+    state0 = np.ascontiguousarray(np.stack([r.state for r in runs]))
     clock0 = np.stack([r.clock for r in runs])
     ev0 = np.stack([r.ev for r in runs])
     k = make_kernel(fam)
@@ -238,7 +260,7 @@ def run_batch(configs, index) -> BatchResult:
     groups: dict = {}
     for j, r in enumerate(runs):
         if r is not None:
-            groups.setdefault(family_of(r._args()), []).append(j)
+            groups.setdefault(family_of(r.params()), []).append(j)
     tables: list = [None] * n
     compile_s = run_s = 0.0
     for members in groups.values():

@@ -21,7 +21,7 @@ that copy with ``cuda.jit(device=True)``:
 
 Nothing of the model is written twice.  A law registered from outside is retargeted the
 same way; one whose functions do something CUDA cannot compile is refused when its kernel
-is compiled (``kernel.compile_kernel`` says so in one line).
+is compiled (``engine`` says so in one line).
 
 Numerics: the CPU compiles with fused multiply-adds allowed (``_jit``), and so does NVVM
 by default; the two compilers fuse different pairs, so the GPU's results agree with the
