@@ -16,16 +16,17 @@ import pytest
 from rodjit.config import Config
 from rodjit.driver.run import parameters
 
-pytest.importorskip("numba.cuda", reason="the GPU engine's extra is not installed: "
-                                         "pip install 'rodjit[cuda]'")
 if os.environ.get("NUMBA_ENABLE_CUDASIM") == "1":
     pytest.skip("NUMBA_ENABLE_CUDASIM=1: the simulator has no compiler", allow_module_level=True)
 
 
 def _nvvm_or_skip():
-    from rodjit.gpu._cuda import import_cuda
+    from rodjit.gpu._cuda import CudaUnavailable, import_cuda
 
-    import_cuda()
+    try:
+        import_cuda()
+    except CudaUnavailable as exc:
+        pytest.skip(str(exc))
     from numba.cuda.cudadrv import nvvm
 
     if not nvvm.is_available():

@@ -10,6 +10,7 @@ compile of the GPU's own code is checked by tests/test_gpu_ptx.py.
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import subprocess
@@ -18,8 +19,9 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("numba.cuda", reason="the GPU engine's extra is not installed: "
-                                         "pip install 'rodjit[cuda]'")
+if importlib.util.find_spec("numba_cuda") is None:
+    pytest.skip("the GPU engine's extra is not installed: pip install 'rodjit[cuda]'",
+                allow_module_level=True)
 
 ROOT = Path(__file__).resolve().parent.parent
 

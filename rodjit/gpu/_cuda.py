@@ -20,8 +20,14 @@ def import_cuda():
     if not hasattr(np, "row_stack"):
         np.row_stack = np.vstack
     try:
+        # the NVIDIA target (numba-cuda), not Numba's deprecated built-in ``numba.cuda``,
+        # which imports without it but lacks what the engine uses
+        import numba_cuda  # noqa: F401
         from numba import cuda
     except ImportError as exc:
         raise CudaUnavailable(f"device = 'cuda' needs numba-cuda, which is not installed "
                               f"({exc}): {EXTRA}") from None
+    if getattr(cuda, "implementation", "") != "NVIDIA":
+        raise CudaUnavailable(f"device = 'cuda' needs numba-cuda, but numba.cuda is Numba's "
+                              f"built-in CUDA target: {EXTRA}")
     return cuda
