@@ -74,3 +74,28 @@ def test_law_registered_from_outside_compiles_to_ptx():
     import custom_law  # noqa: F401  (registers "log-test")
 
     _check(_ptx({"rod.law": "log-test", "time.integrator": "verlet", "rod.N": 5}))
+
+
+def test_retargeted_functions_are_the_cpu_source():
+    """One source: the GPU's step is the CPU kernel's own code object, with its kernels
+    mapped to device functions and its compile-time dispatches to CUDA overloads."""
+    from rodjit._jit import Kernel
+    from rodjit.gpu._cuda import import_cuda
+    from rodjit.gpu.retarget import Retarget
+    from rodjit.model.laws import aiki_kosugi
+    from rodjit.model.laws.base import value
+    from rodjit.stepping import energy
+
+    _nvvm_or_skip()
+    r = Retarget(import_cuda())
+    step = r.function(energy.step)
+    assert step.__code__ is energy.step.py_func.__code__
+    # a kernel it calls: the device function of that kernel's own code
+    jerk = step.__globals__["jerk"]
+    assert jerk.py_func.__code__ is energy.jerk.py_func.__code__
+    assert not isinstance(jerk, Kernel)
+    # a law's own functions, reached through a generic dispatch, are retargeted too
+    floor_value = r.function(aiki_kosugi.floor_value)
+    assert floor_value.__globals__["floor_contact"].py_func.__code__ \
+        is aiki_kosugi.floor_contact.py_func.__code__
+    assert r.value(value) is r.value(value) and r.value(value) is not value

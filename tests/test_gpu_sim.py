@@ -70,6 +70,18 @@ for i in range(len(gpu.grid)):
               else np.array_equal(x, y))
         if not ok:
             report["bounces"][f"{i}.{name}"] = [str(x.tolist()), str(y.tolist())]
+# the engine's own product, as the batch engines hand it to the driver
+from rodjit.gpu.engine import run_batch
+from rodjit.records.columns import BOUNCE_COLUMNS
+from rodjit.sweeps.point import empty_columns
+b = run_batch([gpu.grid.config(gpu.base, i) for i in (2, 0)], [2, 0])
+want = empty_columns(2)
+report["batch"] = {
+    "index": b.index.tolist(), "dtypes": all(b.values[k].dtype == want[k].dtype for k in want),
+    "keys": sorted(b.values) == sorted(want) and sorted(b.bounces) == sorted(BOUNCE_COLUMNS),
+    "rows": int(b.bounce_count.sum()) == len(b.bounces["t_impact"]),
+    "same": [float(b.values["restitution_first"][0]),
+             float(gpu.columns["restitution_first"][2])]}
 print(json.dumps(report))
 """
 
@@ -93,6 +105,9 @@ def test_gpu_sweep_matches_cpu(tmp_path, integrator):
     assert set(report["differ"]) <= NOT_COMPARED, report["differ"]
     assert not report["bounces"], report["bounces"]
     assert not report["file"], report["file"]
+    batch = report["batch"]
+    assert batch["index"] == [2, 0] and batch["dtypes"] and batch["keys"] and batch["rows"]
+    assert batch["same"][0] == batch["same"][1]
 
 
 def test_cli_device_cuda(tmp_path):
