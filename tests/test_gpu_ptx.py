@@ -99,3 +99,17 @@ def test_retargeted_functions_are_the_cpu_source():
     assert floor_value.__globals__["floor_contact"].py_func.__code__ \
         is aiki_kosugi.floor_contact.py_func.__code__
     assert r.value(value) is r.value(value) and r.value(value) is not value
+
+
+def test_law_cuda_cannot_compile_is_one_line():
+    """A law whose kernels use what CUDA cannot compile (here NumPy's random numbers,
+    which the CPU compiles) fails its kernel's compile with a one-line reason naming it;
+    ``engine.prepare`` gives that line before a sweep writes anything."""
+    import gpu_bad_law  # noqa: F401  (registers "gpu-bad-test")
+    from rodjit.gpu.engine import reason
+
+    with pytest.raises(Exception) as info:
+        _ptx({"rod.law": "gpu-bad-test", "time.integrator": "verlet", "rod.N": 5})
+    line = reason(info.value)
+    assert "\n" not in line
+    assert "Unknown attribute 'random'" in line

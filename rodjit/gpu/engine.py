@@ -42,7 +42,8 @@ from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
 from .kernel import N_MAX, family_of, make_kernel, pack, signature, simulated
 
-__all__ = ["run_batch", "check_device", "check_point", "resolve_device", "GPU_INTEGRATORS",
+__all__ = ["run_batch", "check_device", "check_point", "prepare", "resolve_device",
+           "GPU_INTEGRATORS",
            "GpuUnsupported", "N_MAX"]
 
 # the integrators whose loop compiles for the GPU (tests/test_gpu_ptx.py compiles each)
@@ -164,15 +165,7 @@ def _launch(runs, cuda):
     threads = min(THREADS, n) if not simulated() else min(32, n)
     max_steps = max(1, NODE_STEPS_PER_CALL // n1)
     t0 = time.perf_counter()
-    if not simulated():
-        try:
-            k.compile(signature(fam))      # once per process and family: timed apart
-        except Exception as exc:
-            c = runs[0].config
-            raise GpuUnsupported(f"the GPU cannot compile this model (rod.law = "
-                                 f"{c.rod.law!r}, floor.law = {c.floor.law!r}, "
-                                 f"time.integrator = {c.time.integrator!r}): {reason(exc)}; use "
-                                 f"device = 'cpu'") from None
+    _compile(k, fam, runs[0].config)
     t1 = time.perf_counter()
     k[(n + threads - 1) // threads, threads](*out, max_steps)
     fout, iout, brows = out[12].copy_to_host(), out[13].copy_to_host(), out[11].copy_to_host()
@@ -180,11 +173,48 @@ def _launch(runs, cuda):
     return fout, iout, brows, t1 - t0, t2 - t1
 
 
+def _compile(k, fam, config) -> None:
+    """Compile a family's kernel (once per process: later calls find it compiled), or
+    GpuUnsupported naming the model that CUDA cannot compile."""
+    if simulated():
+        return
+    try:
+        k.compile(signature(fam))
+    except Exception as exc:
+        raise GpuUnsupported(f"the GPU cannot compile this model (rod.law = "
+                             f"{config.rod.law!r}, floor.law = {config.floor.law!r}, "
+                             f"time.integrator = {config.time.integrator!r}): {reason(exc)}; "
+                             f"use device = 'cpu'") from None
+
+
+def prepare(config) -> None:
+    """Check ``config`` (``check_point``) and compile its kernel, before a sweep writes
+    anything: a model CUDA cannot compile is refused in one line, not after the file is
+    made.  A point that cannot start is left to fail as a point."""
+    check_point(config)
+    try:
+        start, _ = _setup(config)
+    except Exception:
+        return
+    fam = family_of(start.params())
+    _compile(make_kernel(fam), fam, config)
+
+
+# the lines of a Numba error that name the cause, not the chain of calls that led to it
+_CAUSES = ("Unknown attribute", "Untyped global name", "Use of unsupported",
+           "Cannot determine Numba type", "Invalid use of", "NotImplementedError",
+           "KeyError", "Unsupported", "Cannot unify", "unsupported")
+
+
 def reason(exc) -> str:
-    """The line of a Numba compile error that says what failed (its first lines name the
-    compiler pass; colour codes removed)."""
+    """The line of a Numba compile error that says what failed: the innermost cause where
+    one is named (an attribute or global CUDA cannot type, an unsupported call), else the
+    first line past the compiler pass names; colour codes removed."""
     lines = [re.sub(r"\x1b\[[0-9;]*m", "", x).strip() for x in str(exc).splitlines()]
     lines = [x for x in lines if x and not x.startswith(("Failed in", "During:"))]
+    for x in lines:
+        if x.startswith(_CAUSES):
+            return x
     return lines[0] if lines else type(exc).__name__
 
 

@@ -7,7 +7,7 @@ import importlib
 
 from ..sweeps.batch import BatchResult
 from ..sweeps.point import PointResult
-from .engine import check_device, check_point, run_batch
+from .engine import check_device, check_point, prepare, run_batch
 
 __all__ = ["CudaExecutor", "point_results", "check_grid"]
 
@@ -87,7 +87,9 @@ def sweep_device(device: str | None, save_runs) -> str:
     return device
 
 
-def cuda_executor(base, grid) -> CudaExecutor:
-    """The executor of a GPU sweep, once every point is checked (``check_grid``)."""
+def cuda_executor(base, grid, first: int = 0) -> CudaExecutor:
+    """The executor of a GPU sweep, once every point is checked (``check_grid``) and the
+    kernel of point ``first`` (the first to run) is compiled (``engine.prepare``)."""
     check_grid(base, grid)
+    prepare(grid.config(base, first))
     return CudaExecutor()

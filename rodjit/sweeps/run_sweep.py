@@ -281,7 +281,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
     warm = first if not law_modules(first) else None
     if device == "cuda":   # every point checked for the GPU engine, before the file is made
         from ..gpu.executor import cuda_executor
-        executor = cuda_executor(base, grid)
+        executor = cuda_executor(base, grid, todo[0])
     else:                  # last check: a cluster may be unreachable
         executor = make_executor(scheduler, jobs, warm)
     if runs_dir is not None:
