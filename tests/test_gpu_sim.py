@@ -111,8 +111,8 @@ def test_gpu_sweep_matches_cpu(tmp_path, integrator):
 
 
 def test_cli_device_cuda(tmp_path):
-    """``rodjit sweep --device cuda`` writes the sweep file; N above the limit and run files
-    are refused with one line and exit code 2, before any file is made."""
+    """``rodjit sweep --device cuda`` writes the sweep file; N above the limit, run files
+    and a scheduler are refused with one line and exit code 2, before any file is made."""
     out = tmp_path / "c.h5"
     p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--set", "time.t_end=0.2",
                     "--grid", "floor.kappa_b=1000,3000", "-o", str(out), "-q"])
@@ -134,4 +134,10 @@ def test_cli_device_cuda(tmp_path):
     assert p.returncode == 2
     err = p.stderr.strip().splitlines()
     assert len(err) == 1 and "--save-runs" in err[0], p.stderr
+    assert not bad.exists()
+    p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--scheduler", "local",
+                    "--grid", "floor.kappa_b=1000,3000", "-o", str(bad)])
+    assert p.returncode == 2
+    err = p.stderr.strip().splitlines()
+    assert len(err) == 1 and "--scheduler" in err[0], p.stderr
     assert not bad.exists()

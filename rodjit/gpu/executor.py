@@ -72,14 +72,19 @@ class CudaExecutor:
         pass
 
 
-def sweep_device(device: str | None, save_runs) -> str:
+def sweep_device(device: str | None, save_runs, scheduler=None) -> str:
     """The device a sweep runs on (``engine.resolve_device``), checked before anything is
-    written: ``"cuda"`` needs numba-cuda and a GPU, and writes no run files."""
+    written: ``"cuda"`` needs numba-cuda and a GPU, writes no run files and runs in this
+    process (no scheduler)."""
     from .engine import resolve_device
 
     device = resolve_device(device)
     if device == "cuda":
         check_device()
+        if scheduler not in (None, "inline"):
+            raise ValueError(f"scheduler = {scheduler!r} (--scheduler) cannot be used with "
+                             f"device = 'cuda': the GPU engine runs the points in this "
+                             f"process")
         if save_runs is not None:
             raise ValueError("save_runs (--save-runs) is not available with device = "
                              "'cuda': the GPU engine keeps summaries only; use device = "

@@ -220,7 +220,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     check_scheduler(scheduler)
     if device not in (None, "cpu"):
         from ..gpu.executor import sweep_device
-        device = sweep_device(device, save_runs)
+        device = sweep_device(device, save_runs, scheduler)
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
     if resume and output is None:
