@@ -388,9 +388,13 @@ def _SweepProgress(cold=None):
               help="Check everything (configuration, every point, output paths, limits), "
                    "print the points, the swept keys and the files' estimated sizes, and "
                    "write nothing.")
+@click.option("--device", type=click.Choice(["cpu", "cuda", "auto"]), default="cpu",
+              show_default=True,
+              help="Where the points run: the CPU cores, the GPU engine (one CUDA thread per "
+                   "point; needs rodjit[cuda] and a GPU), or the GPU if there is one.")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
                   force_jobs, quiet, show_progress, max_output, max_steps, max_points,
-                  dry_run):
+                  dry_run, device):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -464,7 +468,7 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
             table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                           save_runs=save_runs, resume=resume, overwrite=overwrite,
-                          progress=progress, command=command, **limits)
+                          progress=progress, command=command, device=device, **limits)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite (or "
                                           "--resume)")) from None
