@@ -149,8 +149,8 @@ def test_the_walk_sees_the_imports_it_checks(graph):
     """The walker resolves relative, absolute and function-level imports."""
     assert "rodjit.records.sink" in graph["rodjit.driver.run"]           # from ..records.sink
     assert "rodjit.sweeps.sweep_file" in graph["rodjit.sweeps.run_sweep"]  # from . import x
-    assert "rodjit.model.laws" in graph["rodjit.config"]                 # inside a function
-    assert "rodjit.reports" in graph["rodjit.cli"]                       # inside a command
+    assert "rodjit.model.laws" in graph["rodjit.config.checks"]          # inside a function
+    assert "rodjit.reports" in graph["rodjit.cli.info"]                  # inside a command
     assert "rodjit.version" in graph["rodjit"]
 
 

@@ -10,7 +10,8 @@ import pytest
 from click.testing import CliRunner
 
 import rodjit
-from rodjit.cli import _Progress, main
+from rodjit.cli import main
+from rodjit.cli.options import run_bar as _Progress
 from rodjit.output import hdf5
 from rodjit.stepping import layout as L
 
@@ -189,10 +190,10 @@ def test_plot_without_matplotlib(tmp_path, monkeypatch):
 
 def test_any_missing_extra_is_a_usage_error(tmp_path, monkeypatch):
     """A verb that needs an extra that is not installed exits 2 with the install line."""
-    import rodjit.cli as cli
+    import rodjit.cli.options as cli
     from rodjit._extras import need
 
-    monkeypatch.setattr(cli, "_load_config", lambda source: need("nosuchmodule", "analysis",
+    monkeypatch.setattr(cli, "load_config", lambda source: need("nosuchmodule", "analysis",
                                                                  "rodjit run"))
     r = CliRunner().invoke(main, ["run", "--dry-run"])
     assert r.exit_code == 2, r.output
@@ -352,14 +353,14 @@ def test_any_warning_a_command_issues_is_said_as_one_line(tmp_path, monkeypatch)
     """Not only the model's: a library's warning while a command runs is one line too."""
     import warnings
 
-    import rodjit.cli as cli
+    import rodjit.cli.options as cli
 
     def noisy(*a, **k):
         warnings.warn("something odd", RuntimeWarning)
         warnings.warn("something odd", RuntimeWarning)
         return rodjit.Config().override({"rod.mu": 1.0}), "default.h5"
 
-    monkeypatch.setattr(cli, "_load_config", lambda source: noisy())
+    monkeypatch.setattr(cli, "load_config", lambda source: noisy())
     monkeypatch.chdir(tmp_path)
     r = CliRunner().invoke(main, ["run", "--dry-run"])
     assert r.exit_code == 0, r.output

@@ -171,7 +171,7 @@ def test_ctrl_c_stops_a_real_sweep_and_resume_finishes_it(tmp_path):
 
 
 def test_sweep_progress_bar_writes_to_stderr(capsys):
-    from rodjit.cli import _SweepProgress
+    from rodjit.cli.options import sweep_bar as _SweepProgress
     from rodjit.sweeps import SweepProgress
 
     bar = _SweepProgress()

@@ -2,8 +2,8 @@
 
 Generated (never written into ``docs/``, so they cannot go stale in the repository):
 
-- ``reference/configuration.md``: every key of ``rodjit.config._FIELDS`` with its type and
-  range (``_Spec.describe()``), its default (from the section dataclasses) and, where the
+- ``reference/configuration.md``: every key of ``rodjit.config.FIELDS`` with its type and
+  range (``KeySpec.describe()``), its default (from the section dataclasses) and, where the
   spec declares them, its meaning and unit;
 - ``reference/api/<module>.md``: one mkdocstrings page per public module (``PUBLIC_MODULES``
   plus every module named in ``rodjit.__all__``);
@@ -105,8 +105,8 @@ def config_rows() -> list[dict]:
     """One dict per configuration key: key, type/range, default, meaning, unit."""
     from rodjit import config
     rows = []
-    for section, fields in config._FIELDS.items():
-        cls = config._SECTIONS[section]
+    for section, fields in config.FIELDS.items():
+        cls = config.SECTIONS[section]
         defaults = {f.name: (f.default if f.default is not dataclasses.MISSING
                              else f.default_factory())
                     for f in dataclasses.fields(cls)}
@@ -118,7 +118,8 @@ def config_rows() -> list[dict]:
                 "meaning": getattr(spec, "meaning", None) or "",
                 "unit": getattr(spec, "unit", None) or "",
                 "section": section,
-                "section_doc": inspect.getdoc(cls) or "",
+                # the section's own words: its Parameters are this table
+                "section_doc": (inspect.getdoc(cls) or "").split("\n\nParameters\n")[0],
             })
     return rows
 

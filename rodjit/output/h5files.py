@@ -40,7 +40,16 @@ class FileMissing(NotARunFile, MissingFile):
 
 
 class OutputExists(ValueError):
-    """The output file exists and overwriting was not asked for."""
+    """The output file exists and overwriting was not asked for; ``path`` is the file (the
+    command line words its own advice from it)."""
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = str(path)
+        super().__init__(f"output file {self.path!r} already exists; pass overwrite=True "
+                         f"to replace it")
+
+    def __reduce__(self):
+        return type(self), (self.path,)
 
 
 def open_file(path) -> h5py.File:
@@ -233,8 +242,7 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
         raise ValueError(f"output directory {str(parent)!r} is not writable")
     if mode is not None:
         if not overwrite:
-            raise OutputExists(f"output file {str(path)!r} already exists; pass "
-                               f"overwrite=True to replace it")
+            raise OutputExists(path)
         if is_live(path, lock=not held):
             raise FileBusy(f"output file {str(path)!r} is being written by a running "
                            f"rodjit process; stop it before replacing the file")

@@ -1,0 +1,68 @@
+"""What ``info``, ``plot`` and ``animate`` share: a file's kind (``rodjit_kind``: run,
+sweep, convergence), the figure kinds of each, and drawing a figure into an image with the
+command line's errors."""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Callable
+
+import click
+
+from .exits import RunFailed, UsageError
+
+__all__ = ["RUN_KINDS", "SWEEP_KINDS", "CONVERGENCE_KINDS", "PLOT_KINDS", "file_kind", "draw",
+           "is_convergence"]
+
+# copies of plotting.KINDS and plotting.sweep.KINDS (tests/test_cli.py checks they agree):
+# importing those modules would load numpy, h5py and Numba before every command
+RUN_KINDS = ("heights", "energy", "bounces", "spacetime", "contact")
+SWEEP_KINDS = ("restitution", "heatmap")
+CONVERGENCE_KINDS = ("convergence",)
+PLOT_KINDS = RUN_KINDS + SWEEP_KINDS + CONVERGENCE_KINDS
+
+
+def file_kind(path: str) -> str:
+    """The file's kind ("run", "sweep"), or a UsageError naming what is wrong with it."""
+    from ..reports import readable_kind
+
+    try:
+        return str(readable_kind(path))
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+
+
+def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
+         **plot_options: Any) -> None:
+    """``plot(path, image, kind, **plot_options)`` into ``output`` (default FILE_KIND.png)."""
+    from ..plotting import MissingMatplotlib, NothingToDraw
+
+    out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
+    from ..output.h5files import check_output
+
+    try:
+        check_output(out, overwrite=True)
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    from ..output.h5files import WriteFailed
+
+    try:
+        written = plot(path, out, kind, **plot_options)
+    except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
+        raise UsageError(str(exc)) from None
+    except WriteFailed as exc:
+        raise RunFailed(str(exc)) from None
+    except NothingToDraw as exc:
+        raise RunFailed(str(exc)) from None
+    except ValueError as exc:
+        raise UsageError(str(exc)) from None
+    click.echo(f"wrote {written}")
+
+
+def is_convergence(path: str) -> bool:
+    """Whether ``path`` is a convergence file (``rodjit converge -o``)."""
+    from ..output.h5files import file_kind as kind_of
+
+    try:
+        return bool(kind_of(path) == "convergence")
+    except (ValueError, OSError):
+        return False

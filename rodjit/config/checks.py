@@ -1,0 +1,102 @@
+"""What a configuration checks beyond each key's own type and range, and what it warns
+about: keys whose allowed values depend on each other, law names (looked up in the
+registry), configurations a run refuses, and the known limits of the model.
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+from ..stepping.registry import get as registry_get
+from .errors import ConfigError
+from .sections import check_dt_range
+
+__all__ = ["CROSS_CHECKS", "RUN_CHECKS", "SHOCK_WARNING", "VERLET_MU_MAX", "VERLET_WARNING",
+           "viscous_warning", "model_warnings"]
+
+# The texts of ``Config.warnings`` (tests and the convergence tool use them too).
+SHOCK_WARNING = (
+    "rod.mu = 0 and rod.gamma = 0: compression waves steepen into shocks that this "
+    "discretisation does not resolve, so first-bounce observables (restitution, contact "
+    "time, penetration, strain) have no continuum limit as rod.N grows; energy and "
+    "long-run statistics remain meaningful (set rod.gamma > 0 or rod.mu > 0 for a "
+    "convergent first bounce)")
+# verlet's Crank–Nicolson viscous sub-step is split off the kicks: above this μ its error
+# is set by its viscous step cap, not by its tolerance (``registry.Scheme.viscous_mu_max``)
+VERLET_MU_MAX: float = registry_get("verlet").viscous_mu_max
+
+
+def viscous_warning(name: str, mu_max: float) -> str:
+    """The warning for an integrator run above its ``viscous_mu_max``.
+
+    Parameters
+    ----------
+    name : str
+        The integrator.
+    mu_max : float
+        Its ``viscous_mu_max`` (the registry's).
+
+    Returns
+    -------
+    str
+        One sentence naming the keys.
+    """
+    return (f"time.integrator = {name!r} with rod.mu > {mu_max:g}: its viscous sub-step, "
+            "split off the kicks, limits the step to mu*dt*4/h^2 <= 2*time.cfl (steps grow "
+            "like mu*N^2) and still misses 1e-4 on first-bounce observables; use 'energy' "
+            "or 'semi-implicit'")
+
+
+VERLET_WARNING = viscous_warning("verlet", VERLET_MU_MAX)
+
+
+def model_warnings(mu: float, gamma: float, integrator: str) -> tuple[str, ...]:
+    """The known limitations of a configuration (``Config.warnings``): the shock-forming
+    μ = γ = 0 model, an integrator above its ``viscous_mu_max``."""
+    out = []
+    if mu == 0 and gamma == 0:
+        out.append(SHOCK_WARNING)
+    entry = registry_get(integrator)
+    if mu > entry.viscous_mu_max:
+        out.append(viscous_warning(entry.name, entry.viscous_mu_max))
+    return tuple(out)
+
+
+def _check_height(height: float, beta: float) -> None:
+    if not height > -beta:
+        raise ConfigError(
+            f"initial.height = {height!r} is out of range (float > -floor.beta "
+            f"= {-beta!r}: the bottom must start above the floor's bending limit)")
+
+
+def _law_check(kind: str) -> Callable[[str], None]:
+    def check(name: str) -> None:
+        from ..model.laws import get_law  # laws register themselves on import
+        get_law(kind, name)      # a ValueError naming the registered laws
+    return check
+
+
+# ``Config`` runs every check; a sweep grid checks each key's values once and these only
+# over the combinations of the swept keys they name, not over every point.
+CROSS_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., None]], ...] = (
+    (("rod.law",), _law_check("rod")),
+    (("floor.law",), _law_check("floor")),
+    (("initial.height", "floor.beta"), _check_height),
+    (("time.dt_min", "time.dt_max"), check_dt_range))
+
+
+def _check_tolerance_honoured(integrator: str, control: str, dt: float | None,
+                              mu: float) -> None:
+    entry = registry_get(integrator)
+    if control == "tolerance" and dt is None and mu > entry.viscous_mu_max:
+        raise ConfigError(
+            f"time.integrator = {integrator!r} cannot honour time.rtol/time.atol at "
+            f"rod.mu = {mu:g} > {entry.viscous_mu_max:g}: its split viscous sub-step caps "
+            f"the step at time.cfl*h^2/(2*mu), and that cap, not the tolerance, sets its "
+            f"error; set time.control = 'cfl' and refine time.cfl, or use "
+            f"time.integrator = 'semi-implicit' or 'energy'")
+
+
+# What a run checks beyond ``CROSS_CHECKS`` before it steps (``Config.check_runnable``):
+# configurations that are valid (a file may hold one) but that a run refuses.
+RUN_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., Any]], ...] = (
+    (("time.integrator", "time.control", "time.dt", "rod.mu"), _check_tolerance_honoured),)
