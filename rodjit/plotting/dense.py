@@ -93,8 +93,14 @@ def resimulate(src, t0: float, t1: float, interval: float):
     """``(t, u, v)`` every ``interval`` over ``[t0, t1]``: the run continued from its last
     snapshot at or before ``t0`` with ``output.snapshot_interval = interval``.
 
-    Raises whatever the continuation raises (an exception means: no dense data here)."""
+    A fixed ``time.dt`` must divide the output interval: ``interval`` is then a whole
+    number of steps (at least one).  Raises whatever the continuation raises (an
+    exception means: no dense data here)."""
     from ..driver.simulate import simulate
+
+    dt = src.config.time.dt
+    if dt is not None:
+        interval = max(1, round(interval / dt)) * dt
 
     times = src.snapshot_times()
     row = max(0, int(np.searchsorted(times, t0, "right")) - 1)
