@@ -30,8 +30,8 @@ def run_file(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def contact(run_file):
-    ep = rodjit.load_file(run_file).episodes
-    a, b = float(ep["t_start"][0]), float(ep["t_end"][0])
+    bounces = rodjit.load_file(run_file).bounces
+    a, b = float(bounces["t_impact"][0]), float(bounces["t_release"][0])
     assert (b - a) / CFG.output.snapshot_interval < 5     # the case: a sparse contact
     return a, b
 

@@ -41,20 +41,24 @@ def frame_rows(n_snapshots: int, n_frames: int) -> np.ndarray:
 
 
 def frame_times(times: np.ndarray, spans: list, n_frames: int,
-                per_contact: int = FRAMES_PER_CONTACT) -> tuple[np.ndarray, int]:
-    """The times of ``n_frames`` frames of a run with snapshot ``times`` and contact
-    ``spans`` ``(t_start, t_end)``: ``per_contact`` frames over each contact and the rest
-    at snapshots spread evenly, and 0; or, where contacts would take more than half the
-    frames, the even frames alone and the number of frames that would show them."""
+                per_contact: int = FRAMES_PER_CONTACT) -> tuple[np.ndarray, list, int]:
+    """The times of ``n_frames`` frames of a run with snapshot ``times`` and contacts
+    ``spans`` ``(t_impact, t_release)``, the contacts that needed frames of their own,
+    and 0: ``per_contact`` frames over each contact shorter than ``per_contact`` even
+    frames, the rest at snapshots spread evenly.  Where those contacts would take more
+    than half the frames: the even frames alone, the contacts skipped, and the number of
+    frames that would show them."""
     even_only = times[frame_rows(times.size, n_frames)]
-    if not spans:
-        return even_only, 0
-    need = per_contact * len(spans)
+    gap = (times[-1] - times[0]) / max(1, n_frames - 1)
+    short = [(a, b) for a, b in spans if b - a < (per_contact - 1) * gap]
+    if not short:
+        return even_only, [], 0
+    need = per_contact * len(short)
     if need > n_frames // 2:
-        return even_only, 2 * need
+        return even_only, short, 2 * need
     even = times[frame_rows(times.size, n_frames - need)]
-    inside = np.concatenate([np.linspace(a, b, per_contact) for a, b in spans])
-    return np.sort(np.concatenate([even, inside])), 0
+    inside = np.concatenate([np.linspace(a, b, per_contact) for a, b in short])
+    return np.sort(np.concatenate([even, inside])), short, 0
 
 
 def movie_frames(src, n_frames: int, *, fps: int = 20, dense: bool = True):
@@ -64,13 +68,13 @@ def movie_frames(src, n_frames: int, *, fps: int = 20, dense: bool = True):
     words the warning of a movie too short for its contacts."""
     t_all = src.snapshot_times()
     lo, hi = float(t_all[0]), float(t_all[-1])
-    spans = contacts(src, lo, hi)
-    wanted, skipped = frame_times(t_all, spans, n_frames)
+    wanted, short, skipped = frame_times(t_all, contacts(src, lo, hi), n_frames)
     if skipped:
         gap = (hi - lo) / max(1, n_frames - 1)
-        shortest = min(b - a for a, b in spans)
+        shortest = min(b - a for a, b in short)
+        several = "s" if len(short) != 1 else ""
         warnings.warn(f"animate: {n_frames} frames {gap:.3g} s apart skip contacts as short "
-                      f"as {shortest:.3g} s; {len(spans)} contacts with "
+                      f"as {shortest:.3g} s; {len(short)} such contact{several} with "
                       f"{FRAMES_PER_CONTACT} frames each need {skipped} frames or more: "
                       f"duration = {math.ceil(10 * skipped / fps) / 10:g} s or more at "
                       f"fps = {fps} shows them", SparseSnapshots, stacklevel=3)

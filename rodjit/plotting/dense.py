@@ -76,16 +76,19 @@ class Samples:
 
 
 def contacts(src, lo: float, hi: float) -> list[tuple[float, float]]:
-    """The contact episodes ``(t_start, t_end)`` that overlap ``[lo, hi]`` (one still open
-    at the end runs to the last snapshot)."""
-    ep = src.table("episodes")
+    """The impacts ``(t_impact, t_release)`` that overlap ``[lo, hi]`` (one still in
+    contact at the end runs to the last snapshot).
+
+    Bounces rather than contact episodes: at μ = 0 one impact chatters through several
+    episodes of a millisecond, and it is the impact a picture must resolve."""
+    b = src.table("bounces")
     t = src.snapshot_times()
     last = float(t[-1]) if t.size else hi
     out = []
-    for a, b in zip(ep["t_start"], ep["t_end"]):
-        a, b = float(a), float(b) if math.isfinite(b) else last
-        if b > a and b >= lo and a <= hi:
-            out.append((a, b))
+    for a, r in zip(b["t_impact"], b["t_release"]):
+        a, r = float(a), float(r) if math.isfinite(r) else last
+        if r > a and r >= lo and a <= hi:
+            out.append((a, r))
     return out
 
 
