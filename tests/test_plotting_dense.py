@@ -65,8 +65,17 @@ def test_the_zoom_on_an_impact_has_many_columns_inside_the_contact(run_file, con
 
 def test_the_whole_run_resolves_its_contacts_too(run_file, contact):
     a, b = contact
-    t = columns(plotting.figure(run_file, "spacetime").axes[0])
-    assert np.unique(t[(t >= a) & (t <= b)]).size >= dense.MIN_SAMPLES
+    for source in (run_file, rodjit.simulate(CFG)):      # a file, a Result in memory
+        t = columns(plotting.figure(source, "spacetime", quantity="v").axes[0])
+        assert np.unique(t[(t >= a) & (t <= b)]).size >= dense.MIN_SAMPLES
+
+
+def test_nothing_is_re_simulated_beyond_the_run(run_file):
+    """A window past the end draws the run up to its last snapshot, no invented future."""
+    end = CFG.time.t_end
+    ax = plotting.figure(run_file, "spacetime", t_range=(end - 0.02, end + 0.5)).axes[0]
+    t = columns(ax)
+    assert t.size >= dense.MIN_SAMPLES and t.max() <= end + 1e-9
 
 
 def test_without_re_simulation_a_warning_names_the_interval_that_resolves_it(

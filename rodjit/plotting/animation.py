@@ -81,7 +81,8 @@ def movie_frames(src, n_frames: int, *, fps: int = 20, dense: bool = True):
     # the snapshots, with the states of sparse contacts re-simulated; each frame shows the
     # sample nearest its time
     s = samples(src, np.arange(t_all.size), lo, hi, dense=dense, what="animate",
-                per_contact=0 if skipped else FRAMES_PER_CONTACT, window=False)
+                per_contact=FRAMES_PER_CONTACT, window=False,
+                impacts=[] if skipped else short)
     if s.t.size == 1:
         return s, np.zeros(1, np.int64)
     k = np.clip(np.searchsorted(s.t, wanted), 1, s.t.size - 1)

@@ -151,23 +151,30 @@ def _merge(spans):
 
 
 def sparse_spans(src, lo: float, hi: float, *, per_contact: int = MIN_SAMPLES,
-                 window: bool = True):
+                 window: bool = True, impacts=None):
     """What is sparse in ``[lo, hi]``: a list of ``(what, (a, b), count, needed, span)``,
     ``span = (s0, s1, interval)`` the part to re-simulate at ``interval``.
 
     A contact with fewer than ``per_contact`` snapshots is re-simulated from half its
     duration before to half after (the approach and the release), at its duration over
     ``DENSE_SAMPLES``; with ``window``, a window of fewer than ``MIN_SAMPLES`` snapshots
-    is re-simulated whole, at its width over ``WINDOW_SAMPLES``."""
+    is re-simulated whole, at its width over ``WINDOW_SAMPLES``.  ``impacts``: the
+    contacts to look at (default: every one in the window).  Nothing beyond the run's
+    last snapshot is re-simulated (a run that failed there does not go on in a figure)."""
     times = src.snapshot_times()
     interval = src.config.output.snapshot_interval
     found = []
+    if times.size == 0:
+        return found
+    lo, hi = max(lo, float(times[0])), min(hi, float(times[-1]))
+    if hi <= lo:
+        return found
     n_window = _count(times, lo, hi)
     if window and n_window < MIN_SAMPLES:
         w = hi - lo
         found.append(("the window", (lo, hi), n_window, w / MIN_SAMPLES,
                       (lo, hi, w / WINDOW_SAMPLES)))
-    for a, b in contacts(src, lo, hi):
+    for a, b in (contacts(src, lo, hi) if impacts is None else impacts):
         d = b - a
         n = _count(times, a, b)
         if n < per_contact and interval > d / per_contact:
@@ -178,14 +185,16 @@ def sparse_spans(src, lo: float, hi: float, *, per_contact: int = MIN_SAMPLES,
 
 
 def samples(src, rows, lo: float, hi: float, *, dense: bool, what: str,
-            per_contact: int = MIN_SAMPLES, window: bool = True,
+            per_contact: int = MIN_SAMPLES, window: bool = True, impacts=None,
             max_dense: int = 20_000) -> Samples:
     """The snapshot ``rows`` (indices) of ``[lo, hi]``, with every sparse contact (and a
     sparse window) replaced by re-simulated states when ``dense`` and possible; else one
-    ``SparseSnapshots`` warning for ``what`` (the figure)."""
+    ``SparseSnapshots`` warning for ``what`` (the figure).  ``impacts``: the contacts to
+    resolve (default: every one in the window)."""
     times = src.snapshot_times()
     rows = np.asarray(rows, dtype=np.int64)
-    found = sparse_spans(src, lo, hi, per_contact=per_contact, window=window)
+    found = sparse_spans(src, lo, hi, per_contact=per_contact, window=window,
+                         impacts=impacts)
     spans = _merge([f[4] for f in found])
     total = sum((s1 - s0) / dt for s0, s1, dt in spans)
     if total > max_dense:        # coarser everywhere, still at most max_dense states
