@@ -128,8 +128,8 @@ def test_re_simulated_states_are_those_of_a_run_that_wrote_them(run_file, contac
     np.testing.assert_allclose(reference.t[rows], t, atol=1e-9)
     strain = np.diff(u, axis=1) * CFG.rod.N - 1
     reference_strain = np.diff(reference.u[rows], axis=1) * CFG.rod.N - 1
-    assert np.abs(strain - reference_strain).max() < 1e-3 * np.abs(reference_strain).max()
-    assert np.abs(v - reference.v[rows]).max() < 1e-3 * np.abs(reference.v[rows]).max()
+    assert np.abs(strain - reference_strain).max() < 1e-5 * np.abs(reference_strain).max()
+    assert np.abs(v - reference.v[rows]).max() < 1e-5 * np.abs(reference.v[rows]).max()
     assert start < a - 0.003                     # continued from the snapshot before
 
 
