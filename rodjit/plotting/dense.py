@@ -69,7 +69,12 @@ class Samples:
         out = np.empty((self.t.size, src.x.size))
         snap = self.row >= 0
         if snap.any():
-            out[snap] = src.snapshots(quantity, self.row[snap])
+            # one strided read (the rows are a strided slice less the re-simulated spans),
+            # not a point selection of each row
+            r = self.row[snap]
+            step = max(1, int(np.gcd.reduce(np.diff(r)))) if r.size > 1 else 1
+            block = src.snapshots(quantity, slice(int(r[0]), int(r[-1]) + 1, step))
+            out[snap] = block[(r - r[0]) // step]
         if (~snap).any():
             out[~snap] = (self.dense_u if quantity == "u" else self.dense_v)[self.index[~snap]]
         return out
