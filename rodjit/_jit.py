@@ -119,6 +119,8 @@ def _options(numba_core_cpu) -> None:
 
 
 _KIND_OPTIONS: dict[str, dict] = {}
+# every function given an ``overload`` -> its typing implementation (``overload``)
+OVERLOADS: dict[Callable, Callable] = {}
 _LOCK = threading.RLock()
 _WHEN_LOADED: list[Callable[[], None]] = []
 _STATE = {"loaded": False, "loading": False}
@@ -170,8 +172,12 @@ def overload(func, *, kind: str = "step", python_wrapper: bool = False, **kwargs
     implementation is compiled with the options of ``kind`` (``"step"``: inlined into the
     loop, as the kernels it dispatches to; ``"plain"``), plus Numba's Python entry wrapper
     if ``python_wrapper`` (which overloads leave out by default).  Other keywords go to
-    Numba's ``overload``.  Returns the implementation unchanged."""
+    Numba's ``overload``.  Returns the implementation unchanged.
+
+    The implementation is also kept in ``OVERLOADS`` (``func`` -> ``impl``), so the same
+    compile-time dispatch can be registered for another Numba target (``rodjit.gpu``)."""
     def decorate(impl):
+        OVERLOADS[func] = impl
         def register():
             from numba.extending import overload as numba_overload
 

@@ -76,10 +76,24 @@ class _PipeSafe:
         return getattr(self._stream, name)
 
 
+# multiprocessing's resource tracker, a process of its own that outlives a command killed
+# with SIGKILL mid-sweep, cleans up the semaphores that command could not release and warns
+# about them on the terminal in two lines of Python's: after a SIGKILL, rodjit says nothing
+# (the processes it starts read this from the environment)
+_QUIET_TRACKER = "ignore::UserWarning:multiprocessing.resource_tracker"
+
+
+def _quiet_resource_tracker() -> None:
+    given = os.environ.get("PYTHONWARNINGS", "")
+    if _QUIET_TRACKER not in given.split(","):
+        os.environ["PYTHONWARNINGS"] = f"{given},{_QUIET_TRACKER}" if given else _QUIET_TRACKER
+
+
 def main() -> None:
     """Run the ``rodjit`` command line on ``sys.argv`` and exit with its code."""
     if sys.stdout is not None and not isinstance(sys.stdout, _PipeSafe):
         sys.stdout = _PipeSafe(sys.stdout)
+    _quiet_resource_tracker()
     try:
         install_early_handlers()     # (already while ``rodjit/__init__`` was imported)
         if hasattr(signal, "SIGXFSZ"):

@@ -15,7 +15,8 @@ Floors, lowest first (a module's floor is its first name under ``rodjit``):
   extremes), shared by every floor above;
 - ``output``: the run file (opening, layout, reader, writer) and its summary;
 - ``driver``: a run in progress, ``simulate``, streaming a run to a file;
-- ``sweeps``: grids of runs, their executors and the sweep file;
+- ``sweeps``, ``gpu``: grids of runs, their executors and the sweep file; the GPU engine
+  of sweeps (numba-cuda, optional);
 - ``plotting``: figures of run and sweep files;
 - ``reports``: what ``rodjit info`` prints of either kind of file;
 - ``cli``, ``__main__``, ``entry``: the ``rodjit`` command;
@@ -45,7 +46,7 @@ FLOORS = (
     ("records",),
     ("output",),
     ("driver",),
-    ("sweeps",),
+    ("sweeps", "gpu"),
     ("analysis",),
     ("plotting",),
     ("reports",),

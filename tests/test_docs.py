@@ -103,8 +103,8 @@ def test_site_has_every_cli_verb(site):
 
 
 def test_site_has_every_guide_page_and_the_integrator_table(site):
-    for page in ("getting-started", "MODEL", "units", "integrators", "output", "sweeps",
-                 "verification", "performance", "reference/configuration"):
+    for page in ("getting-started", "MODEL", "units", "integrators", "output", "plotting",
+                 "sweeps", "verification", "performance", "reference/configuration"):
         assert (site / page / "index.html").is_file(), page
     html = (site / "integrators" / "index.html").read_text()
     from rodjit.stepping import registry

@@ -220,6 +220,15 @@ def _edit(kind):
             f.move("checkpoint/slot1", "checkpoint/slot0")
             f.move("checkpoint/tmp", "checkpoint/slot1")
             f["checkpoint/current"][...] = 1 - int(f["checkpoint/current"][()])
+        elif kind == "both digests deleted":
+            for i in (0, 1):
+                del f[f"checkpoint/slot{i}/digest"]
+        elif kind == "idle digest deleted":
+            del f[f"checkpoint/slot{1 - int(f['checkpoint/current'][()])}/digest"]
+        elif kind == "history a number":
+            f.attrs["history"] = 12345
+        elif kind == "history one text":
+            f.attrs["history"] = "one line"
         elif kind == "snapshots cut":
             f["snapshots/u"].resize(1, axis=0)
         else:
@@ -238,6 +247,10 @@ EDITS = [
     ("slots swapped and current flipped", False), ("snapshots cut", True),
     ("del CUR/state", True), ("del CUR/lengths", True), ("del snapshots/u", True),
     ("del checkpoint/current", True), ("del bounces", True),
+    # a file of a format that has digests without them: not complete, never unchecked
+    # a history that is not a list of lines is kept as one: continued, never half-opened
+    ("history a number", False), ("history one text", False),
+    ("both digests deleted", True), ("del CUR/digest", True), ("idle digest deleted", True),
 ]
 
 
@@ -252,12 +265,13 @@ def test_edited(base, tmp_path, kind, refused):
 
 
 def test_a_file_without_digests_gets_them_when_continued(base, tmp_path):
-    """A file of a rodjit before digests (none in either slot) is still read and
-    continued, and the continued file has them."""
+    """A file of a format before digests (none in either slot) is still read and
+    continued (rebuilt in the current format), and the continued file has them."""
     d, refs = base
     p = tmp_path / "x.h5"
     shutil.copy(d / "base.h5", p)
     with h5py.File(p, "r+") as f:
+        f.attrs["format_version"] = 2
         for i in (0, 1):
             del f[f"checkpoint/slot{i}/digest"]
     check_contract(p, refs, expect_refusal=False)
@@ -265,6 +279,27 @@ def test_a_file_without_digests_gets_them_when_continued(base, tmp_path):
         assert all("digest" in f[f"checkpoint/slot{i}"] for i in (0, 1))
         g = f[f"checkpoint/slot{int(f['checkpoint/current'][()])}"]
         assert g["digest"][()].any()
+
+
+@pytest.mark.parametrize("slots", [(0, 1), (0,), (1,)])
+def test_a_file_claiming_digests_without_them_is_not_complete(base, tmp_path, slots):
+    """Deleting the digests (of one slot or of both) does not make a current-format file
+    look like one of a rodjit before digests: it is refused in one line, naming what is
+    missing, by ``info`` and by ``--resume``, and left as it was."""
+    d, _ = base
+    p = tmp_path / "x.h5"
+    shutil.copy(d / "base.h5", p)
+    with h5py.File(p, "r+") as f:
+        for i in slots:
+            del f[f"checkpoint/slot{i}/digest"]
+    before = sha(p)
+    for args in (("info", p), ("run", "--resume", p, "--t-end", T_NEXT, "-q")):
+        r = invoke(*args)
+        assert r.exit_code == 2, r.output
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and "not a complete rodjit file" in lines[0], r.stderr
+        assert f"/checkpoint/slot{slots[0]}/digest' is missing" in lines[0]
+    assert sha(p) == before
 
 
 # ---- sweep files -----------------------------------------------------------------------
@@ -279,7 +314,7 @@ def sweep_base(tmp_path_factory):
 
 SWEEP_EDITS = ["del base_config_toml", "del grid", "del n_points", "del status",
                "n_points 3", "grid edited", "base edited", "status bogus", "summary cut",
-               "digest edited"]
+               "digest edited", "del header_digest"]
 
 
 @pytest.mark.parametrize("kind", SWEEP_EDITS)

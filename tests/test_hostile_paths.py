@@ -177,3 +177,47 @@ def test_a_hard_link_is_continued_in_place(tmp_path, monkeypatch):
     assert os.stat("a.h5").st_ino == os.stat("b.h5").st_ino
     with h5py.File("a.h5", "r") as f:
         assert f["snapshots/t"][-1] >= 0.4 - 1e-12
+
+
+def test_crash_recovery_of_a_file_with_hard_links_is_refused_up_front(tmp_path, monkeypatch):
+    """A killed file that has two names (hard links): its recovery would rebuild it as a
+    new file under one name only, leaving the other on the killed run.  Refused through
+    either name in one line (exit 2), both names left byte for byte as they were; once it
+    has a single name, it is recovered and continued, the same run as one never killed."""
+    import hashlib
+
+    monkeypatch.chdir(tmp_path)
+    assert invoke("run", *TINY, "-o", "ref.h5").exit_code == 0
+    shutil.copy("ref.h5", "a.h5")
+    assert invoke("run", "--resume", "ref.h5", "--t-end", "0.6", "-q").exit_code == 0
+    _killed(tmp_path / "a.h5")
+    os.link("a.h5", "b.h5")
+    before = hashlib.sha256(open("a.h5", "rb").read()).hexdigest()
+    for name in ("a.h5", "b.h5"):
+        r = invoke("run", "--resume", name, "--t-end", "0.6", "-q")
+        assert r.exit_code == 2, r.output
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and "has 2 hard links" in lines[0], r.stderr
+        assert "nothing was written" in lines[0]
+        assert hashlib.sha256(open(name, "rb").read()).hexdigest() == before
+    assert os.stat("a.h5").st_ino == os.stat("b.h5").st_ino
+    assert sorted(p for p in os.listdir(".") if not p.startswith(".")) == [
+        "a.h5", "b.h5", "ref.h5"]            # no rebuilt copy left beside them
+    os.unlink("b.h5")
+    r = invoke("run", "--resume", "a.h5", "--t-end", "0.6", "-q")
+    assert r.exit_code == 0, r.output
+    assert_same_files("a.h5", "ref.h5")
+
+
+def test_an_older_format_file_with_hard_links_is_not_rebuilt(tmp_path, monkeypatch):
+    """Continuing a file of an older format rebuilds it in the current one (a new file):
+    with several hard links that is refused like a crash recovery, nothing written."""
+    monkeypatch.chdir(tmp_path)
+    fixture = os.path.join(os.path.dirname(__file__), "fixtures", "format1_run.h5")
+    shutil.copy(fixture, "old.h5")
+    os.link("old.h5", "other.h5")
+    before = open("old.h5", "rb").read()
+    r = invoke("run", "--resume", "old.h5", "--t-end", "0.3", "-q")
+    assert r.exit_code == 2, r.output
+    assert "has 2 hard links" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert open("old.h5", "rb").read() == before == open("other.h5", "rb").read()

@@ -77,3 +77,47 @@ def test_one_estimate_for_every_path():
 
     assert "check_run(" in inspect.getsource(files._resume_locked)
     assert "check_run(" in inspect.getsource(evaluate.check_limits)
+
+
+STUDIES = [["converge", "--ladder", "rod.N=5,10", "--also", "none"],
+           ["fit", "rod.mu", "--target", "restitution_first=0.5"]]
+
+
+@pytest.mark.parametrize("args", STUDIES, ids=["converge", "fit"])
+def test_converge_and_fit_take_the_limit_options_their_refusals_name(tmp_path, monkeypatch,
+                                                                      args):
+    """A refusal says "raise it with --max-output" (or --max-steps): the verb has that
+    option, and a lower limit given there refuses a study the default allows."""
+    monkeypatch.chdir(tmp_path)
+    big = invoke(*args, "--set", "time.t_end=1e7")
+    line = big.stderr.strip().splitlines()[0]
+    assert big.exit_code == 2 and "raise it with --max-output" in line, big.output
+    help_text = invoke(args[0], "--help").output
+    assert "--max-output" in help_text and "--max-steps" in help_text
+    r = invoke(*args, "--set", "time.t_end=0.3", "--max-output", "1K")
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1, r.output
+    assert "more than the limit of 1 KiB" in lines[0]
+    r = invoke(*args, "--set", "time.dt=1e-4", "--set", "time.t_end=1", "--set",
+               "output.snapshot_interval=0", "--set", "output.diagnostics_interval=0",
+               "--max-steps", "1000")
+    assert r.exit_code == 2 and "more than the limit of 1e+03" in r.stderr, r.output
+    r = invoke(*args, "--max-output", "lots")
+    assert r.exit_code == 2 and "'lots' is not understood" in r.stderr, r.output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_study_functions_take_the_limits():
+    """``converge``, ``fit`` and ``fit_table`` pass ``max_output`` to every run's check."""
+    import rodjit
+    from rodjit.analysis import converge, fit, fit_table
+
+    cfg = rodjit.Config().override({"time.t_end": 0.3, "rod.N": 3})
+    for call in (lambda: converge(cfg, {"rod.N": [5, 10]}, also=False,
+                                           max_output=1024),
+                 lambda: fit("rod.mu", {"restitution_first": 0.5}, cfg, max_output=1024),
+                 lambda: fit_table(["rod.mu"], [{"initial.height": 0.1,
+                                                 "restitution_first": 0.5}], cfg,
+                                   max_output=1024)):
+        with pytest.raises(ValueError, match="more than the limit of 1 KiB"):
+            call()

@@ -34,9 +34,11 @@ def test_console_script_and_dependencies():
     assert any(d.startswith("matplotlib") for d in extras["plot"])
     assert {d.split(">")[0] for d in extras["analysis"]} == {"xarray", "h5netcdf", "pandas"}
     # [all]: every extra a user runs rodjit with; the developers' extras (tests, the
-    # documentation build, the benchmark peers) stay apart
+    # documentation build, the benchmark peers) stay apart, and so does the GPU engine's
+    # (numba-cuda with the CUDA 12 compiler: for NVIDIA machines only, hundreds of MB)
     assert set(extras["all"]) == {f"rodjit[{name}]" for name in extras
-                                  if name not in ("all", "test", "docs", "bench")}
+                                  if name not in ("all", "test", "docs", "bench", "cuda")}
+    assert [d.split(">")[0] for d in extras["cuda"]] == ["numba-cuda[cu12]"]
 
 
 def test_ci_runs_exactly_the_readme_test_command():

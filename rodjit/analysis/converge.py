@@ -283,7 +283,7 @@ def _values_of(runs, name):
 
 def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVABLES,
              extra=None, time_at=None, jobs=None, scheduler=None,
-             merge_time=None) -> Convergence:
+             merge_time=None, max_output=None, max_steps=None) -> Convergence:
     """Observables of ``config`` along a resolution ladder: observed orders, the
     Richardson-extrapolated continuum value and an error estimate for each, the time
     error measured on a time ladder, and the predictability time of the heights.
@@ -324,6 +324,9 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     merge_time : float, optional
         The flight time τ [s] after which a release ends a bounce (``flight_groups``;
         default: π h/c, the period of the rod's highest mode, as the bounce table).
+    max_output, max_steps : float, optional
+        The limits of a new run (``rodjit.run_to_file``), checked on every run of the
+        study before any runs (default: the same defaults).
 
     Returns
     -------
@@ -369,8 +372,9 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         t_configs = [at.override({t_key: v}) for v in t_values]
     for c in configs + t_configs:        # what a run would refuse: before any runs
         c.check_runnable()
+    limits = {"max_output": max_output, "max_steps": max_steps}
     runs = evaluate(configs + t_configs, jobs=jobs, scheduler=scheduler,
-                    merge_time=merge_time, extra=extra, histories=bool(t_configs))
+                    merge_time=merge_time, extra=extra, histories=bool(t_configs), **limits)
     runs, t_runs = runs[:len(configs)], runs[len(configs):]
     warnings = []
     failed = [f"{key} = {v}: {r['reason']}" for v, r in zip(values, runs)
@@ -392,7 +396,7 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                     c.check_runnable()
                 c_runs = evaluate(c_configs, jobs=jobs,
                                   scheduler=scheduler, merge_time=merge_time, extra=extra,
-                                  histories=True)
+                                  histories=True, **limits)
                 warnings.append(
                     f"{t_key} does not change the steps of time.integrator = "
                     f"{base.time.integrator!r} here ({_steps_text(t_runs)} steps at every "

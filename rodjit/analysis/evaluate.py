@@ -82,13 +82,15 @@ def _where(cfg, first) -> str:
 
 def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
              merge_time: float | None = None, extra: dict | None = None,
-             histories: bool = False) -> list[dict]:
+             histories: bool = False, max_output: float | None = None,
+             max_steps: float | None = None) -> list[dict]:
     """The observables (``rodjit.analysis.observables``, and ``extra``: name ->
     function(Result) -> float) of every Config in ``configs``, in their order, with each
     run's accepted and rejected ``steps`` (and with ``histories``: ``history``, the
     snapshot times and heights ``(t, u)``).
 
-    ``jobs``/``scheduler`` as for ``rodjit.sweep``.  A run that fails gives
+    ``jobs``/``scheduler`` as for ``rodjit.sweep``; ``max_output``/``max_steps`` as for
+    ``rodjit.run_to_file`` (``check_limits``, before any run).  A run that fails gives
     ``status = "failed"`` and its message as ``reason`` (observables missing)."""
     from ..driver.run import SimulationError
     from ..driver.simulate import simulate
@@ -96,7 +98,7 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
     from ..sweeps.point import PointTask, law_modules, reissue_warnings
 
     configs = list(configs)
-    check_limits(configs)
+    check_limits(configs, max_output=max_output, max_steps=max_steps)
     check_scheduler(scheduler)
     jobs = default_jobs() if jobs is None else jobs
     if isinstance(jobs, bool) or not isinstance(jobs, int) or jobs < 1:

@@ -128,8 +128,9 @@ class _Objective:
     """observable(key = x) at the given resolution, or its extrapolated continuum value
     along ``ladder``; cached, evaluated in parallel batches."""
 
-    def __init__(self, base, key, name, ladder, jobs, scheduler, merge_time):
+    def __init__(self, base, key, name, ladder, jobs, scheduler, merge_time, limits=None):
         self.base, self.key, self.name = base, key, name
+        self.limits = limits or {}      # max_output, max_steps for ``evaluate``
         self.ladder, self.jobs, self.scheduler = ladder, jobs, scheduler
         self.merge_time = merge_time
         self.cache: dict[float, tuple[float, str]] = {}
@@ -144,7 +145,8 @@ class _Objective:
         if todo:
             if self.ladder is None:
                 runs = evaluate([self.config(x) for x in todo], jobs=self.jobs,
-                                scheduler=self.scheduler, merge_time=self.merge_time)
+                                scheduler=self.scheduler, merge_time=self.merge_time,
+                                **self.limits)
                 for x, r in zip(todo, runs):
                     self.cache[x] = (float(r.get(self.name, math.nan)), r.get("reason", ""))
             else:
@@ -154,7 +156,7 @@ class _Objective:
                 lkey, levels = _check_ladder("ladder", self.ladder, self.base)
                 cfgs = [self.config(x).override({lkey: v}) for x in todo for v in levels]
                 runs = evaluate(cfgs, jobs=self.jobs, scheduler=self.scheduler,
-                                merge_time=self.merge_time)
+                                merge_time=self.merge_time, **self.limits)
                 n = len(levels)
                 for i, x in enumerate(todo):
                     part = runs[i * n:(i + 1) * n]
@@ -190,7 +192,8 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
         ftol: float = 1e-4, xtol: float | None = None, max_iter: int = 60,
         converged: bool = False, ladder: Mapping[str, Any] | None = None,
         coarse: Mapping[str, Any] | None = None, jobs: int | None = None,
-        scheduler: str | None = None, merge_time: float | None = None) -> FitResult:
+        scheduler: str | None = None, merge_time: float | None = None,
+        max_output: float | None = None, max_steps: float | None = None) -> FitResult:
     """The value of ``key`` in ``bracket`` at which ``target``'s observable (e.g.
     ``{"restitution_first": 0.8}``) takes its value, at the resolution of ``config``.
 
@@ -232,6 +235,9 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
     merge_time : float, optional
         The flight time τ [s] that ends a bounce (``records.observables.flight_groups``;
         default π h/c, the bounce table's).
+    max_output, max_steps : float, optional
+        The limits of a new run (``rodjit.run_to_file``), checked on every run before it
+        runs (default: the same defaults).
 
     Returns
     -------
@@ -268,7 +274,7 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
         n = base.rod.N
         ladder = {"rod.N": [max(1, n // 2), n, 2 * n]}
     obj = _Objective(base, key, name, ladder if converged else None, jobs, scheduler,
-                     merge_time)
+                     merge_time, {"max_output": max_output, "max_steps": max_steps})
     xs = scan_points(lo, hi, n_scan)
     fs = obj.batch(xs)
     bad = [(x, obj.reason(x)) for x, f in zip(xs, fs) if not math.isfinite(f)]
@@ -355,7 +361,7 @@ def _resolution_shift(out: FitResult, obj, base, key, name, coarse, ladder, jobs
     if coarse is None:
         coarse = {"rod.N": max(1, base.rod.N // 2)}
     cfg = base.override({key: out.value}).override(coarse)
-    r = evaluate([cfg], jobs=1, merge_time=merge_time)[0]
+    r = evaluate([cfg], jobs=1, merge_time=merge_time, **obj.limits)[0]
     f_c = float(r.get(name, math.nan))
     if math.isfinite(f_c):
         out.resolution_shift = float((f_c - out.target) / out.sensitivity)

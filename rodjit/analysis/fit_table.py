@@ -141,7 +141,8 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
               bounds: Mapping[str, tuple[float, float]] | None = None,
               jobs: int | None = None, scheduler: str | None = None, max_iter: int = 20,
               rtol: float = 1e-6, step: float = 1e-3,
-              merge_time: float | None = None) -> TableFit:
+              merge_time: float | None = None,
+              max_output: float | None = None, max_steps: float | None = None) -> TableFit:
     """Least-squares values of ``keys`` that reproduce a table of measurements.
 
     Levenberg–Marquardt on the weighted residuals (model − measured)/σ; each iteration's
@@ -175,6 +176,9 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
     merge_time : float, optional
         The flight time τ [s] that ends a bounce (``records.observables.flight_groups``;
         default π h/c, the bounce table's).
+    max_output, max_steps : float, optional
+        The limits of a new run (``rodjit.run_to_file``), checked on every run before it
+        runs (default: the same defaults).
 
     Returns
     -------
@@ -224,7 +228,8 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
     def batch(thetas):
         nonlocal runs_total
         cfgs = [c for th in thetas for c in configs(th)]
-        res = evaluate(cfgs, jobs=jobs, scheduler=scheduler, merge_time=merge_time)
+        res = evaluate(cfgs, jobs=jobs, scheduler=scheduler, merge_time=merge_time,
+                       max_output=max_output, max_steps=max_steps)
         runs_total += len(cfgs)
         n = len(rows)
         out = [residual(res[j * n:(j + 1) * n]) for j in range(len(thetas))]

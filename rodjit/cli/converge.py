@@ -30,9 +30,12 @@ __all__ = ["converge_command"]
 @options.jobs_option()
 @options.scheduler_option()
 @options.set_option()
+@options.max_output_option("a run whose output")
+@options.max_steps_option("a fixed time.dt that")
 def converge_command(config: str | None, ladder: str, also: str | None, observables: str,
                      output: str | None, overwrite: bool, jobs: int | None,
-                     scheduler: str | None, sets: tuple[str, ...]) -> None:
+                     scheduler: str | None, sets: tuple[str, ...], max_output: str,
+                     max_steps: float) -> None:
     """Run CONFIG.toml, a preset or the default along a resolution ladder and report, per
     observable, the values, the observed order of convergence, the Richardson-extrapolated
     continuum value and an error estimate; warns when the ladder is not in the asymptotic
@@ -48,16 +51,18 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
     import os
 
     from ..analysis.converge import converge
+    from ..output.estimate import parse_size
 
     try:
         cfg = options.base_config(config, sets)
+        limits = {"max_output": parse_size(max_output), "max_steps": max_steps}
         if output and os.path.exists(output) and not overwrite:
             raise ValueError(f"{output!r} exists; use --overwrite to replace it")
         names = [o.strip() for o in observables.split(",") if o.strip()]
         result = converge(cfg, key_values("--ladder", ladder),
                           also=(False if also is not None and also.strip() == "none"
                                 else key_values("--also", also) if also else None),
-                          observables=names, jobs=jobs, scheduler=scheduler)
+                          observables=names, jobs=jobs, scheduler=scheduler, **limits)
         if output:
             result.save(output, overwrite=True)
     except ValueError as exc:

@@ -34,10 +34,12 @@ __all__ = ["fit_command"]
 @options.jobs_option()
 @options.scheduler_option()
 @options.set_option()
+@options.max_output_option("a run whose output")
+@options.max_steps_option("a fixed time.dt that")
 def fit_command(key: str, config: str | None, target: str | None, bracket: str,
                 points: int | None, ftol: float, converged: bool, ladder: str | None,
                 table: str | None, jobs: int | None, scheduler: str | None,
-                sets: tuple[str, ...]) -> None:
+                sets: tuple[str, ...], max_output: str, max_steps: float) -> None:
     """Find the value of KEY for which an observable takes a target (--target), or fit
     several KEYs to a table of measurements (--table).
 
@@ -46,15 +48,17 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     """
     from ..analysis.fit import FitError, fit
     from ..analysis.fit_table import fit_table
+    from ..output.estimate import parse_size
 
     result: Any
     try:
         cfg = options.base_config(config, sets)
+        limits = {"max_output": parse_size(max_output), "max_steps": max_steps}
         keys = [k.strip() for k in key.split(",") if k.strip()]
         if table:
             if target:
                 raise ValueError("--target and --table exclude each other")
-            result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler)
+            result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler, **limits)
         else:
             if not target:
                 raise ValueError("fit needs --target OBSERVABLE=VALUE (or --table FILE.csv)")
@@ -72,7 +76,7 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
             result = fit(keys[0], goal, cfg, bracket=(lo, hi), points=points, ftol=ftol,
                          converged=converged,
                          ladder=key_values("--ladder", ladder) if ladder else None,
-                         jobs=jobs, scheduler=scheduler)
+                         jobs=jobs, scheduler=scheduler, **limits)
     except FitError as exc:
         raise RunFailed(str(exc)) from None
     except ValueError as exc:

@@ -46,11 +46,15 @@ __all__ = ["sweep_command", "failed_points"]
               help="Check everything (configuration, every point, output paths, limits), "
                    "print the points, the swept keys and the files' estimated sizes, and "
                    "write nothing.")
+@click.option("--device", type=click.Choice(["cpu", "cuda", "auto"]), default="cpu",
+              show_default=True,
+              help="Where the points run: the CPU cores, the GPU engine (one CUDA thread per "
+                   "point; needs rodjit[cuda] and a GPU), or the GPU if there is one.")
 def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None,
                   jobs: int | None, scheduler: str | None, save_runs: str | None,
                   sets: tuple[str, ...], resume: bool, overwrite: bool, force_jobs: bool,
                   quiet: bool, show_progress: bool | None, max_output: str, max_steps: float,
-                  max_points: float, dry_run: bool) -> None:
+                  max_points: float, dry_run: bool, device: str) -> None:
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -124,7 +128,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
         with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
             table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                           save_runs=save_runs, resume=resume, overwrite=overwrite,
-                          progress=bar, command=command, **limits)
+                          progress=bar, command=command, device=device, **limits)
     except OutputExists as exc:
         raise UsageError(output_exists(exc, "--resume")) from None
     except SweepInterrupted as exc:

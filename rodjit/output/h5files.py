@@ -16,6 +16,7 @@ import stat
 from pathlib import Path
 
 import h5py
+import numpy as np
 
 from ..config import MissingFile
 from .cf import LIBVER
@@ -183,8 +184,13 @@ def now() -> str:
 
 
 def history_with(f: h5py.File, entry: str) -> list[str]:
-    """The file's ``history`` attribute with ``entry`` appended, stamped with ``now()``."""
-    return [str(s) for s in f.attrs.get("history", [])] + [f"{now()} {entry}"]
+    """The file's ``history`` attribute with ``entry`` appended, stamped with ``now()``.
+    A history that is not a list of lines (one text, a number: an edited file) is kept as
+    one line: it is not worth refusing a file for, and continuing never fails on it."""
+    old = f.attrs.get("history", [])
+    lines = [old] if isinstance(old, (str, bytes)) or np.ndim(old) == 0 else np.ravel(old)
+    return [s.decode("utf-8", "replace") if isinstance(s, bytes) else str(s)
+            for s in lines] + [f"{now()} {entry}"]
 
 
 def writer_alive(f: h5py.File, lock: bool = True) -> bool | None:

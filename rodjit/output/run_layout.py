@@ -33,9 +33,9 @@ from .h5files import now, writer_attrs
 
 __all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "CLOCK_NAMES", "COUNT_NAMES",
            "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
-           "DIGEST_PARTS", "REQUIRED_ATTRS", "RunLayout", "build_layout", "add_digests",
-           "digest_rows", "overwrite", "CK_COUNTERS", "counter_names", "counters_by_name",
-           "OLD_BOUNCE_FILL", "current_checkpoint"]
+           "DIGEST_PARTS", "DIGESTS_SINCE", "REQUIRED_ATTRS", "RunLayout", "build_layout",
+           "add_digests", "digest_rows", "overwrite", "CK_COUNTERS", "counter_names",
+           "counters_by_name", "OLD_BOUNCE_FILL", "current_checkpoint"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
 FORMAT_VERSION = 3
@@ -150,6 +150,10 @@ _CK_DATASETS = CK_DATASETS = CK_ARRAYS + CK_SCALARS + ("lengths",)
 # what a slot's ``digest`` covers, one row each: its datasets and the stored configuration
 DIGEST_PARTS = _CK_DATASETS + ("config_toml",)
 DIGEST_SIZE = 16
+# the first format whose files carry a ``digest`` in both checkpoint slots: a file that
+# claims this format or a later one and lacks them is not complete (older files never had
+# them and are read as before)
+DIGESTS_SINCE = 3
 # the root attributes without which a run file is not complete (the kind and format are
 # checked on their own, ``h5files.check_kind``)
 REQUIRED_ATTRS = ("config_toml", "status")

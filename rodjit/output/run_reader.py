@@ -16,8 +16,8 @@ from ..records.stats import run_stats
 from ..stepping import layout as L
 from .cf import as_bool
 from .h5files import NotARunFile, check_kind, damaged, open_file
-from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, KIND,
-                         OLD_BOUNCE_FILL, READS, REQUIRED_ATTRS, STATUSES, TABLES,
+from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, DIGESTS_SINCE,
+                         KIND, OLD_BOUNCE_FILL, READS, REQUIRED_ATTRS, STATUSES, TABLES,
                          counter_names, counters_by_name, current_checkpoint, digest_rows,
                          x_path)
 
@@ -28,7 +28,9 @@ __all__ = ["check_run_file", "check_not_lost", "read_config", "read_checkpoint",
 def check_run_file(f: h5py.File, path=None) -> None:
     """Raise NotARunFile unless ``f`` is a complete rodjit run file of a format this
     version reads: its root attributes, every table's columns and both checkpoint slots
-    present (its checkpoint's integrity is ``read_checkpoint``'s)."""
+    present, with their digests in a format that has them (a file that claims such a
+    format without them would otherwise be believed unchecked; its checkpoint's integrity
+    is ``read_checkpoint``'s)."""
     name = str(path if path is not None else f.filename)
     with damaged(name):
         check_kind(f, KIND, READS, path)
@@ -40,11 +42,13 @@ def check_run_file(f: h5py.File, path=None) -> None:
         if status not in STATUSES:
             raise NotARunFile(f"{name!r} is not a complete rodjit file (status {status!r} "
                               f"is not one of {', '.join(STATUSES)})")
-        old = int(f.attrs.get("format_version", 1)) < 3    # without the newer columns
+        version = int(f.attrs.get("format_version", 1))
+        old = version < 3    # without the newer columns
         needed = [f"{t}/{c}" for t, cols in TABLES.items() for c in cols
                   if not (old and t == "bounces" and c in OLD_BOUNCE_FILL)] + [x_path(f)]
+        slot_datasets = CK_DATASETS + (("digest",) if version >= DIGESTS_SINCE else ())
         needed += ["checkpoint/current"] + [f"checkpoint/slot{i}/{d}" for i in (0, 1)
-                                            for d in CK_DATASETS]
+                                            for d in slot_datasets]
         for obj in needed:
             if obj not in f:
                 raise NotARunFile(f"{name!r} is not a complete rodjit file ('/{obj}' is "

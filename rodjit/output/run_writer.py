@@ -218,6 +218,8 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     f = open_for_writing(path, "r+")
     try:
         ck = read_checkpoint(f)
+        # whatever reading can refuse, before the first write: a refusal leaves the file
+        history = history_with(f, history)
         lengths = ck["lengths"]
         for name, cols in TABLES.items():
             for col in cols:
@@ -227,7 +229,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         if config_toml is not None:
             f.attrs["config_toml"] = config_toml
         _sign_current(f)
-        f.attrs["history"] = history_with(f, history)
+        f.attrs["history"] = history
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         stamp_writer(f.attrs)
@@ -254,7 +256,8 @@ def _sign_current(f: h5py.File) -> None:
 def recover(path) -> None:
     """Rebuild a file whose writer died without closing it (SWMR flags still set): copy the
     rows matched by its checkpoint into a fresh file, which then replaces it (the file a
-    symbolic link names, keeping the link)."""
+    symbolic link names, keeping the link).  A file with several hard links is refused
+    (``check_single_link``)."""
     with h5py.File(path, "r", swmr=True) as src:
         t = float(read_checkpoint(src)["clock"][L.T])
     _rebuild(path, swmr=True, status="interrupted",
@@ -264,12 +267,32 @@ def recover(path) -> None:
                    f"closing the file"))
 
 
+def check_single_link(path) -> None:
+    """ValueError (one line) if ``path`` has more than one hard link.  A rebuild (crash
+    recovery, an older format made continuable) writes a fresh file and renames it over
+    the old one: the only way that a kill at any moment leaves either the old file or the
+    whole new one.  A rename replaces one name only; the other hard links would keep the
+    killed run, and two copies would diverge.  Writing the rebuilt bytes back into the
+    shared file instead would leave, if killed during that copy, no valid file under any
+    name.  So such a file is refused before anything is written, saying what to do."""
+    links = os.stat(path).st_nlink
+    if links > 1:
+        raise ValueError(f"{str(path)!r} has {links} hard links: continuing it needs a "
+                         f"rebuild into a new file, which would part this name from the "
+                         f"other {links - 1} (they would keep the old run); remove the other "
+                         f"links (find -samefile {str(path)!r}) or continue a copy; nothing "
+                         f"was written")
+
+
 def _rebuild(path, *, swmr: bool, status, message, note: str) -> None:
     """Copy the rows of ``path`` matched by its checkpoint into a fresh file in the current
     layout, which then replaces it (the file a symbolic link names, keeping the link);
     ``status`` and ``message`` (None: kept) are its new ones, ``note`` goes into its
-    history.  A column an older format lacks gets its ``OLD_BOUNCE_FILL`` value."""
+    history.  A column an older format lacks gets its ``OLD_BOUNCE_FILL`` value.
+    ValueError (one line, nothing written) for a file with several hard links
+    (``check_single_link``)."""
     path = Path(os.path.realpath(path))
+    check_single_link(path)
     tmp = path.with_name(path.name + ".recovering")
     with h5py.File(path, "r", swmr=swmr) as src:
         check_run_file(src, path)

@@ -1,24 +1,34 @@
 """An animation of a run: the rod drawn as it is, a vertical bar over the floor coloured
 by its strain (or velocity), the floor's bending band down to −β, the time shown.
 
-Frames are snapshots sampled evenly over the run and read one at a time as they are
-drawn, so memory stays bounded however long the run.  GIF through Pillow, MP4 through
-ffmpeg (when it is installed).
+Frames are snapshots sampled evenly over the run, except around impacts: each contact
+gets ``FRAMES_PER_CONTACT`` frames spread over it (the movie runs in slow motion there;
+the time stamp says so), so frames 50 ms apart do not skip a 12 ms impact.  Where the
+snapshots are too sparse inside a contact, its frames are re-simulated from the snapshot
+before (``plotting.dense``; a ``SparseSnapshots`` warning naming
+``output.snapshot_interval`` where that is impossible); where the movie has too few
+frames for every contact, a ``SparseSnapshots`` warning names the ``duration`` that
+shows them.  Snapshots are read one at a time as they are drawn, so memory stays bounded
+however long the run.  GIF through Pillow, MP4 through ffmpeg (when it is installed).
 """
 from __future__ import annotations
 
+import math
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..records.datasets import strain_of
+from .dense import SparseSnapshots, contacts, samples
 from .mpl import NothingToDraw, discard, need_matplotlib, new_figure, write_whole
 from .source import RunSource
 
-__all__ = ["animate", "FORMATS", "MissingWriter"]
+__all__ = ["animate", "FORMATS", "MissingWriter", "FRAMES_PER_CONTACT"]
 
 FORMATS = (".gif", ".mp4")
 QUANTITIES = ("strain", "v")
+FRAMES_PER_CONTACT = 12   # frames spread over each contact (from its start to its end)
 
 
 class MissingWriter(RuntimeError):
@@ -30,10 +40,61 @@ def frame_rows(n_snapshots: int, n_frames: int) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, n_snapshots - 1, n_frames)).astype(int))
 
 
+def frame_times(times: np.ndarray, spans: list, n_frames: int,
+                per_contact: int = FRAMES_PER_CONTACT) -> tuple[np.ndarray, list, int]:
+    """The times of ``n_frames`` frames of a run with snapshot ``times`` and contacts
+    ``spans`` ``(t_impact, t_release)``, the contacts that needed frames of their own,
+    and 0: ``per_contact`` frames over each contact shorter than ``per_contact`` even
+    frames, the rest at snapshots spread evenly.  Where those contacts would take more
+    than half the frames: the even frames alone, the contacts skipped, and the number of
+    frames that would show them."""
+    even_only = times[frame_rows(times.size, n_frames)]
+    gap = (times[-1] - times[0]) / max(1, n_frames - 1)
+    short = [(a, b) for a, b in spans if b - a < (per_contact - 1) * gap]
+    if not short:
+        return even_only, [], 0
+    need = per_contact * len(short)
+    if need > n_frames // 2:
+        return even_only, short, 2 * need
+    even = times[frame_rows(times.size, n_frames - need)]
+    inside = np.concatenate([np.linspace(a, b, per_contact) for a, b in short])
+    return np.sort(np.concatenate([even, inside])), short, 0
+
+
+def movie_frames(src, n_frames: int, *, fps: int = 20, dense: bool = True):
+    """``(samples, indices)``: the states a movie of ``n_frames`` frames of the run
+    ``src`` (a ``RunSource``) draws, ``samples.t[indices]`` its frames' times (increasing;
+    fewer than ``n_frames`` where two frames would show the same state).  ``fps`` only
+    words the warning of a movie too short for its contacts."""
+    t_all = src.snapshot_times()
+    lo, hi = float(t_all[0]), float(t_all[-1])
+    wanted, short, skipped = frame_times(t_all, contacts(src, lo, hi), n_frames)
+    if skipped:
+        gap = (hi - lo) / max(1, n_frames - 1)
+        shortest = min(b - a for a, b in short)
+        several = "s" if len(short) != 1 else ""
+        warnings.warn(f"animate: {n_frames} frames {gap:.3g} s apart skip contacts as short "
+                      f"as {shortest:.3g} s; {len(short)} such contact{several} with "
+                      f"{FRAMES_PER_CONTACT} frames each need {skipped} frames or more: "
+                      f"duration = {math.ceil(10 * skipped / fps) / 10:g} s or more at "
+                      f"fps = {fps} shows them", SparseSnapshots, stacklevel=3)
+    # the snapshots, with the states of sparse contacts re-simulated; each frame shows the
+    # sample nearest its time
+    s = samples(src, np.arange(t_all.size), lo, hi, dense=dense, what="animate",
+                per_contact=FRAMES_PER_CONTACT, window=False,
+                impacts=[] if skipped else short)
+    if s.t.size == 1:
+        return s, np.zeros(1, np.int64)
+    k = np.clip(np.searchsorted(s.t, wanted), 1, s.t.size - 1)
+    k = np.where(np.abs(s.t[k - 1] - wanted) <= np.abs(s.t[k] - wanted), k - 1, k)
+    return s, np.unique(k)
+
+
 def animate(source, output, *, fps: int = 20, duration: float = 5.0,
-            quantity: str = "strain", dpi: int = 100) -> Path:
+            quantity: str = "strain", dpi: int = 100, dense: bool = True) -> Path:
     """Write an animation of the run ``source`` to ``output``: ``fps * duration`` frames
-    (at most one per snapshot), read one snapshot at a time.
+    (at most one per snapshot or re-simulated state), ``FRAMES_PER_CONTACT`` of them over
+    each contact, read one snapshot at a time.
 
     Parameters
     ----------
@@ -49,11 +110,21 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
         What colours the rod: ``strain``, ``u`` or ``v``.
     dpi : int
         Resolution of the frames.
+    dense : bool
+        Re-simulate a contact whose snapshots are too sparse for its frames
+        (``plotting.dense``); False uses the snapshots and warns.
 
     Returns
     -------
     Path
         The file written.
+
+    Warns
+    -----
+    SparseSnapshots
+        Frames that skip contacts (too few frames: the message names the number that
+        shows them) or snapshots too sparse for a contact that could not be
+        re-simulated (the message names ``output.snapshot_interval``).
     """
     output = Path(output)
     if output.suffix.lower() not in FORMATS:
@@ -83,13 +154,13 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
         if n == 0:
             raise NothingToDraw("the run has no snapshots (output.snapshot_interval = 0); "
                                 "nothing to animate")
-        rows = frame_rows(n, max(1, int(round(fps * duration))))
-        t = src.snapshot_times()
+        s, rows = movie_frames(src, max(1, int(round(fps * duration))), fps=fps, dense=dense)
+        t = s.t
         c = src.config
         N = c.rod.N
         beta = c.floor.beta
         # the height range, from the frames' two ends only (one small read per frame)
-        ends = np.array([src.snapshot_row("u", int(i))[[0, N]] for i in rows])
+        ends = np.array([s.state(src, "u", int(i))[[0, N]] for i in rows])
         top = float(ends.max()) * 1.05 + 0.05
         bottom = min(-1.6 * beta, float(ends.min()) - 0.2 * beta)
         fig = new_figure(figsize=(3.2, 5.0), layout="constrained")
@@ -102,9 +173,9 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
         ax.set_xticks([])
         ax.set_ylabel("height [m]")
         def frame_values(i):
-            u = src.snapshot_row("u", int(i))
+            u = s.state(src, "u", int(i))
             values = strain_of(u, N) if quantity == "strain" else \
-                (lambda v: (v[:-1] + v[1:]) / 2)(src.snapshot_row("v", int(i)))
+                (lambda v: (v[:-1] + v[1:]) / 2)(s.state(src, "v", int(i)))
             return u, values
 
         # the colour scale fitted to the frames (one row per frame, read once more): a
@@ -131,7 +202,7 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
                                  np.stack([np.zeros(N), u[1:]], 1)], 1)
             bar.set_segments(segments)
             bar.set_array(values)
-            clock.set_text(f"t = {t[int(i)]:.3f} s")
+            clock.set_text(f"t = {t[int(i)]:.4f} s")
             return bar, clock
 
         movie = animation.FuncAnimation(fig, draw, frames=rows, blit=False,

@@ -27,7 +27,7 @@ def plot(obj, kind: str | None = None, ax=None, **style):
     ax : matplotlib.axes.Axes, optional
         Draw into this axes instead of a new figure.
     **style
-        The figure's options (runs: quantity, t_range, figsize; sweeps: quantity, x, y,
+        The figure's options (runs: quantity, t_range, figsize, dense; sweeps: quantity, x, y,
         at, panels, figsize).
 
     Returns

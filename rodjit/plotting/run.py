@@ -12,6 +12,7 @@ import numpy as np
 
 from ..records.datasets import strain_of
 from ..records.metadata import meaning
+from .dense import samples as sample
 from .mpl import MissingMatplotlib, NothingToDraw, new_figure, save
 from .source import MAX_POINTS, RunSource
 
@@ -39,7 +40,7 @@ def _title(config) -> str:
 
 
 def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
-           t_range=None, figsize=None):
+           t_range=None, figsize=None, dense: bool = True):
     """The matplotlib Figure of kind ``kind`` for a run.
 
     Parameters
@@ -58,6 +59,11 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
         ``(t0, t1)`` [s]: the part of the time axis drawn.
     figsize : tuple of float, optional
         Size of a new figure in inches (default 7.5 × 4.5).
+    dense : bool
+        ``spacetime``: where the snapshots are too sparse for a contact or for the window
+        (fewer than ``dense.MIN_SAMPLES``), draw the solution re-simulated there from the
+        snapshot before at a finer interval (``plotting.dense``); False draws the
+        snapshots only and warns.
 
     Returns
     -------
@@ -71,6 +77,12 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
         The run has no data for ``kind`` (e.g. snapshots switched off).
     MissingMatplotlib
         matplotlib is not installed (the ``[plot]`` extra).
+
+    Warns
+    -----
+    SparseSnapshots
+        ``spacetime`` drew snapshots too sparse for a contact or the window (re-simulation
+        off or impossible); the message names the ``output.snapshot_interval`` needed.
     """
     if kind not in KINDS:
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
@@ -84,7 +96,7 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
             fig = ax.figure
         draw = {"heights": _heights, "energy": _energy, "bounces": _bounces,
                 "spacetime": _spacetime, "contact": _contact}[kind]
-        axes = draw(src, fig, ax, quantity=quantity, t_range=t_range)
+        axes = draw(src, fig, ax, quantity=quantity, t_range=t_range, dense=dense)
         axes[0].set_title(_title(src.config), fontsize=10)
     return fig
 
@@ -106,7 +118,7 @@ def plot_file(path, output, kind: str = "heights", *, dpi: int = 150, figsize=No
     figsize : tuple of float, optional
         Figure size in inches.
     **options
-        ``quantity`` and ``t_range``, as for ``figure``.
+        ``quantity``, ``t_range`` and ``dense``, as for ``figure``.
 
     Returns
     -------
@@ -235,23 +247,29 @@ def _mark_episodes(ax, src, t_range, t):
     return not first
 
 
-def _spacetime(src, fig, ax, *, quantity, t_range, **_):
+def _spacetime(src, fig, ax, *, quantity, t_range, dense=True, **_):
     n = src.n_snapshots()
     if n == 0:
         raise NothingToDraw("the run has no snapshots (output.snapshot_interval = 0); "
                             "nothing to draw for kind 'spacetime'")
-    rows = src.strided_rows(MAX_ROWS, t_range)
-    t = src.snapshot_times()[rows]
+    times = src.snapshot_times()
+    rows = np.arange(n)[src.strided_rows(MAX_ROWS, t_range)]
+    lo, hi = t_range if t_range is not None else (float(times[0]), float(times[-1]))
+    # every contact and a zoomed window drawn from enough columns (re-simulated where the
+    # snapshots are too sparse, else a warning naming output.snapshot_interval)
+    s = sample(src, rows, lo, hi, dense=dense, window=t_range is not None,
+               what="spacetime", max_dense=MAX_ROWS)
+    t = s.t
     if t.size < 2:
         raise NothingToDraw(f"fewer than two snapshots in t_range = {t_range}; nothing to "
                             f"draw for kind 'spacetime'")
     x = src.x
     if quantity == "strain":
-        z = strain_of(src.snapshots("u", rows), x.size - 1)
+        z = strain_of(s.states(src, "u"), x.size - 1)
         y_edges = x                                  # a segment spans its two nodes
         label = "strain ε = u_x − 1"
     else:
-        z = src.snapshots(quantity, rows)
+        z = s.states(src, quantity)
         mid = (x[:-1] + x[1:]) / 2
         y_edges = np.concatenate([[x[0]], mid, [x[-1]]])
         label = _label("height u" if quantity == "u" else "velocity v", "snapshots", quantity)
@@ -260,12 +278,20 @@ def _spacetime(src, fig, ax, *, quantity, t_range, **_):
     ax = _one_axes(fig, ax)
     if quantity == "u":
         mesh = ax.pcolormesh(t_edges, y_edges, z.T, cmap="viridis", shading="flat")
-    else:
+    else:    # the colour scale fitted to the data drawn, symmetric about 0
         lim = float(np.nanmax(np.abs(z))) or 1.0
         mesh = ax.pcolormesh(t_edges, y_edges, z.T, cmap="RdBu_r", vmin=-lim, vmax=lim,
                              shading="flat")
     fig.colorbar(mesh, ax=ax, label=label)
-    if _mark_episodes(ax, src, t_range, t):
+    marked = _mark_episodes(ax, src, t_range, t)
+    for j, (s0, s1, dt) in enumerate(s.spans):   # say where the columns are re-simulated
+        ax.axvspan(s0, s1, ymin=0.97, ymax=1.0, color="0.35", lw=0,
+                   label=(f"re-simulated every {dt:.2g} s (the run's snapshots: every "
+                          f"{src.config.output.snapshot_interval:g} s)") if j == 0 else None)
+    if s.spans:     # below the axes, covering nothing
+        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), fontsize=8, ncols=1,
+                  frameon=False)
+    elif marked:
         ax.legend(loc="upper right", fontsize=8)
     ax.set_xlabel(_label("time t", "snapshots", "t"))
     ax.set_ylabel(_label("natural coordinate x (0: bottom)", "grid", "x"))

@@ -21,6 +21,7 @@ from itertools import count, islice
 from multiprocessing.connection import wait
 
 from ..output.h5files import abandoned, quiet_disk_errors
+from .dask_logging import route_dask_logs
 from .point import PointTask, died, run_point, run_points, start_worker
 
 __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
@@ -327,6 +328,7 @@ class DaskCluster:
             raise ValueError(f"--scheduler {scheduler} needs Dask distributed; install it with: "
                              f"pip install 'rodjit[dask]'") from None
         self.distributed = distributed
+        route_dask_logs()        # its log lines as rodjit's warnings (sweeps/dask_logging.py)
         self.cluster = None
         self.started = time.perf_counter()
         if scheduler == "local":

@@ -153,7 +153,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
           resume: bool = False, overwrite: bool = False, progress=None, command=None,
           handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL,
           max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
-          max_points: float = MAX_POINTS) -> SweepTable:
+          max_points: float = MAX_POINTS, device: str | None = None) -> SweepTable:
     """Run ``config`` (None: the built-in run) at every point of ``grid`` and return the
     summary table; with ``output``, stream it to that sweep file as points finish.
 
@@ -197,6 +197,9 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         Refuse a point whose fixed step needs more steps than this.
     max_points : float, optional
         Refuse a grid of more points than this, before it is made.
+    device : str, optional
+        ``"cpu"`` (default), ``"cuda"`` (the GPU engine, ``rodjit.gpu``: every point in
+        this process, in batches; no ``save_runs``) or ``"auto"`` (the GPU if there is one).
 
     Returns
     -------
@@ -215,6 +218,9 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     jobs = check_jobs(jobs)
     check_scheduler(scheduler)
+    if device not in (None, "cpu"):
+        from ..gpu.executor import sweep_device
+        device = sweep_device(device, save_runs, scheduler)
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
     if resume and output is None:
@@ -226,7 +232,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
                                           max_steps=max_steps, max_points=max_points)
     if output is None:
         return _sweep(config, plan, None, jobs, scheduler, save_runs, resume, overwrite,
-                      progress, command, handle_signals, flush_interval, max_points)
+                      progress, command, handle_signals, flush_interval, max_points, device)
     output = Path(output)
     if resume and not output.is_file():
         open_file(output).close()      # the one-line reason: missing, a directory, ...
@@ -234,11 +240,11 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     with WriterLock(output):
         return _sweep(config, plan if plan is not None else grid, output, jobs, scheduler,
                       save_runs, resume, overwrite, progress, command, handle_signals,
-                      flush_interval, max_points)
+                      flush_interval, max_points, device)
 
 
 def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, progress,
-           command, handle_signals, flush_interval, max_points) -> SweepTable:
+           command, handle_signals, flush_interval, max_points, device=None) -> SweepTable:
     """``sweep`` once this process holds the writer lock of ``output`` (if any); ``grid``
     is the checked SweepPlan of a new sweep, the grid given to a resume."""
     attrs = {}
@@ -266,14 +272,18 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
         table.stats = _stats(0.0, 0, 0, None)
         sweep_file.finish(output, "completed")
         return table
-    if scheduler != "inline":
+    if scheduler != "inline" and device != "cuda":    # the GPU engine starts no workers
         check_main()
     t_start = time.perf_counter()
     first = grid.config(base, todo[0])
     # workers load the first point's kernels before they report ready, unless that means
     # running a user's law (which could crash a worker before it has taken any point)
     warm = first if not law_modules(first) else None
-    executor = make_executor(scheduler, jobs, warm)   # last check: a cluster may be unreachable
+    if device == "cuda":   # every point checked for the GPU engine, before the file is made
+        from ..gpu.executor import cuda_executor
+        executor = cuda_executor(base, grid, todo[0])
+    else:                  # last check: a cluster may be unreachable
+        executor = make_executor(scheduler, jobs, warm)
     if runs_dir is not None:
         runs_dir.mkdir(parents=True, exist_ok=True)
     if output is not None:

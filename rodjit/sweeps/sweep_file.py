@@ -62,6 +62,7 @@ __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "fin
 
 KIND = "sweep"
 FORMAT_VERSION = 3
+DIGEST_SINCE = 3     # the first format whose files carry ``header_digest``
 READS = (1, 2, 3)       # the formats this version reads
 CONTINUES = (3,)        # and those it continues (--resume)
 # format 1 and 2 summary columns whose meaning has a new name: old name -> name read
@@ -343,10 +344,13 @@ def check_sweep_file(f: h5py.File, path=None) -> None:
 def read_header(f: h5py.File) -> dict:
     """Base configuration, grid and the root attributes of an open sweep file, which must
     prove itself: NotARunFile (one line, naming what does not match) if a required
-    attribute is missing or ``header_digest`` (when present) does not match them."""
+    attribute is missing (``header_digest`` in a format that has it) or ``header_digest``
+    does not match them."""
     name = f.filename
     with damaged(name):
-        for attr in REQUIRED_ATTRS:
+        required = REQUIRED_ATTRS + (("header_digest",) if _format(f) >= DIGEST_SINCE
+                                     else ())
+        for attr in required:
             if attr not in f.attrs:
                 raise NotARunFile(f"{name!r} is not a complete rodjit file (its root "
                                   f"attribute {attr!r} is missing)")

@@ -1,0 +1,208 @@
+"""The CUDA kernel of a batch of sweep points: one thread per point, each running
+``trajectory.run_one`` on its own state in ``cuda.local.array``.
+
+A kernel is made per *family*: the classes of the five parameter tuples of the compiled loop
+(scheme, control, system, rod law, floor law, ``driver.run.parameters``), the kinds of
+their fields, and the node count N + 1 (local arrays need compile-time shapes).  Every
+point's tuples travel as one row of a float64 array; the kernel rebuilds them field by
+field (an int or bool field is stored exactly as a double), so the values of a sweep's
+parameters stay run-time values and one compile serves the whole grid.
+
+The kernel's source is made here (``_source``) because the tuples' classes and field counts
+are the family's; the model in it is the CPU's own code, retargeted (``retarget``).  Under
+numba-cuda's simulator (``NUMBA_ENABLE_CUDASIM=1``) the same kernel runs as Python, and
+``run_one`` and the loop are the CPU's compiled functions themselves: the simulator checks
+the kernel's set-up, the drains and the host side; ``compile_ptx`` checks that all of it
+compiles for the GPU.
+"""
+from __future__ import annotations
+
+import contextlib
+import threading
+from typing import NamedTuple
+
+from ..stepping import layout as L
+from ..stepping.schemes import SCHEME_STATS, work_rows
+from . import trajectory as T
+from ._cuda import import_cuda
+
+__all__ = ["Family", "family_of", "pack", "make_kernel", "compile_ptx", "simulated",
+           "N_MAX"]
+
+# the largest rod (segments N) a thread runs: its state, trial states, integrator scratch
+# and interpolation rows are (8 + work rows) × (N + 1) doubles of local memory (3 kB for the
+# energy integrator at N = 32, 7 kB at N = 64), beyond which one thread per trajectory
+# spills more than it computes
+N_MAX = 64
+
+_KINDS = {float: "f", int: "i", bool: "b"}
+
+
+class Family(NamedTuple):
+    """What a compiled kernel depends on (module docstring)."""
+
+    classes: tuple          # the five parameter tuples' classes
+    kinds: tuple            # per tuple, the kind of each field: "f", "i" or "b"
+    n1: int                 # nodes N + 1
+    work_rows: int
+
+
+def family_of(params) -> Family:
+    """The family of a point's parameter tuples ``params`` (``driver.run.parameters``)."""
+    kinds = tuple("".join(_KINDS[type(x)] for x in t) for t in params)
+    return Family(tuple(type(t) for t in params), kinds, int(params[2].n) + 1,
+                  int(work_rows(params[0])))
+
+
+def pack(params) -> list[float]:
+    """A point's parameter tuples as one row of doubles (``Family.kinds`` says how each
+    field is read back)."""
+    return [float(x) for t in params for x in t]
+
+
+def simulated() -> bool:
+    """Whether numba-cuda runs kernels in its simulator (``NUMBA_ENABLE_CUDASIM=1``)."""
+    from numba.cuda import config
+
+    return bool(getattr(config, "ENABLE_CUDASIM", False))
+
+
+def _source(family: Family) -> str:
+    fields = []
+    o = 0
+    for k, kinds in enumerate(family.kinds):
+        args = []
+        for kind in kinds:
+            x = f"p[{o}]"
+            args.append({"f": x, "i": f"int({x})", "b": f"{x} != 0.0"}[kind])
+            o += 1
+        fields.append(f"    t{k} = C{k}({', '.join(args)})")
+    n1 = family.n1
+    zero = "\n".join(f"    for j in range({size}):\n        {name}[j] = 0"
+                     for name, size in (("sstats", max(1, len(SCHEME_STATS))),
+                                        ("count", L.COUNT_SIZE), ("fail", L.FAIL_SIZE)))
+    return f"""
+def sweep_kernel(params, state0, clock0, ev0, snap_t, snap_step, snap_u, snap_v, diag,
+                 episodes, bounces, bounce_out, fout, iout, max_steps):
+    i = cuda.grid(1)
+    if i >= params.shape[0]:
+        return
+    p = params[i]
+{chr(10).join(fields)}
+    state = cuda.local.array((3, {n1}), float64)
+    trial = cuda.local.array((3, {n1}), float64)
+    work = cuda.local.array(({family.work_rows}, {n1}), float64)
+    interp = cuda.local.array((2, {n1}), float64)
+    sstats = cuda.local.array({max(1, len(SCHEME_STATS))}, int64)
+    clock = cuda.local.array({L.CLOCK_SIZE}, float64)
+    count = cuda.local.array({L.COUNT_SIZE}, int64)
+    ev = cuda.local.array({L.EV_SIZE}, float64)
+    fail = cuda.local.array({L.FAIL_SIZE}, float64)
+    for j in range({n1}):
+        state[0, j] = state0[i, 0, j]
+        state[1, j] = state0[i, 1, j]
+        state[2, j] = 0.0
+        for r in range(3):
+            trial[r, j] = 0.0
+        for r in range(2):
+            interp[r, j] = 0.0
+        for r in range({family.work_rows}):
+            work[r, j] = 0.0
+    for j in range({L.CLOCK_SIZE}):
+        clock[j] = clock0[i, j]
+    for j in range({L.EV_SIZE}):
+        ev[j] = ev0[i, j]
+{zero}
+    run_one(t0, t1, t2, t3, t4, state, trial, work, interp, sstats, clock, count, ev,
+            snap_t[i], snap_step[i], snap_u[i], snap_v[i], diag[i], episodes[i], bounces[i],
+            fail, bounce_out[i], fout[i], iout[i], max_steps)
+"""
+
+
+def _namespace(family: Family, cuda, run_one) -> dict:
+    from numba import float64, int64
+
+    ns = {"cuda": cuda, "float64": float64, "int64": int64, "run_one": run_one}
+    ns.update({f"C{k}": cls for k, cls in enumerate(family.classes)})
+    return ns
+
+
+_LOCK = threading.Lock()
+_KERNELS: dict = {}
+
+
+def kernel_function(family: Family, cuda, run_one):
+    """The Python function of a family's kernel, reading ``cuda`` and ``run_one`` as
+    globals (the simulator replaces a kernel's global ``cuda`` by its own)."""
+    ns = _namespace(family, cuda, run_one)
+    exec(compile(_source(family), f"<rodjit.gpu kernel N={family.n1 - 1}>", "exec"), ns)
+    return ns["sweep_kernel"]
+
+
+def make_kernel(family: Family):
+    """The family's kernel, compiled once per process (on its first launch)."""
+    cuda = import_cuda()
+    with _LOCK:
+        got = _KERNELS.get(family)
+        if got is None:
+            if simulated():
+                run_one = _simulated_run_one
+            else:
+                from .retarget import Retarget
+
+                run_one = Retarget(cuda).device(T.run_one)
+            got = _KERNELS[family] = cuda.jit(kernel_function(family, cuda, run_one))
+        return got
+
+
+def _simulated_run_one(*args):
+    """``run_one`` in the simulator: its device arrays unwrapped to the NumPy arrays they
+    hold, so the loop's kernels run compiled for the CPU (they cannot take the simulator's
+    array objects), on the thread's own rows."""
+    return T.run_one(*(getattr(a, "_ary", a) for a in args))
+
+
+class _Device(NamedTuple):
+    compute_capability: tuple
+
+
+@contextlib.contextmanager
+def _compute_capability(cc):
+    """Compile device functions for ``cc`` without asking the driver.
+
+    numba-cuda compiles a device function called from a kernel for the current device's
+    compute capability (``dispatcher.get_current_device``), which needs a GPU and its
+    driver even inside ``compile_ptx``.  Here that question is answered with ``cc``, so
+    the whole kernel, device functions included, compiles to PTX on a machine without
+    either (the tests, CI)."""
+    from numba.cuda import dispatcher
+
+    original = dispatcher.get_current_device
+    dispatcher.get_current_device = lambda: _Device(tuple(cc))
+    try:
+        yield
+    finally:
+        dispatcher.get_current_device = original
+
+
+def signature(family: Family):
+    """The Numba signature of a family's kernel (for ``compile_ptx``)."""
+    from numba import float64, int64, void
+
+    return void(float64[:, ::1], float64[:, :, ::1], float64[:, ::1], float64[:, ::1],
+                float64[:, ::1], int64[:, ::1], float64[:, :, ::1], float64[:, :, ::1],
+                float64[:, :, ::1], float64[:, :, ::1], float64[:, :, ::1],
+                float64[:, :, ::1], float64[:, ::1], int64[:, ::1], int64)
+
+
+def compile_ptx(family: Family, cc=(9, 0)) -> str:
+    """PTX of a family's kernel for compute capability ``cc``, compiled without a GPU:
+    the real compile of everything the kernel runs (what the simulator cannot check)."""
+    from .retarget import Retarget
+
+    cuda = import_cuda()
+    with _LOCK, _compute_capability(cc):
+        run_one = Retarget(cuda).device(T.run_one)
+        ptx, _ = cuda.compile_ptx(kernel_function(family, cuda, run_one), signature(family),
+                                  cc=tuple(cc))
+    return ptx
