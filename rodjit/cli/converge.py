@@ -2,6 +2,8 @@
 and the predictability time."""
 from __future__ import annotations
 
+from typing import Any
+
 import click
 
 from . import options
@@ -55,7 +57,7 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
 
     try:
         cfg = options.base_config(config, sets)
-        limits = {"max_output": parse_size(max_output), "max_steps": max_steps}
+        limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
         if output and os.path.exists(output) and not overwrite:
             raise ValueError(f"{output!r} exists; use --overwrite to replace it")
         names = [o.strip() for o in observables.split(",") if o.strip()]

@@ -53,7 +53,7 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     result: Any
     try:
         cfg = options.base_config(config, sets)
-        limits = {"max_output": parse_size(max_output), "max_steps": max_steps}
+        limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
         keys = [k.strip() for k in key.split(",") if k.strip()]
         if table:
             if target:
