@@ -217,3 +217,27 @@ def test_a_fixed_step_run_is_re_simulated_to_rounding(contact):
     for i, j in shared:
         assert np.abs(u[j] - res.u[i]).max() < 1e-12
         assert np.abs(v[j] - res.v[i]).max() < 1e-10 * np.abs(res.v).max()
+
+
+def test_a_movie_of_many_bounces_shares_half_its_frames_among_the_contacts():
+    """At μ = 0 (paper-mu0) six contacts of about 130 ms in 5 s: 12 frames each do not fit
+    in half of the default 100 frames, but 8 each do; the contacts get those rather than
+    the 2 or 3 evenly spread frames that step over them."""
+    from rodjit.plotting.animation import MIN_FRAMES_PER_CONTACT, frame_times
+
+    times = np.linspace(0.0, 5.0, 1001)
+    spans = [(0.5 + 0.75 * k, 0.63 + 0.75 * k) for k in range(6)]
+    t, short, skipped = frame_times(times, spans, 100)
+    assert skipped == 0 and short == spans
+    assert t.size == 100 and np.all(np.diff(t) >= 0)
+    per = 50 // len(spans)
+    for a, b in spans:
+        inside = t[(t >= a) & (t <= b)]
+        assert inside.size >= per
+        assert np.diff(inside).max() <= 1.01 * (b - a) / (per - 1)
+    # too many contacts for even MIN_FRAMES_PER_CONTACT each: the evenly spread frames,
+    # and the number of frames that shows every contact with its full share
+    many = [(0.1 + 0.2 * k, 0.2 + 0.2 * k) for k in range(20)]
+    assert 50 // len(many) < MIN_FRAMES_PER_CONTACT
+    t, short, skipped = frame_times(times, many, 100)
+    assert skipped == 2 * FRAMES_PER_CONTACT * len(many) and t.size == 100
