@@ -166,3 +166,78 @@ def test_a_movie_of_sparse_snapshots_without_re_simulation_warns(run_file, conta
     a, b = contact
     t = s.t[frames]
     assert ((t >= a) & (t <= b)).sum() < 5
+
+
+def test_the_command_line_says_a_failed_re_simulation_as_one_warning_line(
+        run_file, contact, tmp_path, monkeypatch):
+    """``rodjit plot`` and ``rodjit animate`` draw the snapshots they have when the run
+    cannot be continued here (a law whose module is not imported) and say why in one
+    ``warning:`` line naming the setting and the value that resolves it."""
+    from click.testing import CliRunner
+
+    from rodjit.cli import main
+
+    def fails(*args, **kwargs):
+        raise ImportError("No module named 'my_law'")
+
+    monkeypatch.setattr(dense, "resimulate", fails)
+    a, b = contact
+
+    def advised(samples):       # 1, 2 or 5 times a power of ten at most (b - a) / samples
+        need = (b - a) / samples
+        power = 10.0 ** np.floor(np.log10(need))
+        return f"{max(m * power for m in (1, 2, 5) if m * power <= need):.3g}"
+
+    runner = CliRunner()
+    plot = ["plot", str(run_file), "--kind", "spacetime", "-o", str(tmp_path / "st.png"),
+            "--dpi", "40"]
+    movie = ["animate", str(run_file), "-o", str(tmp_path / "rod.gif"), "--fps", "20",
+             "--duration", "5", "--dpi", "30"]
+    for samples, args in ((dense.MIN_SAMPLES, plot), (FRAMES_PER_CONTACT, movie)):
+        r = runner.invoke(main, args)
+        assert r.exit_code == 0, r.output
+        lines = [ln for ln in r.output.splitlines() if ln.startswith("warning:")]
+        assert len(lines) == 1, r.output
+        assert "ImportError: No module named 'my_law'" in lines[0]
+        assert f"output.snapshot_interval = {advised(samples)} s or less" in lines[0]
+        assert r.output.splitlines()[-1].startswith("wrote ")
+
+
+def test_a_fixed_step_run_is_re_simulated_to_rounding(contact):
+    """Under a fixed ``time.dt`` the continuation takes the run's own steps: where it meets
+    the run's snapshots it agrees to rounding, not only to a tolerance."""
+    cfg = CFG.override({"time.dt": 1e-5, "time.t_end": 0.5})
+    res = rodjit.simulate(cfg)
+    a, b = contact
+    with RunSource(res) as src:
+        t, u, v = dense.resimulate(src, a - 0.005, b + 0.005, 0.0005)
+    shared = [(i, np.flatnonzero(np.abs(t - ts) < 1e-9)) for i, ts in enumerate(res.t)]
+    shared = [(i, j[0]) for i, j in shared if j.size]
+    assert len(shared) >= 3                     # the snapshots across the contact
+    for i, j in shared:
+        assert np.abs(u[j] - res.u[i]).max() < 1e-12
+        assert np.abs(v[j] - res.v[i]).max() < 1e-10 * np.abs(res.v).max()
+
+
+def test_a_movie_of_many_bounces_shares_half_its_frames_among_the_contacts():
+    """At μ = 0 (paper-mu0) six contacts of about 130 ms in 5 s: 12 frames each do not fit
+    in half of the default 100 frames, but 8 each do; the contacts get those rather than
+    the 2 or 3 evenly spread frames that step over them."""
+    from rodjit.plotting.animation import MIN_FRAMES_PER_CONTACT, frame_times
+
+    times = np.linspace(0.0, 5.0, 1001)
+    spans = [(0.5 + 0.75 * k, 0.63 + 0.75 * k) for k in range(6)]
+    t, short, skipped = frame_times(times, spans, 100)
+    assert skipped == 0 and short == spans
+    assert t.size == 100 and np.all(np.diff(t) >= 0)
+    per = 50 // len(spans)
+    for a, b in spans:
+        inside = t[(t >= a) & (t <= b)]
+        assert inside.size >= per
+        assert np.diff(inside).max() <= 1.01 * (b - a) / (per - 1)
+    # too many contacts for even MIN_FRAMES_PER_CONTACT each: the evenly spread frames,
+    # and the number of frames that shows every contact with its full share
+    many = [(0.1 + 0.2 * k, 0.2 + 0.2 * k) for k in range(20)]
+    assert 50 // len(many) < MIN_FRAMES_PER_CONTACT
+    t, short, skipped = frame_times(times, many, 100)
+    assert skipped == 2 * FRAMES_PER_CONTACT * len(many) and t.size == 100

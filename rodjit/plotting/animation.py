@@ -6,9 +6,10 @@ gets ``FRAMES_PER_CONTACT`` frames spread over it (the movie runs in slow motion
 the time stamp says so), so frames 50 ms apart do not skip a 12 ms impact.  Where the
 snapshots are too sparse inside a contact, its frames are re-simulated from the snapshot
 before (``plotting.dense``; a ``SparseSnapshots`` warning naming
-``output.snapshot_interval`` where that is impossible); where the movie has too few
-frames for every contact, a ``SparseSnapshots`` warning names the ``duration`` that
-shows them.  Snapshots are read one at a time as they are drawn, so memory stays bounded
+``output.snapshot_interval`` where that is impossible).  Contacts take at most half the
+frames: where ``FRAMES_PER_CONTACT`` each do not fit (a run of many bounces), they share
+that half, ``MIN_FRAMES_PER_CONTACT`` each at least; where even that does not fit, a
+``SparseSnapshots`` warning names the ``duration`` that shows them.  Snapshots are read one at a time as they are drawn, so memory stays bounded
 however long the run.  GIF through Pillow, MP4 through ffmpeg (when it is installed).
 """
 from __future__ import annotations
@@ -29,6 +30,7 @@ __all__ = ["animate", "FORMATS", "MissingWriter", "FRAMES_PER_CONTACT"]
 FORMATS = (".gif", ".mp4")
 QUANTITIES = ("strain", "v")
 FRAMES_PER_CONTACT = 12   # frames spread over each contact (from its start to its end)
+MIN_FRAMES_PER_CONTACT = 4   # fewer than this each in half the movie: the contacts skipped
 
 
 class MissingWriter(RuntimeError):
@@ -46,8 +48,9 @@ def frame_times(times: np.ndarray, spans: list, n_frames: int,
     ``spans`` ``(t_impact, t_release)``, the contacts that needed frames of their own,
     and 0: ``per_contact`` frames over each contact shorter than ``per_contact`` even
     frames, the rest at snapshots spread evenly.  Where those contacts would take more
-    than half the frames: the even frames alone, the contacts skipped, and the number of
-    frames that would show them."""
+    than half the frames: half the frames shared among them, at least
+    ``MIN_FRAMES_PER_CONTACT`` each; fewer than that: the even frames alone, the contacts
+    skipped, and the number of frames that would show them with ``per_contact`` each."""
     even_only = times[frame_rows(times.size, n_frames)]
     gap = (times[-1] - times[0]) / max(1, n_frames - 1)
     short = [(a, b) for a, b in spans if b - a < (per_contact - 1) * gap]
@@ -55,7 +58,15 @@ def frame_times(times: np.ndarray, spans: list, n_frames: int,
         return even_only, [], 0
     need = per_contact * len(short)
     if need > n_frames // 2:
-        return even_only, short, 2 * need
+        # half the frames shared among the contacts, if that gives each a few (a run of
+        # many bounces at the default length: fewer frames per contact, none skipped)
+        fewer = (n_frames // 2) // len(short)
+        if fewer < MIN_FRAMES_PER_CONTACT:
+            return even_only, short, 2 * need
+        short = [(a, b) for a, b in short if b - a < (fewer - 1) * gap]
+        if not short:
+            return even_only, [], 0
+        per_contact, need = fewer, fewer * len(short)
     even = times[frame_rows(times.size, n_frames - need)]
     inside = np.concatenate([np.linspace(a, b, per_contact) for a, b in short])
     return np.sort(np.concatenate([even, inside])), short, 0
