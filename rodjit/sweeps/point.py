@@ -34,7 +34,7 @@ from ..stepping import layout as L
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
            "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS", "start_worker",
-           "worker_info", "reissue_warnings"]
+           "worker_info", "reissue_warnings", "bounce_values", "pass_on"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -142,19 +142,27 @@ class _PointSink(Sink):
         self.rows.append(rows.copy())
 
 
-def _bounce_values(bounces: dict) -> dict:
+def bounce_values(values: dict, bounces: dict) -> dict:
     """The summary columns of a bounce table: counts, and means over the rows not marked
-    ambiguous (an open or unfinished bounce is always ambiguous)."""
+    ambiguous (an open or unfinished bounce is always ambiguous); and, where the first
+    impact could not be read from diagnostics (``values["impact_status"]`` undefined), its
+    restitution and contact time from the table's first row, the same bounce (its status
+    and apex values stay undefined)."""
     done = ~bounces["open"]
     sure = ~np.asarray(bounces["ambiguous"], bool)
     e = bounces["restitution"][sure]
     e_energy = bounces["restitution_energy"][sure]
-    return {
+    out = {
         "n_bounces": int(bounces["t_impact"].size),
         "n_complete_bounces": int(done.sum()),
         "restitution_mean": float(np.mean(e)) if e.size else math.nan,
         "restitution_energy_mean": float(np.mean(e_energy)) if e_energy.size else math.nan,
     }
+    if values["impact_status"] == "undefined" and bounces["t_impact"].size \
+            and not bounces["open"][0]:
+        out["restitution_first"] = float(bounces["restitution"][0])
+        out["contact_time_first"] = float(bounces["t_release"][0] - bounces["t_impact"][0])
+    return out
 
 
 def _run_in_memory(config) -> tuple[dict, dict]:
@@ -223,16 +231,9 @@ def run_point(task: PointTask) -> PointResult:
                 else:
                     got, bounces = _run_to_file(task.config, task.save_path)
         finally:
-            said = _pass_on(caught)
+            said = pass_on(caught)
         values.update(got)
-        values.update(_bounce_values(bounces))
-        if values["impact_status"] == "undefined" and bounces["t_impact"].size \
-                and not bounces["open"][0]:
-            # no diagnostics to read the first impact from: the bounce table's first row,
-            # the same bounce (its status and apex values stay undefined)
-            values["restitution_first"] = float(bounces["restitution"][0])
-            values["contact_time_first"] = float(bounces["t_release"][0]
-                                                 - bounces["t_impact"][0])
+        values.update(bounce_values(values, bounces))
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
         disk = (disk_cause(exc) or "") if task.save_path is not None else ""
         if disk:               # the run file: removed (the point runs again on --resume)
@@ -245,7 +246,7 @@ def run_point(task: PointTask) -> PointResult:
     return PointResult(task.index, values, bounces, worker_info(), disk, said)
 
 
-def _pass_on(caught) -> tuple:
+def pass_on(caught) -> tuple:
     """The texts of the ModelWarnings among ``caught`` (the parent says them: a worker's
     own stderr would repeat them once per worker, with its file and line); other warnings
     are issued again here as they came."""
