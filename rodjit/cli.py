@@ -388,9 +388,12 @@ def _SweepProgress(cold=None):
               help="Check everything (configuration, every point, output paths, limits), "
                    "print the points, the swept keys and the files' estimated sizes, and "
                    "write nothing.")
+@click.option("--batch-size", type=int, default=None, metavar="N",
+              help="Points per compiled call of the ensemble engine [default: about 0.3 s "
+                   "of work, from the measured cost per point].")
 def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resume, overwrite,
                   force_jobs, quiet, show_progress, max_output, max_steps, max_points,
-                  dry_run):
+                  dry_run, batch_size):
     """Run CONFIG.toml, a preset or the built-in default at every point of a grid, on every
     core (or a Dask cluster), into one sweep file with a summary row per point.
 
@@ -452,9 +455,10 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
                   "max_points": max_points}
         if dry_run:
             from .sweeps.executors import check_scheduler
-            from .sweeps.run_sweep import check_jobs
+            from .sweeps.run_sweep import check_batch_size, check_jobs
 
             check_jobs(jobs)
+            check_batch_size(batch_size)
             check_scheduler(scheduler)
             plan = plan_sweep(cfg, grid, output=output, save_runs=save_runs,
                               overwrite=overwrite, **limits)
@@ -464,7 +468,8 @@ def sweep_command(config, grids, output, jobs, scheduler, save_runs, sets, resum
         with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
             table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                           save_runs=save_runs, resume=resume, overwrite=overwrite,
-                          progress=progress, command=command, **limits)
+                          progress=progress, command=command, batch_size=batch_size,
+                          **limits)
     except OutputExists as exc:
         raise UsageError(str(exc).replace("pass overwrite=True", "use --overwrite (or "
                                           "--resume)")) from None

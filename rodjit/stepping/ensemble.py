@@ -99,8 +99,22 @@ def _nscalar_ov(proto):
 
 
 def _rebuild(proto, row, o):
-    """The parameter tuple of ``proto``'s class with its scalar fields from ``row[o:]``."""
-    raise NotImplementedError("compiled only")
+    """The parameter tuple of ``proto``'s class with its scalar fields from ``row[o:]``
+    (this Python version runs where Numba is off, NUMBA_DISABLE_JIT=1)."""
+    args = []
+    k = 0
+    for x in proto:
+        if isinstance(x, (bool, np.bool_)):
+            args.append(bool(row[o + k] != 0.0))
+        elif isinstance(x, (int, np.integer)):
+            args.append(int(row[o + k]))
+        elif isinstance(x, (float, np.floating)):
+            args.append(float(row[o + k]))
+        else:
+            args.append(x)
+            continue
+        k += 1
+    return type(proto)(*args)
 
 
 @overload(_rebuild)
@@ -122,7 +136,7 @@ def _rebuild_ov(proto, row, o):
         k += 1
     cls = proto.instance_class
     name = f"_rebuild_{cls.__name__}"
-    ns = {"cls": cls}
+    ns = {"cls": cls, "__name__": __name__}
     # compiled with this file's name: Numba caches an implementation by its source file
     exec(compile(f"def {name}(proto, row, o):\n    return cls({', '.join(args)})\n",
                  __file__, "exec"), ns)

@@ -21,6 +21,7 @@ workers are the parallelism, as for the per-point path.
 from __future__ import annotations
 
 import importlib
+import pickle
 import math
 import time
 import warnings
@@ -39,10 +40,11 @@ from ..stepping import impact as I
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS, work_rows
 from .batch import BatchResult
-from .point import (SUMMARY_COLUMNS, PointTask, empty_columns, pass_on, run_point,
+from .point import (SUMMARY_COLUMNS, PointTask, died, empty_columns, pass_on, run_point,
                     worker_info)
 
-__all__ = ["BatchTask", "run_batch", "run_task", "lost_batch", "EPISODE_ROWS"]
+__all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
+           "timed", "EPISODE_ROWS"]
 
 EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
 BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
@@ -65,6 +67,37 @@ def run_task(task):
     if isinstance(task, BatchTask):
         return run_batch(task)
     return run_point(task)
+
+
+def lost(task, message: str):
+    """What to do with a task whose worker died: a point fails (its result); a batch is
+    tried once more, each of its points alone (the tasks to run, a list), so only a
+    point that kills its worker fails, as a batch of one on its second death (its
+    result)."""
+    if isinstance(task, BatchTask):
+        if task.retry:
+            return lost_batch(task, message)
+        return [task._replace(index=task.index[k:k + 1], retry=True)
+                for k in range(len(task.index))]
+    return died(task.index, message)
+
+
+def task_key(task):
+    """A task's identity for the executors' bookkeeping: a point's index, a batch's first."""
+    return ("batch", int(task.index[0])) if isinstance(task, BatchTask) else task.index
+
+
+def run_tasks(tasks) -> bytes:
+    """Run several tasks in turn (one Dask task); their results pickled into one blob,
+    which Dask moves as a single frame."""
+    return pickle.dumps([run_task(t) for t in tasks], protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def timed(result) -> tuple[int, float]:
+    """(points timed, their wall time) of a result: a point that died has no steps."""
+    steps = np.atleast_1d(result.values["steps"])
+    wall = np.atleast_1d(result.values["wall_time"])
+    return int(np.count_nonzero(steps)), float(np.sum(wall[steps != 0]))
 
 
 def lost_batch(task: BatchTask, message: str) -> BatchResult:
@@ -340,3 +373,38 @@ def fill_bounce_values(values, bounces, counts, per_point=()) -> None:
             values["restitution_first"][k] = float(e[s])
             values["contact_time_first"][k] = float(bounces["t_release"][s]
                                                     - bounces["t_impact"][s])
+
+
+def split_bounces(result: BatchResult) -> list[dict]:
+    """Each point's bounce table from a BatchResult's columns (a sweep without a file
+    keeps them per point)."""
+    ends = np.cumsum(result.bounce_count)
+    starts = ends - result.bounce_count
+    return [{name: col[s:e].copy() for name, col in result.bounces.items()}
+            for s, e in zip(starts, ends)]
+
+
+def as_batch(results) -> BatchResult:
+    """PointResults and BatchResults as one BatchResult, in increasing point order."""
+    parts = [r if isinstance(r, BatchResult) else _from_point(r) for r in results]
+    idx = np.concatenate([p.index for p in parts])
+    counts = np.concatenate([p.bounce_count for p in parts])
+    values = {name: np.concatenate([np.asarray(p.values[name]) for p in parts])
+              for name in SUMMARY_COLUMNS}
+    starts = np.cumsum(counts) - counts
+    order = np.argsort(idx, kind="stable")
+    rows = (np.concatenate([np.arange(starts[k], starts[k] + counts[k]) for k in order])
+            if counts.sum() else np.zeros(0, np.int64))
+    bounces = {name: np.concatenate([np.asarray(p.bounces[name]) for p in parts])[rows]
+               for name in BOUNCE_COLUMNS}
+    return BatchResult(idx[order], {k: v[order] for k, v in values.items()}, bounces,
+                       counts[order])
+
+
+def _from_point(r) -> BatchResult:
+    values = empty_columns(1)
+    for name in SUMMARY_COLUMNS:
+        values[name][0] = r.values[name]
+    return BatchResult(np.array([r.index], np.int64), values,
+                       {name: np.asarray(r.bounces[name]) for name in BOUNCE_COLUMNS},
+                       np.array([len(r.bounces["t_impact"])], np.int64))
