@@ -305,8 +305,8 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
             force_max = max(force_max, x)
     e0 = clock[L.E0]
     fo[F_MIN_U0] = u0_min if np.isfinite(u0_min) else np.nan
-    fo[F_MAX_FF] = force_max
-    fo[F_MIN_STRAIN] = strain_min
+    fo[F_MAX_FF] = force_max if np.isfinite(force_max) else np.nan
+    fo[F_MIN_STRAIN] = strain_min if np.isfinite(strain_min) else np.nan
     if samples == 0:
         fo[F_ENERGY_ERROR] = np.nan
     else:

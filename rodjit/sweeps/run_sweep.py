@@ -39,6 +39,7 @@ __all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
 FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
 BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
+ENGINE = True          # False: every point alone through ``point.run_point`` (benchmarks)
 BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
 FIRST_BATCH = 8        # points of the batches sent before any has been timed
 MAX_BATCH_SIZE = 100_000
@@ -408,7 +409,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     timing = {"points": 0, "wall": 0.0}
 
     def tasks():
-        if runs_dir is None:      # the ensemble engine: batches of points
+        if runs_dir is None and ENGINE:      # the ensemble engine: batches of points
             yield from _batches(todo, base, grid, law_modules(grid.config(base, todo[0])),
                                 batch_size, timing, executor.jobs)
             return
