@@ -1,11 +1,14 @@
 """The ensemble engine: a batch of points in one compiled call gives each point's row and
 bounce table exactly as the per-point path (``point.run_point``, the NumPy observables)."""
 import math
+from typing import NamedTuple
 
 import numpy as np
 import pytest
 
 import rodjit
+from custom_law import deriv, lower, primitive, value
+from rodjit.laws import Law, register
 from rodjit.presets import load_preset
 from rodjit.sweeps import ensemble
 from rodjit.sweeps.batch import BatchResult
@@ -69,11 +72,25 @@ def test_every_first_contact_status_and_a_failing_point_equal_the_per_point_path
     assert all("fixed step time.dt = 0.001 failed" in m for m in v["message"][failed])
 
 
+class RaiseRod(NamedTuple):
+    kappa: float
+
+
+def _raising_params(rod):
+    if rod.kappa == 13.0:
+        raise ValueError("this law refuses rod.kappa = 13")
+    return RaiseRod(float(rod.kappa))
+
+
+register(Law(name="raise-test", kind="rod", params=RaiseRod, from_config=_raising_params,
+             value=value, deriv=deriv, primitive=primitive, lower=lower))
+
+
 def test_a_point_that_cannot_start_fails_alone_with_the_per_point_message():
-    # a bottom start below the floor's limit: the initial state is not admissible
-    batch = _check_against_points(BASE, {"initial.height": [0.5, -5.0, 0.3]})
+    base = BASE.override({"rod.law": "raise-test"})
+    batch = _check_against_points(base, {"rod.kappa": [100.0, 13.0, 50.0]})
     assert list(batch.values["status"]) == ["completed", "failed", "completed"]
-    assert batch.values["message"][1].startswith("ValueError: ")
+    assert batch.values["message"][1] == "ValueError: this law refuses rod.kappa = 13"
 
 
 def test_a_point_that_overflows_its_arrays_runs_on_the_per_point_path(monkeypatch):
