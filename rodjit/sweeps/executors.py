@@ -1,10 +1,12 @@
 """Where sweep points run: this process, a pool of local worker processes, or Dask.
 
-Every executor turns an iterator of PointTasks into an iterator of PointResults, in the
-order they finish, with ``None`` as a heartbeat (at least every HEARTBEAT seconds) so the
-caller can check for signals and flush while points run (``total``, when given, is how
-many tasks there are).  A worker process that dies yields a failed result for the point it
-held; the other points go on.
+Every executor turns an iterator of tasks (PointTasks, or the ensemble engine's
+BatchTasks) into an iterator of their results (PointResults, BatchResults;
+``ensemble.run_task``), in the order they finish, with ``None`` as a heartbeat (at least
+every HEARTBEAT seconds) so the caller can check for signals and flush while points run
+(``total``, when given, is how many tasks there are).  A worker process that dies yields a
+failed result for the point it held; a batch it held runs again, each point alone
+(``ensemble.lost``); the other tasks go on.
 """
 from __future__ import annotations
 
