@@ -44,12 +44,46 @@ from .point import (SUMMARY_COLUMNS, PointTask, died, empty_columns, pass_on, ru
                     worker_info)
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
-           "timed", "EPISODE_ROWS"]
+           "timed", "batches", "check_batch_size", "split_bounces", "as_batch", "EPISODE_ROWS",
+           "BATCH_SECONDS", "MAX_BATCH_SIZE"]
 
 EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
 BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
 NO_SAMPLES = ("the macroscopic-contact observables need diagnostics samples "
               "(output.diagnostics_interval > 0)")
+
+
+BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
+FIRST_BATCH = 8        # points of the batches sent before any has been timed
+MAX_BATCH_SIZE = 100_000
+
+
+def check_batch_size(batch_size) -> None:
+    """ValueError (one line) unless ``batch_size`` is None or a whole number in range."""
+    if batch_size is None:
+        return
+    if (isinstance(batch_size, bool) or not isinstance(batch_size, int)
+            or not 1 <= batch_size <= MAX_BATCH_SIZE):
+        raise ValueError(f"batch_size = {batch_size!r} is out of range (a whole number from "
+                         f"1 to {MAX_BATCH_SIZE})")
+
+
+def batches(todo, base, grid, laws, batch_size, timing, jobs):
+    """BatchTasks over ``todo``: ``batch_size`` points each, or by default about
+    BATCH_SECONDS of work at the cost per point measured so far (``timing``, updated as
+    results arrive; FIRST_BATCH points before any), and at most the points left over two
+    batches per worker, so the workers finish together."""
+    todo = np.asarray(todo, dtype=np.int64)
+    i = 0
+    while i < todo.size:
+        if batch_size is not None:
+            k = batch_size
+        else:
+            k = (int(BATCH_SECONDS * timing["points"] / max(timing["wall"], 1e-9))
+                 if timing["points"] else FIRST_BATCH)
+            k = max(1, min(k, -(-(todo.size - i) // (2 * max(1, jobs)))))
+        yield BatchTask(todo[i:i + k], base, grid, laws)
+        i += k
 
 
 class BatchTask(NamedTuple):

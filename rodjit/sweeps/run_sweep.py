@@ -30,7 +30,7 @@ from .grid import MAX_POINTS, Grid
 from .main_guard import check_main
 from .plan import check_runs_dir, plan_sweep
 from .batch import BatchResult
-from .ensemble import BatchTask, split_bounces, timed
+from .ensemble import batches, check_batch_size, split_bounces, timed
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
 from .sweep_table import SweepTable
 
@@ -40,36 +40,6 @@ FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
 BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
 ENGINE = True          # False: every point alone through ``point.run_point`` (benchmarks)
-BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
-FIRST_BATCH = 8        # points of the batches sent before any has been timed
-MAX_BATCH_SIZE = 100_000
-
-
-def check_batch_size(batch_size) -> None:
-    if batch_size is None:
-        return
-    if (isinstance(batch_size, bool) or not isinstance(batch_size, int)
-            or not 1 <= batch_size <= MAX_BATCH_SIZE):
-        raise ValueError(f"batch_size = {batch_size!r} is out of range (a whole number from "
-                         f"1 to {MAX_BATCH_SIZE})")
-
-
-def _batches(todo, base, grid, laws, batch_size, timing, jobs):
-    """BatchTasks over ``todo``: ``batch_size`` points each, or by default about
-    BATCH_SECONDS of work at the cost per point measured so far (``timing``, updated as
-    results arrive; FIRST_BATCH points before any), and at most the points left over two
-    batches per worker, so the workers finish together."""
-    todo = np.asarray(todo, dtype=np.int64)
-    i = 0
-    while i < todo.size:
-        if batch_size is not None:
-            k = batch_size
-        else:
-            k = (int(BATCH_SECONDS * timing["points"] / max(timing["wall"], 1e-9))
-                 if timing["points"] else FIRST_BATCH)
-            k = max(1, min(k, -(-(todo.size - i) // (2 * max(1, jobs)))))
-        yield BatchTask(todo[i:i + k], base, grid, laws)
-        i += k
 
 
 class SweepInterrupted(RuntimeError):
@@ -232,7 +202,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         Refuse a grid of more points than this, before it is made.
     batch_size : int, optional
         Points per batch of the ensemble engine (one compiled call each); by default
-        from the measured cost per point, about BATCH_SECONDS of work a batch.  Not used
+        from the measured cost per point, about ``ensemble.BATCH_SECONDS`` of work a batch; not used
         with ``save_runs`` (each point writes its run file).
 
     Returns
@@ -410,7 +380,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
 
     def tasks():
         if runs_dir is None and ENGINE:      # the ensemble engine: batches of points
-            yield from _batches(todo, base, grid, law_modules(grid.config(base, todo[0])),
+            yield from batches(todo, base, grid, law_modules(grid.config(base, todo[0])),
                                 batch_size, timing, executor.jobs)
             return
         for i in todo:
