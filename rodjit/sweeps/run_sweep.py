@@ -202,8 +202,8 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
         Refuse a grid of more points than this, before it is made.
     batch_size : int, optional
         Points per batch of the ensemble engine (one compiled call each); by default
-        from the measured cost per point, about ``ensemble.BATCH_SECONDS`` of work a batch; not used
-        with ``save_runs`` (each point writes its run file).
+        from the measured cost per point, about ``ensemble.BATCH_SECONDS`` of work a
+        batch; not used with ``save_runs`` (each point writes its run file).
 
     Returns
     -------
