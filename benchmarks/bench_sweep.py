@@ -24,9 +24,11 @@ the overhead per point.
    compiled call, the default), of the per-point path (``run_sweep.ENGINE = False``: every
    point through ``point.run_point``, a ``Run`` each) and of the stepping-only lower bound
    (the sum of the per-point path's ``run_time``, each point's loop run alone, over the 2
-   jobs), and the engine's wall time over that bound.  The per-point path of the 20000
-   points runs only with ``--full`` (its bound is then the 2000-point one scaled by the
-   points).
+   jobs), and the engine's wall time over that bound and over its own compiled calls.  The
+   per-point path of the 20000 points runs only with ``--full`` (its bound is then the
+   2000-point one scaled by the points).  First, in this process and in turns (so that the
+   load of a shared machine hits both alike): 80 points as one batch against the same
+   points through the per-point path and their loops' own ``run_time``.
 
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
 start-up (the workers importing rodjit and loading the kernels, until all report ready; a
@@ -156,11 +158,37 @@ def best_of(runs: list[dict]) -> dict:
     return min(runs, key=lambda r: r["steady"])
 
 
+def in_process(base, repeat: int = 3) -> dict:
+    """Part 5, in this process, in turns (the machine's load hits both alike): 80 points of
+    the grid as one batch (``ensemble.run_batch``) against the same points through
+    ``point.run_point``, and their loops' own ``run_time``."""
+    from rodjit.sweeps.ensemble import BatchTask, run_batch
+    from rodjit.sweeps.grid import Grid
+    from rodjit.sweeps.point import PointTask, run_point
+
+    grid = Grid.from_spec(big_grid(8))
+    idx = np.arange(len(grid))
+    run_batch(BatchTask(idx[:2], base, grid, ()))
+    rows = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        run_batch(BatchTask(idx, base, grid, ()))
+        t1 = time.perf_counter()
+        points = [run_point(PointTask(int(i), grid.config(base, int(i)), None, ())) for i in idx]
+        t2 = time.perf_counter()
+        rows.append((t1 - t0, t2 - t1, sum(p.values["run_time"] for p in points)))
+    batch, per_point, loops = (min(r[j] for r in rows) for j in range(3))
+    print(f"   80 points in this process (best of {repeat}): one batch {batch:.3f} s, "
+          f"per-point path {per_point:.3f} s, their loops' run_time {loops:.3f} s: batch / "
+          f"loops {batch / loops:.2f}x, per-point / loops {per_point / loops:.2f}x")
+    return {"points": int(idx.size), "batch": batch, "per_point": per_point, "loops": loops}
+
+
 def engine_part(base, tmp, full: bool) -> dict:
     """Part 5 (module docstring)."""
     from rodjit.sweeps import run_sweep
 
-    out = {}
+    out = {"in_process": in_process(base)}
     for mu_values in (200, 2000):
         grid = big_grid(mu_values)
         eng = timed_sweep(base, grid, tmp, jobs=2)
@@ -192,7 +220,7 @@ def engine_part(base, tmp, full: bool) -> dict:
              r.get("per_point_points_per_second", float("nan")),
              r["stepping_points_per_second"], r["engine_over_stepping"],
              r["engine_wall_over_compiled"]]
-            for r in out.values()]
+            for k, r in out.items() if k != "in_process"]
     print(_util.table(rows, ["grid points (2 jobs)", "engine wall [s]", "start-up [s]",
                              "engine points/s", "per-point points/s",
                              "stepping-only points/s", "engine wall / stepping",
