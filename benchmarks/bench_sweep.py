@@ -19,6 +19,17 @@ the overhead per point.
    by the rodjit of another checkout (``rodjit sweep`` in a child process with that tree
    first on ``sys.path``), in turns with this one, and the ratio of the two is printed.
 
+5. ``--engine`` (only this part): the grid of part 4 at 2000 and 20000 points (μ over 200
+   and 2000 values) on 2 jobs: points/s of the ensemble engine (batches of points in one
+   compiled call, the default), of the per-point path (``run_sweep.ENGINE = False``: every
+   point through ``point.run_point``, a ``Run`` each) and of the stepping-only lower bound
+   (the sum of the per-point path's ``run_time``, each point's loop run alone, over the 2
+   jobs), and the engine's wall time over that bound and over its own compiled calls.  The
+   per-point path of the 20000 points runs only with ``--full`` (its bound is then the
+   2000-point one scaled by the points).  First, in this process and in turns (so that the
+   load of a shared machine hits both alike): 80 points as one batch against the same
+   points through the per-point path and their loops' own ``run_time``.
+
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
 start-up (the workers importing rodjit and loading the kernels, until all report ready; a
 LocalCluster's scheduler and workers), the steady state until the last result, which is what
@@ -27,6 +38,7 @@ end-to-end ratios are printed too.  Each configuration is timed --repeat times i
 (best kept), so the machine's load hits every one alike.
 
     python benchmarks/bench_sweep.py [--repeat 3] [--quick] [--baseline CHECKOUT]
+    python benchmarks/bench_sweep.py --engine [--full]
 """
 from __future__ import annotations
 
@@ -146,6 +158,76 @@ def best_of(runs: list[dict]) -> dict:
     return min(runs, key=lambda r: r["steady"])
 
 
+def in_process(base, repeat: int = 3) -> dict:
+    """Part 5, in this process, in turns (the machine's load hits both alike): 80 points of
+    the grid as one batch (``ensemble.run_batch``) against the same points through
+    ``point.run_point``, and their loops' own ``run_time``."""
+    from rodjit.sweeps.ensemble import BatchTask, run_batch
+    from rodjit.sweeps.grid import Grid
+    from rodjit.sweeps.point import PointTask, run_point
+
+    grid = Grid.from_spec(big_grid(8))
+    idx = np.arange(len(grid))
+    run_batch(BatchTask(idx[:2], base, grid, ()))
+    rows = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        run_batch(BatchTask(idx, base, grid, ()))
+        t1 = time.perf_counter()
+        points = [run_point(PointTask(int(i), grid.config(base, int(i)), None, ())) for i in idx]
+        t2 = time.perf_counter()
+        rows.append((t1 - t0, t2 - t1, sum(p.values["run_time"] for p in points)))
+    batch, per_point, loops = (min(r[j] for r in rows) for j in range(3))
+    print(f"   80 points in this process (best of {repeat}): one batch {batch:.3f} s, "
+          f"per-point path {per_point:.3f} s, their loops' run_time {loops:.3f} s: batch / "
+          f"loops {batch / loops:.2f}x, per-point / loops {per_point / loops:.2f}x")
+    return {"points": int(idx.size), "batch": batch, "per_point": per_point, "loops": loops}
+
+
+def engine_part(base, tmp, full: bool) -> dict:
+    """Part 5 (module docstring)."""
+    from rodjit.sweeps import run_sweep
+
+    out = {"in_process": in_process(base)}
+    for mu_values in (200, 2000):
+        grid = big_grid(mu_values)
+        eng = timed_sweep(base, grid, tmp, jobs=2)
+        compiled = float(np.sum(rodjit.load_sweep(Path(tmp) / "bench_sweep.h5")["run_time"]))
+        row = {"points": eng["points"], "engine_wall": eng["wall"],
+               "engine_steady": eng["steady"], "engine_startup": eng["startup"],
+               "engine_points_per_second": eng["points"] / eng["wall"],
+               # the time of its batches' compiled calls over the 2 jobs (stepping and the
+               # compiled observables): the engine's own Python outside them is the rest
+               "engine_compiled": compiled / 2,
+               "engine_wall_over_compiled": eng["wall"] / (compiled / 2)}
+        if mu_values == 200 or full:
+            run_sweep.ENGINE = False
+            try:
+                per = timed_sweep(base, grid, tmp, jobs=2)
+            finally:
+                run_sweep.ENGINE = True
+            table = rodjit.load_sweep(Path(tmp) / "bench_sweep.h5")
+            stepping = float(np.sum(table["run_time"])) / 2
+            row.update(per_point_wall=per["wall"],
+                       per_point_points_per_second=per["points"] / per["wall"])
+        else:
+            stepping = out[200]["stepping"] * mu_values / 200
+        row.update(stepping=stepping, stepping_points_per_second=row["points"] / stepping,
+                   engine_over_stepping=eng["wall"] / stepping)
+        out[mu_values] = row
+    rows = [[r["points"], r["engine_wall"], r["engine_startup"],
+             r["engine_points_per_second"],
+             r.get("per_point_points_per_second", float("nan")),
+             r["stepping_points_per_second"], r["engine_over_stepping"],
+             r["engine_wall_over_compiled"]]
+            for k, r in out.items() if k != "in_process"]
+    print(_util.table(rows, ["grid points (2 jobs)", "engine wall [s]", "start-up [s]",
+                             "engine points/s", "per-point points/s",
+                             "stepping-only points/s", "engine wall / stepping",
+                             "engine wall / its compiled calls"]))
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -154,7 +236,20 @@ def main(argv=None):
                     help="points of part 4's grid (a multiple of 10; default 2000)")
     ap.add_argument("--baseline", default=None,
                     help="a checkout of another rodjit to run part 4's sweep against")
+    ap.add_argument("--engine", action="store_true",
+                    help="only part 5: the ensemble engine against the per-point path")
+    ap.add_argument("--full", action="store_true",
+                    help="part 5: also the per-point path of the 20000 points")
     args = ap.parse_args(argv)
+    if args.engine:
+        _util.header("parameter sweeps: the ensemble engine")
+        base = load_preset("paper-mu100")
+        with tempfile.TemporaryDirectory() as tmp:
+            rodjit.sweep(base, {"rod.mu": [0.0]}, scheduler="inline")   # kernels cached
+            out = engine_part(base, tmp, args.full)
+        path = _util.save("sweep_engine", {str(k): v for k, v in out.items()})
+        print(f"   -> {path}")
+        return out
     if args.grid_points < 10 or args.grid_points % 10:
         ap.error("--grid-points must be a positive multiple of 10")
     repeat = 1 if args.quick else args.repeat

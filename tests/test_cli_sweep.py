@@ -99,6 +99,7 @@ def test_failed_points_exit_1_and_resume_reruns_them(tmp_path, monkeypatch):
     ([], "a sweep needs at least one --grid KEY=VALUES"),
     (["--grid", "rod.mu=1", "--jobs", "0"], "jobs = 0 is out of range"),
     (["--grid", "rod.mu=1", "--scheduler", "mpi"], "scheduler = 'mpi' is not allowed"),
+    (["--grid", "rod.mu=1", "--batch-size", "0"], "batch_size = 0 is out of range"),
     (["--grid", "rod.mu=1", "--set", "rod.mu=2"], None),
     (["--grid", "rod.mu=1", "-o", "missing/s.h5"], "output directory 'missing' does not exist"),
     (["nosuch.toml", "--grid", "rod.mu=1"], "configuration file 'nosuch.toml' does not exist"),

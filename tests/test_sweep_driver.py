@@ -123,22 +123,25 @@ KILLER_GRID = {"rod.kappa": [100.0, 13.0], "initial.velocity": [0.0, -100.0]}
 
 def test_a_dying_worker_fails_its_point_only():
     grid = {"rod.kappa": [100.0, 50.0, 13.0], "rod.mu": [0.0, 1.0]}
-    table = rodjit.sweep(BASE.override(KILLER), grid, jobs=2)
+    # batches of two: the last one kills its worker, runs again point by point, and each
+    # of its points kills a worker again
+    table = rodjit.sweep(BASE.override(KILLER), grid, jobs=2, batch_size=2)
     assert list(table["status"]) == ["completed"] * 4 + ["failed"] * 2
     for i in (4, 5):
         assert "worker process" in table["message"][i]
         assert "died while running this point (killed by SIGKILL)" in table["message"][i]
-    assert table.stats["worker_deaths"] == 2
+    assert table.stats["worker_deaths"] == 3
     assert np.all(table["steps"][:4] > 0)
 
 
 def test_points_waiting_behind_a_dying_point_run_elsewhere():
-    """One worker, points queued two deep: each killer fails alone and the point queued
-    behind it goes to the replacement worker."""
+    """One worker, batches of two queued two deep: the batch of the two killers kills its
+    worker, each of its points runs again alone and fails alone, and the batch queued
+    behind it goes to a replacement worker."""
     table = rodjit.sweep(BASE.override(KILLER), {"rod.kappa": [13.0, 100.0],
                                                  "rod.mu": [0.0, 1.0]}, jobs=1)
     assert list(table["status"]) == ["failed", "failed", "completed", "completed"]
-    assert table.stats["worker_deaths"] == 2
+    assert table.stats["worker_deaths"] == 3
 
 
 def test_workers_run_numba_single_threaded_with_kernels_loaded_before_the_first_point():
@@ -374,9 +377,13 @@ def test_progress_reports_points_failures_and_time_left():
     seen = []
     base = BASE.override(FAILING)
     rodjit.sweep(base, {"initial.velocity": [0.0, -100.0, -1.0]}, scheduler="inline",
-                 progress=seen.append)
+                 progress=seen.append, batch_size=1)
     done = [(p.done, p.failed, p.total) for p in seen]
     assert done == [(1, 0, 3), (2, 1, 3), (3, 1, 3)]
+    seen.clear()       # batches (of two, then one: the default for one job) report each
+    rodjit.sweep(base, {"initial.velocity": [0.0, -100.0, -1.0]}, scheduler="inline",
+                 progress=seen.append)
+    assert [(p.done, p.failed, p.total) for p in seen] == [(2, 1, 3), (3, 1, 3)]
     assert seen[-1].eta == 0.0 and seen[0].eta > 0 and seen[0].elapsed > 0
 
 

@@ -36,7 +36,7 @@ from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
 
-__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters"]
+__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
 
 # node-steps per compiled call: long enough that returning to Python costs nothing, short
 # enough that signals, progress and checkpoints are seen promptly
@@ -121,10 +121,67 @@ def parameters(config) -> tuple:
     return scheme, ctrl, system, rod, floor
 
 
+def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tuple[int, int]:
+    """The rows of a run's snapshot and diagnostics buffers (``Run``): by default what the
+    run needs, up to a memory bound, and always at least what a dense-output step writes
+    in one call (``control.DENSE_OUTPUTS_MAX``)."""
+    n1 = config.rod.N + 1
+    out, t_end = config.output, config.time.t_end
+    if snapshot_capacity is None:
+        snapshot_capacity = min(_capacity(n1), _rows_needed(out.snapshot_interval, t_end))
+    if diag_capacity is None:
+        diag_capacity = min(4096, _rows_needed(out.diagnostics_interval, t_end))
+    if out.snapshot_interval > 0:
+        snapshot_capacity = max(snapshot_capacity, ctrl.dense_snapshots)
+    if out.diagnostics_interval > 0:
+        diag_capacity = max(diag_capacity, ctrl.dense_diagnostics)
+    return snapshot_capacity, diag_capacity
+
+
 def warn_config(config, stacklevel: int = 3) -> None:
     """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller)."""
     for text in config.warnings():
         warnings.warn(text, ModelWarning, stacklevel=stacklevel)
+
+
+def failure_text(fail, t_end: float, ctrl, config, rod, floor) -> str:
+    """The one-line message of a run that failed with the loop's ``fail`` row
+    (``Run.failure_message``; also the ensemble engine's, for a point of a batch)."""
+    f = fail
+    code = int(f[L.F_CODE])
+    t = f[L.F_T]
+    if code == NO_PROGRESS:
+        return (f"time stopped advancing at t = {float(t)!r}: {int(f[L.F_VALUE])} steps of "
+                f"dt = {f[L.F_DT]:.3g} each left t unchanged (the resolution of t there "
+                f"is {math.ulp(t):.3g}): time.t_end = {t_end:g} cannot be "
+                f"reached with steps this short")
+    if code == BAD_STRAIN:
+        why = (f"the strain of segment {int(f[L.F_INDEX])} reached {f[L.F_VALUE]:.6g}, at or "
+               f"below the rod's compression limit {lower(rod):g} (rod.law = "
+               f"{config.rod.law!r})")
+    elif code == BAD_FLOOR:
+        why = (f"the bottom height u_0 reached {f[L.F_VALUE]:.6g}, at or below the floor's "
+               f"bending limit -beta = {lower(floor):g}")
+    elif code == NON_FINITE:
+        why = "a non-finite value appeared in the state"
+    elif code == NO_CONVERGENCE:
+        why = (f"the implicit step's Newton iteration did not converge (last update "
+               f"{f[L.F_VALUE]:.3g})")
+    elif code == TOO_CLOSE:
+        why = (f"the state approaches a barrier (smallest strain {f[L.F_VALUE]:.6g}, "
+               f"bottom height limit -beta = {lower(floor):g}) faster than steps "
+               f"can resolve")
+    elif code == INACCURATE:
+        why = (f"the local error estimate is {f[L.F_VALUE]:.3g} × the tolerance "
+               f"(time.rtol = {config.time.rtol:g}, time.atol = "
+               f"{config.time.atol:g})")
+    else:
+        why = f"unknown failure code {code}"
+    if ctrl.dt_fixed > 0:
+        return (f"fixed step time.dt = {ctrl.dt_fixed:g} failed at t = {t:.9g}: {why}; "
+                f"unset time.dt for adaptive steps or choose a smaller time.dt")
+    return (f"step size fell below time.dt_min = {ctrl.dt_min:g} at t = {t:.9g} "
+            f"(last trial step {f[L.F_DT]:.3g}): {why}")
 
 
 class Run:
@@ -162,15 +219,8 @@ class Run:
         self.clock[L.SNAP_DT] = out.snapshot_interval
         self.clock[L.DIAG_DT] = out.diagnostics_interval
         self._set_tolerance()
-        if snapshot_capacity is None:
-            snapshot_capacity = min(_capacity(n1), _rows_needed(out.snapshot_interval, tc.t_end))
-        if diag_capacity is None:
-            diag_capacity = min(4096, _rows_needed(out.diagnostics_interval, tc.t_end))
-        # a dense-output step writes all its rows in one call (``control.DENSE_OUTPUTS_MAX``)
-        if out.snapshot_interval > 0:
-            snapshot_capacity = max(snapshot_capacity, self.ctrl.dense_snapshots)
-        if out.diagnostics_interval > 0:
-            diag_capacity = max(diag_capacity, self.ctrl.dense_diagnostics)
+        snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
+                                                      diag_capacity)
         self._shapes = (snapshot_capacity, n1, diag_capacity, event_capacity)
         (self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
          self.bounces) = self._buffers()
@@ -409,41 +459,8 @@ class Run:
 
     # ---- failure -------------------------------------------------------------------------
     def failure_message(self) -> str:
-        f = self.fail
-        code = int(f[L.F_CODE])
-        t = f[L.F_T]
-        if code == NO_PROGRESS:
-            return (f"time stopped advancing at t = {float(t)!r}: {int(f[L.F_VALUE])} steps of "
-                    f"dt = {f[L.F_DT]:.3g} each left t unchanged (the resolution of t there "
-                    f"is {math.ulp(t):.3g}): time.t_end = {self.clock[L.T_END]:g} cannot be "
-                    f"reached with steps this short")
-        if code == BAD_STRAIN:
-            why = (f"the strain of segment {int(f[L.F_INDEX])} reached {f[L.F_VALUE]:.6g}, at or "
-                   f"below the rod's compression limit {lower(self.rod):g} (rod.law = "
-                   f"{self.config.rod.law!r})")
-        elif code == BAD_FLOOR:
-            why = (f"the bottom height u_0 reached {f[L.F_VALUE]:.6g}, at or below the floor's "
-                   f"bending limit -beta = {lower(self.floor):g}")
-        elif code == NON_FINITE:
-            why = "a non-finite value appeared in the state"
-        elif code == NO_CONVERGENCE:
-            why = (f"the implicit step's Newton iteration did not converge (last update "
-                   f"{f[L.F_VALUE]:.3g})")
-        elif code == TOO_CLOSE:
-            why = (f"the state approaches a barrier (smallest strain {f[L.F_VALUE]:.6g}, "
-                   f"bottom height limit -beta = {lower(self.floor):g}) faster than steps "
-                   f"can resolve")
-        elif code == INACCURATE:
-            why = (f"the local error estimate is {f[L.F_VALUE]:.3g} × the tolerance "
-                   f"(time.rtol = {self.config.time.rtol:g}, time.atol = "
-                   f"{self.config.time.atol:g})")
-        else:
-            why = f"unknown failure code {code}"
-        if self.ctrl.dt_fixed > 0:
-            return (f"fixed step time.dt = {self.ctrl.dt_fixed:g} failed at t = {t:.9g}: {why}; "
-                    f"unset time.dt for adaptive steps or choose a smaller time.dt")
-        return (f"step size fell below time.dt_min = {self.ctrl.dt_min:g} at t = {t:.9g} "
-                f"(last trial step {f[L.F_DT]:.3g}): {why}")
+        return failure_text(self.fail, float(self.clock[L.T_END]), self.ctrl, self.config,
+                            self.rod, self.floor)
 
     # ---- checkpoint ------------------------------------------------------------------------
     _CHECKPOINT_ARRAYS = ("state", "clock", "count", "ev", "sstats")

@@ -1,36 +1,20 @@
 """The GPU engine as a sweep executor: the points, in batches, through ``engine.run_batch``,
-in this process, each batch's results handed on point by point to the sweep's driver
-(``sweeps.run_sweep``), which writes them to the sweep file as it does a CPU worker's."""
+in this process; each batch's ``BatchResult`` goes to the sweep's driver
+(``sweeps.run_sweep``), which writes it to the sweep file column by column, as it does a
+CPU worker's batch."""
 from __future__ import annotations
 
 import importlib
 
-from ..sweeps.batch import BatchResult
-from ..sweeps.point import PointResult
 from .engine import check_device, check_point, prepare, run_batch
 
-__all__ = ["CudaExecutor", "point_results", "check_grid"]
+__all__ = ["CudaExecutor", "check_grid", "cuda_executor", "sweep_device"]
 
 # points per batch: enough to fill an H100/H200 many times over (one thread each), few
 # enough that a batch's results reach the sweep file every few seconds
 BATCH_POINTS = 1 << 16
 # keys whose values decide whether the GPU engine can run a point (``engine.check_point``)
 _DECIDING = ("rod.N", "time.integrator", "rod.law", "floor.law")
-
-
-def point_results(batch: BatchResult) -> list[PointResult]:
-    """A batch's points as PointResults (its warnings on the first)."""
-    out = []
-    lo = 0
-    for q, index in enumerate(batch.index):
-        hi = lo + int(batch.bounce_count[q])
-        values = {name: col[q].item() if hasattr(col[q], "item") else col[q]
-                  for name, col in batch.values.items()}
-        bounces = {name: col[lo:hi] for name, col in batch.bounces.items()}
-        out.append(PointResult(int(index), values, bounces, dict(batch.worker), "",
-                               batch.warnings if q == 0 else ()))
-        lo = hi
-    return out
 
 
 def check_grid(base, grid) -> None:
@@ -48,6 +32,7 @@ class CudaExecutor:
 
     name = "cuda"
     jobs = 1
+    takes_points = True     # the driver hands it points; it batches them itself
 
     def __init__(self, batch_points: int = BATCH_POINTS):
         self.batch_points = int(batch_points)
@@ -56,7 +41,7 @@ class CudaExecutor:
         for task in tasks:
             for mod in task.laws:
                 importlib.import_module(mod)
-        return point_results(run_batch([t.config for t in tasks], [t.index for t in tasks]))
+        return [run_batch([t.config for t in tasks], [t.index for t in tasks])]
 
     def results(self, tasks, total: int | None = None):
         batch = []

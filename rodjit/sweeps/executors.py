@@ -1,10 +1,12 @@
 """Where sweep points run: this process, a pool of local worker processes, or Dask.
 
-Every executor turns an iterator of PointTasks into an iterator of PointResults, in the
-order they finish, with ``None`` as a heartbeat (at least every HEARTBEAT seconds) so the
-caller can check for signals and flush while points run (``total``, when given, is how
-many tasks there are).  A worker process that dies yields a failed result for the point it
-held; the other points go on.
+Every executor turns an iterator of tasks (PointTasks, or the ensemble engine's
+BatchTasks) into an iterator of their results (PointResults, BatchResults;
+``ensemble.run_task``), in the order they finish, with ``None`` as a heartbeat (at least
+every HEARTBEAT seconds) so the caller can check for signals and flush while points run
+(``total``, when given, is how many tasks there are).  A worker process that dies yields a
+failed result for the point it held; a batch it held runs again, each point alone
+(``ensemble.lost``); the other tasks go on.
 """
 from __future__ import annotations
 
@@ -22,7 +24,9 @@ from multiprocessing.connection import wait
 
 from ..output.h5files import abandoned, quiet_disk_errors
 from .dask_logging import route_dask_logs
-from .point import PointTask, died, run_point, run_points, start_worker
+from .ensemble import (BatchTask, lost_batch, run_task, run_tasks, timed, task_key as _key,
+                       lost as _lost)
+from .point import PointTask, died, start_worker
 
 __all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
            "WORKER_ENV", "SCHEDULERS", "default_jobs"]
@@ -98,7 +102,7 @@ class Inline:
 
     def results(self, tasks, total: int | None = None):
         for task in tasks:
-            yield run_point(task)
+            yield run_task(task)
 
     def close(self, cancel: bool = False) -> None:
         pass
@@ -136,7 +140,7 @@ def _worker_main(conn, warm) -> None:
             if task is None:
                 return
             try:
-                conn.send(run_point(task))
+                conn.send(run_task(task))
             except (BrokenPipeError, OSError):
                 return
     finally:
@@ -258,9 +262,11 @@ class ProcessPool:
                         continue
                     if kind == "dead":
                         self.deaths += 1
-                        lost = died(w.tasks.popleft().index,
-                                    _death_message(w.process.pid, result))
+                        lost = _lost(w.tasks.popleft(), _death_message(w.process.pid, result))
                         requeued.extendleft(reversed(w.tasks))
+                        if isinstance(lost, list):   # a batch's first death: its points
+                            requeued.extendleft(reversed(lost))   # again, each alone
+                            lost = None
                         w.tasks.clear()
                         busy.remove(w)
                         self._retire(w, cancel=True)
@@ -270,7 +276,8 @@ class ProcessPool:
                             nw.assign(task)
                             fill(nw)
                             busy.append(nw)
-                        yield lost
+                        if lost is not None:
+                            yield lost
                         continue
                     w.tasks.popleft()
                     fill(w)                    # keep the worker busy first
@@ -377,15 +384,20 @@ class DaskCluster:
             # timed, and (guided scheduling) at most the remaining points over the tasks in
             # flight, so the tasks shrink toward the end and the workers finish together
             k = 1
+            first = next(tasks, None)
+            if first is None:
+                return ()
+            if isinstance(first, BatchTask):     # already sized: one Dask task
+                return (first,)
             if timing["done"]:
                 k = int(TASK_SECONDS * timing["done"] / max(timing["wall"], 1e-9))
                 if total is not None:
                     k = min(k, -(-(total - timing["sent"]) // (self.depth * self.jobs)))
                 k = max(1, min(k, MAX_BATCH))
-            return tuple(islice(tasks, k))
+            return (first,) + tuple(islice(tasks, k - 1))
 
         def submit(points: tuple[PointTask, ...]) -> None:
-            fut = self.client.submit(run_points, points, pure=False,
+            fut = self.client.submit(run_tasks, points, pure=False,
                                      key=f"rodjit-points-{next(seq)}-{token}")
             self._futures[fut] = points
             timing["sent"] += len(points)
@@ -399,7 +411,7 @@ class DaskCluster:
             # the one that killed it.
             while True:
                 # (a re-run point is always alone in its task)
-                isolating = bool(suspects) or any(p[0].index in retried
+                isolating = bool(suspects) or any(_key(p[0]) in retried
                                                   for p in self._futures.values())
                 limit = self._live_workers() if isolating else self.depth * self.jobs
                 if len(self._futures) >= limit:
@@ -434,21 +446,27 @@ class DaskCluster:
                         # restarted worker has a new address)
                         lost.add(getattr(getattr(exc, "last_worker", None), "address", fut.key))
                         self.deaths = len(lost)
-                        fresh = [p for p in points if p.index not in retried]
-                        # it, or a point beside it, killed the worker
-                        retried.update(p.index for p in fresh)
+                        again = [p for p in points if _key(p) in retried]
+                        # it, or a point beside it, killed the worker: each point again,
+                        # alone (a batch as batches of one)
+                        fresh = [q for p in points if _key(p) not in retried for q in (
+                            _lost(p, "") if isinstance(p, BatchTask) else [p])]
+                        retried.update(_key(p) for p in fresh)
                         suspects.extend(fresh)
-                        results = [died(p.index, "the Dask worker process running this point "
-                                                 "died, also when it ran alone (KilledWorker)")
-                                   for p in points if p not in fresh]
+                        why = ("the Dask worker process running this point died, also when "
+                               "it ran alone (KilledWorker)")
+                        results = [lost_batch(p, why) if isinstance(p, BatchTask)
+                                   else died(p.index, why)
+                                   for p in again]
                     except Exception as exc:   # cancelled, lost, or an error outside run_point
-                        results = [died(p.index, f"the Dask task failed: "
-                                                 f"{type(exc).__name__}: {exc}") for p in points]
+                        why = f"the Dask task failed: {type(exc).__name__}: {exc}"
+                        results = [lost_batch(p, why) if isinstance(p, BatchTask)
+                                   else died(p.index, why) for p in points]
                     fut.release()
                     for r in results:
-                        if r.values["steps"]:   # timed (not a point that died)
-                            timing["done"] += 1
-                            timing["wall"] += r.values["wall_time"]
+                        done, wall = timed(r)
+                        timing["done"] += done
+                        timing["wall"] += wall
                     fill()                     # before the parent writes the results
                     yield from results
         finally:

@@ -29,6 +29,8 @@ from .executors import check_scheduler, default_jobs, make_executor
 from .grid import MAX_POINTS, Grid
 from .main_guard import check_main
 from .plan import check_runs_dir, plan_sweep
+from .batch import BatchResult
+from .ensemble import batches, check_batch_size, split_bounces, timed
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
 from .sweep_table import SweepTable
 
@@ -37,6 +39,7 @@ __all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
 FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
 BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
+ENGINE = True          # False: every point alone through ``point.run_point`` (benchmarks)
 
 
 class SweepInterrupted(RuntimeError):
@@ -153,7 +156,8 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
           resume: bool = False, overwrite: bool = False, progress=None, command=None,
           handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL,
           max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
-          max_points: float = MAX_POINTS, device: str | None = None) -> SweepTable:
+          max_points: float = MAX_POINTS, device: str | None = None,
+          batch_size: int | None = None) -> SweepTable:
     """Run ``config`` (None: the built-in run) at every point of ``grid`` and return the
     summary table; with ``output``, stream it to that sweep file as points finish.
 
@@ -200,6 +204,10 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     device : str, optional
         ``"cpu"`` (default), ``"cuda"`` (the GPU engine, ``rodjit.gpu``: every point in
         this process, in batches; no ``save_runs``) or ``"auto"`` (the GPU if there is one).
+    batch_size : int, optional
+        Points per batch of the ensemble engine (one compiled call each); by default
+        from the measured cost per point, about ``ensemble.BATCH_SECONDS`` of work a
+        batch; not used with ``save_runs`` (each point writes its run file).
 
     Returns
     -------
@@ -217,6 +225,7 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     jobs = check_jobs(jobs)
+    check_batch_size(batch_size)
     check_scheduler(scheduler)
     if device not in (None, "cpu"):
         from ..gpu.executor import sweep_device
@@ -232,7 +241,8 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
                                           max_steps=max_steps, max_points=max_points)
     if output is None:
         return _sweep(config, plan, None, jobs, scheduler, save_runs, resume, overwrite,
-                      progress, command, handle_signals, flush_interval, max_points, device)
+                      progress, command, handle_signals, flush_interval, max_points, device,
+                      batch_size)
     output = Path(output)
     if resume and not output.is_file():
         open_file(output).close()      # the one-line reason: missing, a directory, ...
@@ -240,11 +250,12 @@ def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, sav
     with WriterLock(output):
         return _sweep(config, plan if plan is not None else grid, output, jobs, scheduler,
                       save_runs, resume, overwrite, progress, command, handle_signals,
-                      flush_interval, max_points, device)
+                      flush_interval, max_points, device, batch_size)
 
 
 def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, progress,
-           command, handle_signals, flush_interval, max_points, device=None) -> SweepTable:
+           command, handle_signals, flush_interval, max_points, device=None,
+           batch_size=None) -> SweepTable:
     """``sweep`` once this process holds the writer lock of ``output`` (if any); ``grid``
     is the checked SweepPlan of a new sweep, the grid given to a resume."""
     attrs = {}
@@ -311,7 +322,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                                       f"written", exc.cause) from None
                 raise
     return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
-                  flush_interval, t_start)
+                  flush_interval, t_start, batch_size)
 
 
 def _remove_unreported(runs_dir: Path, grid: Grid, todo, cols) -> None:
@@ -368,7 +379,7 @@ def _stats(wall: float, ran: int, failed: int, executor, teardown: float = 0.0) 
 
 
 def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
-           flush_interval, t0: float) -> SweepTable:
+           flush_interval, t0: float, batch_size=None) -> SweepTable:
     """Run ``todo`` on ``executor`` (started at ``t0``: its start-up counts in the wall
     time) into ``table`` and its file."""
     grid, base, cols = table.grid, table.base, table.columns
@@ -376,7 +387,15 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     n = len(grid)
     done0 = n - len(todo)
 
+    timing = {"points": 0, "wall": 0.0}
+
     def tasks():
+        # the ensemble engine: batches of points (an executor that batches the points
+        # itself, the GPU engine's, takes them one by one)
+        if runs_dir is None and ENGINE and not getattr(executor, "takes_points", False):
+            yield from batches(todo, base, grid, law_modules(grid.config(base, todo[0])),
+                                batch_size, timing, executor.jobs)
+            return
         for i in todo:
             cfg = grid.config(base, i)
             path = str(runs_dir / grid.run_name(i)) if runs_dir is not None else None
@@ -395,7 +414,22 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
     with StopFlag(handle_signals) as stop:
         try:
             for result in results:
-                if result is not None:
+                if isinstance(result, BatchResult):
+                    reissue_warnings(result, said)
+                    for name in SUMMARY_COLUMNS:
+                        cols[name][result.index] = result.values[name]
+                    if output is None:
+                        for k, table_k in enumerate(split_bounces(result)):
+                            table.keep_bounces(int(result.index[k]), table_k)
+                    else:
+                        batch.append(result)
+                    done_k, wall_k = timed(result)
+                    timing["points"] += done_k
+                    timing["wall"] += wall_k
+                    ran += result.index.size
+                    failed += int(np.sum(result.values["status"] == "failed"))
+                    t_last = time.perf_counter()
+                elif result is not None:
                     reissue_warnings(result, said)
                     for name in SUMMARY_COLUMNS:
                         cols[name][result.index] = result.values[name]

@@ -53,6 +53,7 @@ from ..records.bounces import empty_bounces
 from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS
 from ..version import __version__
 from .grid import Grid
+from .ensemble import as_batch
 from .point import SUMMARY_COLUMNS, empty_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
@@ -262,29 +263,40 @@ def reopen(path, *, history: str) -> None:
 
 
 def write_results(path, results, wait: float = LOCK_WAIT) -> None:
-    """Write a batch of PointResults: their summary rows and bounce tables.  FileBusy if
-    another process holds the file open for longer than ``wait`` seconds."""
-    if not results:
+    """Write PointResults and BatchResults: their summary rows and bounce tables, as one
+    BatchResult (``write_batch``).  FileBusy if another process holds the file open for
+    longer than ``wait`` seconds."""
+    if results:
+        write_batch(path, as_batch(results), wait)
+
+
+def write_batch(path, result, wait: float = LOCK_WAIT) -> None:
+    """Write a BatchResult whose points are in increasing order (``ensemble.as_batch``):
+    column by column, its bounce rows appended to the one table."""
+    idx = np.asarray(result.index, dtype=np.int64)
+    if idx.size == 0:
         return
-    results = sorted(results, key=lambda r: r.index)
-    idx = np.array([r.index for r in results])
-    with _writing(path, "r+", wait, reserve=_batch_bytes(results)) as f:
+    v = result.values
+    reserve = (RESERVE_BASE + RESERVE_POINT * idx.size
+               + 4 * sum(len(str(x)) for name, (kind, _) in SUMMARY_COLUMNS.items()
+                         if kind == "str" for x in v[name])
+               + 2 * sum(np.asarray(c).nbytes for c in result.bounces.values()))
+    with _writing(path, "r+", wait, reserve=reserve) as f:
         s = f["summary"]
         for name, (kind, _) in SUMMARY_COLUMNS.items():
             if name == "status":
                 continue      # last: a row counts as done only once all of it is there
-            vals = [r.values[name] for r in results]
-            s[name][idx] = np.array(vals, dtype=object if kind == "str" else _DTYPES[kind])
-        _append_bounces(f, idx, [r.bounces for r in results])
-        s["status"][idx] = np.array([r.status for r in results], dtype=object)
+            s[name][idx] = np.asarray(v[name], dtype=object if kind == "str" else _DTYPES[kind])
+        _append_rows(f, idx, result.bounces, np.asarray(result.bounce_count, np.int64))
+        s["status"][idx] = np.asarray(v["status"], dtype=object)
 
 
-def _append_bounces(f: h5py.File, idx: np.ndarray, tables) -> None:
-    """Append the bounce rows of the points ``idx`` (increasing) to the one table, and
-    record where each point's rows are."""
+def _append_rows(f: h5py.File, idx: np.ndarray, bounces: dict, counts: np.ndarray) -> None:
+    """Append the bounce rows of the points ``idx`` (increasing; ``counts`` rows each, in
+    that order in the columns ``bounces``) to the one table, and record where each point's
+    rows are."""
     g, s = f[BOUNCES], f["summary"]
     n0 = int(g.attrs["rows"])
-    counts = np.array([len(t["t_impact"]) for t in tables], dtype=np.int64)
     starts = n0 + np.cumsum(counts) - counts
     n1 = n0 + int(counts.sum())
     if n1 > n0:
@@ -294,7 +306,7 @@ def _append_bounces(f: h5py.File, idx: np.ndarray, tables) -> None:
         g[ROW][n0:n1] = np.arange(n0, n1, dtype=np.int64)
         g[POINT_INDEX][n0:n1] = np.repeat(idx, counts)
         for name in BOUNCE_COLUMNS:
-            data = np.concatenate([np.asarray(t[name]) for t in tables])
+            data = np.asarray(bounces[name])
             g[name][n0:n1] = data.astype(cf.BOOL_DTYPE) if data.dtype == bool else data
     s["bounce_count"][idx] = counts
     s["bounce_start"][idx] = np.where(counts > 0, starts, -1)
@@ -313,16 +325,6 @@ def _cut_bounces(f: h5py.File) -> None:
         if g[name].shape[0] != rows:
             g[name].resize((rows,))
     g.attrs["rows"] = rows
-
-
-def _batch_bytes(results) -> int:
-    """Disk space to reserve for writing ``results``: more than they can take."""
-    total = RESERVE_BASE
-    for r in results:
-        total += RESERVE_POINT + 4 * sum(len(str(v)) for v in r.values.values()
-                                         if isinstance(v, str))
-        total += 2 * sum(np.asarray(col).nbytes for col in r.bounces.values())
-    return total
 
 
 def finish(path, status: str, message: str = "", attrs: dict | None = None) -> None:

@@ -1,0 +1,323 @@
+"""The ensemble engine's compiled batch call: many points of one sweep in one call.
+
+A *batch* is points whose five parameter tuples (scheme, control, system, rod law, floor
+law: ``driver.run.parameters``) have the same classes and field types; only their values
+differ.  Each point's tuples travel as one row of ``params`` (every scalar field as a
+double, ``pack``), and ``_rebuild`` makes them again in compiled code, so the values stay
+run-time values and one compile serves the whole grid (as the GPU engine does).
+
+Per point, ``run_batch`` does what ``sweeps.point`` does with a ``Run``, with the loop's own
+kernels (``loop.start``, ``loop.advance``), so every step is the same:
+
+* its arrays start as ``Run.__init__`` leaves them (zeros; u, v and the clock row from the
+  caller; the flight time in ``ev``), then ``start`` and ``advance`` until DONE, with the
+  same ``max_steps`` and buffer sizes as a ``Run`` (so even the driver's check for a call
+  that took steps without moving t sees the same calls);
+* after each call the buffers are consumed here, as ``Run.drain`` hands them to a sink: a
+  block holding a non-finite diagnostic value is refused (the point fails), snapshots are
+  dropped (they were only taken so that steps land on the same output times), the
+  diagnostics rows fold into the extremes (``records.extremes.Extremes``) and their
+  TRACK columns go to ``track``, episodes to ``eps``, bounce rows to the batch's ``bout``;
+* at the end, the pending bounce (``events.write_bounce``), the extremes and the
+  first-impact observables (``impact.first_contact``).
+
+A point whose track, episodes or bounce rows do not fit the arrays it was given is marked
+``R_OVERFLOW``: the caller runs it again on the per-point path.  Nothing here allocates.
+"""
+import numpy as np
+
+from . import impact as I
+from . import layout as L
+from .events import write_bounce
+from .loop import advance, start
+from .._jit import kernel, overload
+
+NO_PROGRESS = 100     # driver.run.NO_PROGRESS: steps were taken, t did not move
+
+# per point, ``fout`` columns
+F_MIN_U0 = 0
+F_MAX_FF = 1
+F_MIN_STRAIN = 2
+F_ENERGY_ERROR = 3
+F_T_FINAL = 4
+F_E0 = 5
+F_FAIL = 6                       # the loop's ``fail`` row (FAIL_SIZE values)
+F_IMPACT = F_FAIL + L.FAIL_SIZE  # impact.first_contact's ``out`` (OUT_SIZE values)
+F_T_END = F_IMPACT + I.OUT_SIZE  # clock[T_END] (the failure message names it)
+F_SIZE = F_T_END + 1
+
+# per point, ``iout`` columns
+I_RESULT = 0          # R_* below
+I_STEPS = 1
+I_REJECTED = 2
+I_BOUNCES = 3         # rows in ``bout``, the pending bounce included
+I_IMPACT = 4          # impact.first_contact's code
+I_BSTART = 5          # its first row in ``bout``
+I_SIZE = 6
+
+R_COMPLETED = 0
+R_FAILED = 1          # ``fail`` says why
+R_NONFINITE = 2       # a diagnostics block held a non-finite value
+R_OVERFLOW = 3        # did not fit: run it on the per-point path
+
+
+def _nscalar(proto):
+    """The scalar (float, int, bool) fields of a parameter tuple: the values ``pack``
+    stores for it."""
+    return sum(isinstance(x, (bool, int, float, np.bool_, np.integer, np.floating))
+               for x in proto)
+
+
+def pack(params) -> list:
+    """A point's five parameter tuples as one row of doubles: their scalar fields in order
+    (an int or bool stored exactly as a double; other fields must equal the batch's
+    first point's, ``family``)."""
+    return [float(x) for t in params for x in t
+            if isinstance(x, (bool, int, float, np.bool_, np.integer, np.floating))]
+
+
+def family(params) -> tuple:
+    """What must be equal for points to share a batch: the tuples' classes, each field's
+    type, and the value of every field that is not a scalar."""
+    out = []
+    for t in params:
+        out.append(type(t))
+        for x in t:
+            if isinstance(x, (bool, int, float, np.bool_, np.integer, np.floating)):
+                out.append(type(x))
+            else:
+                out.append(("value", repr(x)))
+    return tuple(out)
+
+
+@overload(_nscalar)
+def _nscalar_ov(proto):
+    from numba.core import types
+
+    n = sum(isinstance(t, (types.Float, types.Integer, types.Boolean)) for t in proto.types)
+    return lambda proto: n
+
+
+def _rebuild(proto, row, o):
+    """The parameter tuple of ``proto``'s class with its scalar fields from ``row[o:]``
+    (this Python version runs where Numba is off, NUMBA_DISABLE_JIT=1)."""
+    args = []
+    k = 0
+    for x in proto:
+        if isinstance(x, (bool, np.bool_)):
+            args.append(bool(row[o + k] != 0.0))
+        elif isinstance(x, (int, np.integer)):
+            args.append(int(row[o + k]))
+        elif isinstance(x, (float, np.floating)):
+            args.append(float(row[o + k]))
+        else:
+            args.append(x)
+            continue
+        k += 1
+    return type(proto)(*args)
+
+
+@overload(_rebuild)
+def _rebuild_ov(proto, row, o):
+    from numba.core import types
+
+    args = []
+    k = 0
+    for j, t in enumerate(proto.types):
+        if isinstance(t, types.Boolean):
+            args.append(f"row[o + {k}] != 0.0")
+        elif isinstance(t, types.Integer):
+            args.append(f"int(row[o + {k}])")
+        elif isinstance(t, types.Float):
+            args.append(f"row[o + {k}]")
+        else:
+            args.append(f"proto[{j}]")
+            continue
+        k += 1
+    cls = proto.instance_class
+    name = f"_rebuild_{cls.__name__}"
+    ns = {"cls": cls, "__name__": __name__}
+    # compiled with this file's name: Numba caches an implementation by its source file
+    exec(compile(f"def {name}(proto, row, o):\n    return cls({', '.join(args)})\n",
+                 __file__, "exec"), ns)
+    return ns[name]
+
+
+@kernel
+def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, flight,
+              state, trial, work, interp, sstats, clock, count, ev, snap_t, snap_step,
+              snap_u, snap_v, diag, episodes, bounces, fail, track, eps, bout, st,
+              fout, iout, max_steps):
+    """Run every point (row) of ``params``; ``init[i]`` holds its u and v rows,
+    ``clock0[i]`` its clock, ``flight[i]`` its flight time τ.  The other arrays are one
+    point's (reused: ``Run``'s arrays and buffers, ``track`` and ``eps`` rows, ``st`` 3
+    floats), ``bout`` the batch's bounce rows, ``fout`` and ``iout`` its summary values
+    (``F_*``, ``I_*``).  Returns the bounce rows written."""
+    o1 = _nscalar(scheme0)
+    o2 = o1 + _nscalar(ctrl0)
+    o3 = o2 + _nscalar(system0)
+    o4 = o3 + _nscalar(rod0)
+    nbo = 0
+    for i in range(params.shape[0]):
+        p = params[i]
+        scheme = _rebuild(scheme0, p, 0)
+        ctrl = _rebuild(ctrl0, p, o1)
+        system = _rebuild(system0, p, o2)
+        rod = _rebuild(rod0, p, o3)
+        floor = _rebuild(floor0, p, o4)
+        nbo = _run_point(scheme, ctrl, system, rod, floor, init[i], clock0[i], flight[i],
+                         state, trial, work, interp, sstats, clock, count, ev, snap_t,
+                         snap_step, snap_u, snap_v, diag, episodes, bounces, fail, track,
+                         eps, bout, nbo, st, fout[i], iout[i], max_steps)
+    return nbo
+
+
+@kernel
+def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial, work,
+               interp, sstats, clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag,
+               episodes, bounces, fail, track, eps, bout, nbo, st, fo, io, max_steps):
+    """One point of ``run_batch``; returns the bounce rows of the batch after it."""
+    n1 = state.shape[1]
+    for r in range(state.shape[0]):
+        for j in range(n1):
+            state[r, j] = init[r, j] if r < 2 else 0.0
+            trial[r, j] = 0.0
+    for r in range(work.shape[0]):
+        for j in range(n1):
+            work[r, j] = 0.0
+    for r in range(interp.shape[0]):
+        for j in range(n1):
+            interp[r, j] = 0.0
+    for j in range(sstats.size):
+        sstats[j] = 0
+    for j in range(clock.size):
+        clock[j] = clock0[j]
+    for j in range(count.size):
+        count[j] = 0
+    for j in range(ev.size):
+        ev[j] = 0.0
+    ev[L.FLIGHT_TIME] = tau
+    for j in range(fail.size):
+        fail[j] = 0.0
+    # the extremes (records.extremes.Extremes)
+    samples = 0
+    bal_max = -np.inf
+    bal_min = np.inf
+    kin_max = 0.0
+    strain_min = np.inf
+    u0_min = np.inf
+    force_max = -np.inf
+    nd = 0
+    ne = 0
+    bstart = nbo
+    result = L.DONE
+    outcome = R_COMPLETED
+    code = start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev, snap_t,
+                 snap_step, snap_u, snap_v, diag, fail)
+    if code == L.FAILED:
+        outcome = R_FAILED
+    while outcome == R_COMPLETED:
+        t_before = clock[L.T]
+        steps_before = count[L.STEP]
+        code = advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats,
+                       clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes,
+                       bounces, fail, max_steps)
+        if ((code == L.PAUSED or code == L.FULL) and count[L.STEP] > steps_before
+                and clock[L.T] <= t_before):
+            fail[L.F_CODE] = NO_PROGRESS
+            fail[L.F_T] = t_before
+            fail[L.F_DT] = clock[L.DT]
+            fail[L.F_VALUE] = count[L.STEP] - steps_before
+            code = L.FAILED
+        # the block, as Run.drain hands it to a sink
+        m = count[L.N_DIAG]
+        total = 0.0
+        for r in range(m):
+            for c in range(diag.shape[1]):
+                total += diag[r, c]
+        finite = np.isfinite(total)
+        if not finite:
+            for r in range(m):
+                for c in range(diag.shape[1]):
+                    if not np.isfinite(diag[r, c]):
+                        outcome = R_NONFINITE
+        if outcome == R_NONFINITE:
+            break
+        for r in range(m):
+            row = diag[r]
+            samples += 1
+            bal = row[L.D_ENERGY_TOTAL] + row[L.D_DISSIPATED]
+            bal_max = max(bal_max, bal)
+            bal_min = min(bal_min, bal)
+            kin_max = max(kin_max, row[L.D_ENERGY_KINETIC])
+            strain_min = min(strain_min, row[L.D_MIN_STRAIN])
+            u0_min = min(u0_min, row[L.D_U_BOTTOM])
+            force_max = max(force_max, row[L.D_FLOOR_FORCE])
+            if nd < track.shape[0]:
+                for c in range(I.TRACK_SIZE):
+                    track[nd, c] = row[I.TRACK_FROM_DIAG[c]]
+            nd += 1
+        for r in range(count[L.N_EP]):
+            if ne < eps.shape[0]:
+                eps[ne, 0] = episodes[r, L.EC_T_START]
+                eps[ne, 1] = episodes[r, L.EC_T_END]
+            ne += 1
+        for r in range(count[L.N_BOUNCE]):
+            if nbo < bout.shape[0]:
+                for c in range(bounces.shape[1]):
+                    bout[nbo, c] = bounces[r, c]
+                bout[nbo, I.BR_OPEN] = 0.0
+            nbo += 1
+        count[L.N_SNAP] = 0
+        count[L.N_DIAG] = 0
+        count[L.N_EP] = 0
+        count[L.N_BOUNCE] = 0
+        if code == L.FAILED:
+            outcome = R_FAILED
+        if code == L.DONE:
+            break
+    if ev[L.B_NEP] > 0:     # the pending bounce (Run.pending_bounce, bounce_table)
+        is_open = ev[L.IN_CONTACT] != 0.0
+        if nbo < bout.shape[0]:
+            write_bounce(bout[nbo], ev, is_open)
+            bout[nbo, L.BC_AMBIGUOUS] = 1.0
+            bout[nbo, L.BC_RESTITUTION_ENERGY] = np.nan
+            bout[nbo, I.BR_OPEN] = 1.0 if is_open else 0.0
+        nbo += 1
+    io[I_STEPS] = count[L.STEP]
+    io[I_REJECTED] = count[L.REJECTED]
+    io[I_BSTART] = bstart
+    io[I_BOUNCES] = nbo - bstart
+    if nd > track.shape[0] or ne > eps.shape[0] or nbo > bout.shape[0]:
+        io[I_RESULT] = R_OVERFLOW
+        return bstart           # its rows are dropped: the point runs again alone
+    io[I_RESULT] = outcome
+    # Extremes.with_bounces: the finite extremes of the bounce rows too
+    for r in range(bstart, nbo):
+        x = bout[r, L.BC_MIN_STRAIN]
+        if np.isfinite(x):
+            strain_min = min(strain_min, x)
+        x = bout[r, L.BC_MIN_U0]
+        if np.isfinite(x):
+            u0_min = min(u0_min, x)
+        x = bout[r, L.BC_MAX_FLOOR_FORCE]
+        if np.isfinite(x):
+            force_max = max(force_max, x)
+    e0 = clock[L.E0]
+    fo[F_MIN_U0] = u0_min if np.isfinite(u0_min) else np.nan
+    fo[F_MAX_FF] = force_max if np.isfinite(force_max) else np.nan
+    fo[F_MIN_STRAIN] = strain_min if np.isfinite(strain_min) else np.nan
+    if samples == 0:
+        fo[F_ENERGY_ERROR] = np.nan
+    else:
+        dev = max(0.0, bal_max - e0, e0 - bal_min)
+        fo[F_ENERGY_ERROR] = dev / max(abs(e0), kin_max, 1e-300)
+    fo[F_T_FINAL] = clock[L.T]
+    fo[F_E0] = e0
+    fo[F_T_END] = clock[L.T_END]
+    for j in range(L.FAIL_SIZE):
+        fo[F_FAIL + j] = fail[j]
+    io[I_IMPACT] = I.first_contact(track, nd, eps, ne, bout[bstart:nbo], nbo - bstart,
+                                   system.g, tau, clock[L.T], state[0, 0] < 0.0,
+                                   fo[F_IMPACT:F_IMPACT + I.OUT_SIZE], st)
+    return nbo

@@ -1,0 +1,487 @@
+"""The ensemble engine's host side: a batch of sweep points in one compiled call
+(``stepping.ensemble.run_batch``), returned as a ``BatchResult``.
+
+What runs in Python per point, before the call, and why: the point's Config
+(``Grid.config``: the base configuration with the swept keys replaced, the fast path of
+``Config.override``), its parameter tuples (``driver.run.parameters``), its initial state
+(checked admissible) and its clock row: the same functions a ``Run`` calls, so the compiled
+loop starts from exactly the arrays ``rodjit run`` would give it.  That set-up measures
+about 90 µs a point on the paper's grid (most of it the Config), under a tenth of the
+point's loop; a ``Run`` object, its buffers and its compile lookup are not made.  The
+flight time τ is cached by rod law and N.  After the call, Python works on columns, except
+for a point that needs text (a failure message, the reason of a first contact without
+lift-off, whose lift-off energy is computed for those points only) and the means over each
+point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
+
+A point the batch could not hold (more diagnostics samples, episodes or bounce rows than
+its arrays, ``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
+
+Threads: one per worker process (``prange`` over points is not used): the sweep's
+workers are the parallelism, as for the per-point path.
+"""
+from __future__ import annotations
+
+import importlib
+import pickle
+import math
+import time
+import warnings
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..config import ModelWarning
+from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text, parameters
+from ..model.system import check_admissible, initial_state
+from ..records.columns import BOUNCE_COLUMNS
+from ..records.observables import flight_time, lift_energy
+from ..stepping import control
+from ..stepping import ensemble as E
+from ..stepping import impact as I
+from ..stepping import layout as L
+from ..stepping.schemes import SCHEME_STATS, work_rows
+from .batch import BatchResult
+from .point import (SUMMARY_COLUMNS, PointTask, died, empty_columns, pass_on, run_point,
+                    worker_info)
+
+__all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
+           "timed", "batches", "check_batch_size", "split_bounces", "as_batch", "EPISODE_ROWS",
+           "BATCH_SECONDS", "MAX_BATCH_SIZE"]
+
+EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
+BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
+NO_SAMPLES = ("the macroscopic-contact observables need diagnostics samples "
+              "(output.diagnostics_interval > 0)")
+
+
+BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
+FIRST_BATCH = 8        # points of the batches sent before any has been timed
+MAX_BATCH_SIZE = 100_000
+
+
+def check_batch_size(batch_size) -> None:
+    """ValueError (one line) unless ``batch_size`` is None or a whole number in range."""
+    if batch_size is None:
+        return
+    if (isinstance(batch_size, bool) or not isinstance(batch_size, int)
+            or not 1 <= batch_size <= MAX_BATCH_SIZE):
+        raise ValueError(f"batch_size = {batch_size!r} is out of range (a whole number from "
+                         f"1 to {MAX_BATCH_SIZE})")
+
+
+def batches(todo, base, grid, laws, batch_size, timing, jobs):
+    """BatchTasks over ``todo``: ``batch_size`` points each, or by default about
+    BATCH_SECONDS of work at the cost per point measured so far (``timing``, updated as
+    results arrive; FIRST_BATCH points before any), and at most the points left over two
+    batches per worker, so the workers finish together."""
+    todo = np.asarray(todo, dtype=np.int64)
+    i = 0
+    while i < todo.size:
+        if batch_size is not None:
+            k = batch_size
+        else:
+            k = (int(BATCH_SECONDS * timing["points"] / max(timing["wall"], 1e-9))
+                 if timing["points"] else FIRST_BATCH)
+            k = max(1, min(k, -(-(todo.size - i) // (2 * max(1, jobs)))))
+        yield BatchTask(todo[i:i + k], base, grid, laws)
+        i += k
+
+
+class BatchTask(NamedTuple):
+    """A batch of points for a worker: their indices in ``grid`` over ``base``."""
+
+    index: Any                  # (n,) int64 grid indices
+    base: Any                   # the sweep's base Config
+    grid: Any                   # its Grid
+    laws: tuple[str, ...]       # modules to import first (non-built-in laws)
+    retry: bool = False         # its worker died once: this is the second try
+
+
+def run_task(task):
+    """A PointTask's PointResult, or a BatchTask's BatchResult."""
+    if isinstance(task, BatchTask):
+        return run_batch(task)
+    return run_point(task)
+
+
+def lost(task, message: str):
+    """What to do with a task whose worker died: a point fails (its result); a batch is
+    tried once more, each of its points alone (the tasks to run, a list), so only a
+    point that kills its worker fails, as a batch of one on its second death (its
+    result)."""
+    if isinstance(task, BatchTask):
+        if task.retry:
+            return lost_batch(task, message)
+        return [task._replace(index=task.index[k:k + 1], retry=True)
+                for k in range(len(task.index))]
+    return died(task.index, message)
+
+
+def task_key(task):
+    """A task's identity for the executors' bookkeeping: a point's index, a batch's first."""
+    return ("batch", int(task.index[0])) if isinstance(task, BatchTask) else task.index
+
+
+def run_tasks(tasks) -> bytes:
+    """Run several tasks in turn (one Dask task); their results pickled into one blob,
+    which Dask moves as a single frame."""
+    return pickle.dumps([run_task(t) for t in tasks], protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def timed(result) -> tuple[int, float]:
+    """(points timed, their wall time) of a result: a point that died has no steps."""
+    steps = np.atleast_1d(result.values["steps"])
+    wall = np.atleast_1d(result.values["wall_time"])
+    return int(np.count_nonzero(steps)), float(np.sum(wall[steps != 0]))
+
+
+def lost_batch(task: BatchTask, message: str) -> BatchResult:
+    """The result of a batch whose worker died twice: every point failed with ``message``."""
+    idx = np.asarray(task.index, dtype=np.int64)
+    values = empty_columns(idx.size)
+    values["status"][:] = "failed"
+    values["message"][:] = message
+    return BatchResult(idx, values, _no_bounces(), np.zeros(idx.size, np.int64))
+
+
+def _no_bounces() -> dict:
+    from ..records.bounces import empty_bounces
+
+    return empty_bounces()
+
+
+_FLIGHT: dict = {}
+
+
+def _flight_time(config) -> float:
+    key = (config.rod.law, config.rod, config.rod.N)
+    try:
+        return _FLIGHT[key]
+    except (KeyError, TypeError):
+        tau = flight_time(config)
+        try:
+            _FLIGHT[key] = tau
+        except TypeError:
+            pass
+        return tau
+
+
+class _Point(NamedTuple):
+    config: Any
+    params: tuple
+    row: list
+    u: np.ndarray
+    v: np.ndarray
+    clock: np.ndarray
+    tau: float
+
+
+def _prepare(config) -> _Point:
+    """What ``Run.__init__`` computes for a point, without its buffers."""
+    config.check_runnable()
+    params = parameters(config)
+    u, v = initial_state(config)
+    check_admissible(u, params[3], params[4], "initial state")
+    clock = np.zeros(L.CLOCK_SIZE)
+    out = config.output
+    clock[L.T_END] = config.time.t_end
+    clock[L.SNAP_DT] = out.snapshot_interval
+    clock[L.DIAG_DT] = out.diagnostics_interval
+    spans = [x for x in (clock[L.SNAP_DT], clock[L.DIAG_DT], clock[L.T_END] - clock[L.T])
+             if x > 0]
+    clock[L.TOL] = control.output_tolerance(spans)
+    return _Point(config, params, E.pack(params), u, v, clock, _flight_time(config))
+
+
+def run_batch(task: BatchTask) -> BatchResult:
+    """Run the points of ``task`` (module docstring); a point that fails, also in its
+    set-up, gets its row marked failed with its reason, the others go on."""
+    t0 = time.perf_counter()
+    idx = np.asarray(task.index, dtype=np.int64)
+    n = idx.size
+    values = empty_columns(n)
+    per_point: dict[int, tuple] = {}          # position -> (values, bounces) of a point
+    caught: list = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ModelWarning)
+        for mod in task.laws:
+            importlib.import_module(mod)
+        groups: dict = {}
+        for k, i in enumerate(idx):
+            try:
+                p = _prepare(task.grid.config(task.base, int(i)))
+            except Exception as exc:     # as run_point reports a point that cannot start
+                values["status"][k] = "failed"
+                values["message"][k] = f"{type(exc).__name__}: {exc}"
+                continue
+            cfg = p.config
+            key = (E.family(p.params), cfg.rod.N, capacities(cfg, p.params[1]),
+                   cfg.output.diagnostics_interval, cfg.time.t_end)
+            groups.setdefault(key, []).append((k, p))
+        pieces = [_run_group(members, values) for members in groups.values()]
+        compiled = sum(piece[3] for piece in pieces)
+        loading = sum(piece[4] for piece in pieces)
+        # the points that did not fit: the per-point path
+        for k in np.flatnonzero(values["status"] == "overflow"):
+            r = run_point(PointTask(int(idx[k]), task.grid.config(task.base, int(idx[k])),
+                                    None, task.laws))
+            per_point[int(k)] = r
+            for name in SUMMARY_COLUMNS:
+                values[name][k] = r.values[name]
+    said = pass_on(caught)
+    bounces, counts = _assemble(n, pieces, per_point)
+    fill_bounce_values(values, bounces, counts, per_point)
+    wall = time.perf_counter() - t0
+    # a point's share of the batch's time, by its steps (its loop's work)
+    work = (values["steps"] + values["rejected_steps"]).astype(float)
+    batch_mask = np.array([k not in per_point for k in range(n)])
+    share = np.where(work > 0, work, 1.0) * batch_mask
+    share = share / share.sum() if share.sum() > 0 else share
+    values["run_time"] = np.where(batch_mask, share * compiled, values["run_time"])
+    values["wall_time"] = np.where(batch_mask, share * (wall - sum(
+        r.values["wall_time"] for r in per_point.values())), values["wall_time"])
+    values["compile_time"] = np.where(batch_mask, share * loading, values["compile_time"])
+    return BatchResult(idx, values, bounces, counts, said, worker_info())
+
+
+_LOADED: set = set()      # the families whose batch kernel this process has loaded
+
+
+def _scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows) -> tuple:
+    """One point's arrays of ``run_batch``, from ``state`` to ``eps`` (reused by every
+    point of the call): a Run's arrays and buffers, and the track and episode rows."""
+    return (np.zeros((3, n1)), np.zeros((3, n1)), np.zeros((work_rows(scheme), n1)),
+            np.zeros((2, n1)), np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64),
+            np.zeros(L.CLOCK_SIZE), np.zeros(L.COUNT_SIZE, dtype=np.int64),
+            np.zeros(L.EV_SIZE), np.zeros(cap_s), np.zeros(cap_s, dtype=np.int64),
+            np.zeros((cap_s, n1)), np.zeros((cap_s, n1)),
+            np.zeros((cap_d, len(L.DIAG_COLUMNS))),
+            np.zeros((ev_cap, len(L.EPISODE_COLUMNS))),
+            np.zeros((ev_cap, len(L.BOUNCE_COLUMNS))), np.zeros(L.FAIL_SIZE),
+            np.zeros((track_rows, I.TRACK_SIZE)), np.zeros((EPISODE_ROWS, 2)))
+
+
+def _run_group(members, values):
+    """One compiled call for points of one family; their columns into ``values``.
+    Returns ``(positions, bout, iout)`` for the bounce rows, the seconds of the compiled
+    call and of loading its kernel (0 after the first call of a family)."""
+    k0, p0 = members[0]
+    cfg = p0.config
+    scheme, ctrl = p0.params[0], p0.params[1]
+    n1 = cfg.rod.N + 1
+    m = len(members)
+    params = np.array([p.row for _, p in members], dtype=np.float64)
+    init = np.empty((m, 2, n1))
+    clock0 = np.empty((m, L.CLOCK_SIZE))
+    flight = np.empty(m)
+    for j, (_, p) in enumerate(members):
+        init[j, 0] = p.u
+        init[j, 1] = p.v
+        clock0[j] = p.clock
+        flight[j] = p.tau
+    cap_s, cap_d = capacities(cfg, ctrl)
+    out = cfg.output
+    track_rows = (int(min(2**31, cfg.time.t_end / out.diagnostics_interval)) + 4
+                  if out.diagnostics_interval > 0 else 1)
+    fout = np.zeros((m, E.F_SIZE))
+    iout = np.zeros((m, E.I_SIZE), dtype=np.int64)
+    bout = np.zeros((BOUNCE_ROWS * m, I.BROW_SIZE))
+    ev_cap = 1024
+    compile_time = 0.0
+    key = E.family(p0.params)
+    if key not in _LOADED:
+        # the first call of these types in this process: with no point, so that loading
+        # (or compiling) the batch kernel is timed apart, as a Run's compile_time
+        t0 = time.perf_counter()
+        E.run_batch(*p0.params, params[:0], init[:0], clock0[:0], flight[:0],
+                    *_scratch(n1, scheme, cap_s, cap_d, ev_cap, 1), bout, np.zeros(3),
+                    fout[:0], iout[:0], 1)
+        compile_time = time.perf_counter() - t0
+        _LOADED.add(key)
+    t0 = time.perf_counter()
+    E.run_batch(*p0.params, params, init, clock0, flight,
+                *_scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows), bout, np.zeros(3),
+                fout, iout, int(max(1, NODE_STEPS_PER_CALL // n1)))
+    elapsed = time.perf_counter() - t0
+    pos = np.array([k for k, _ in members], dtype=np.int64)
+    res = iout[:, E.I_RESULT]
+    values["steps"][pos] = iout[:, E.I_STEPS]
+    values["rejected_steps"][pos] = iout[:, E.I_REJECTED]
+    values["min_u0"][pos] = fout[:, E.F_MIN_U0]
+    values["max_floor_force"][pos] = fout[:, E.F_MAX_FF]
+    values["min_strain"][pos] = fout[:, E.F_MIN_STRAIN]
+    values["energy_error"][pos] = fout[:, E.F_ENERGY_ERROR]
+    values["t_final"][pos] = fout[:, E.F_T_FINAL]
+    values["status"][pos] = np.where(res == E.R_COMPLETED, "completed", "failed")
+    _impact(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + I.OUT_SIZE], iout[:, E.I_IMPACT],
+            [p for _, p in members])
+    for j, (k, p) in enumerate(members):
+        if res[j] == E.R_FAILED:
+            values["message"][k] = failure_text(fout[j, E.F_FAIL:E.F_FAIL + L.FAIL_SIZE],
+                                                float(fout[j, E.F_T_END]), p.params[1],
+                                                p.config, p.params[3], p.params[4])
+        elif res[j] == E.R_NONFINITE:
+            values["message"][k] = ("a non-finite diagnostic value was computed; refusing "
+                                    "to write it")
+        elif res[j] == E.R_OVERFLOW:
+            values["status"][k] = "overflow"
+    keep = res != E.R_OVERFLOW
+    return pos[keep], bout, iout[keep], elapsed, compile_time
+
+
+_LIFT: dict = {}
+
+
+def _lift_energy(p: _Point) -> float:
+    """``lift_energy`` of a point (a bisection in Python), cached by what it depends on:
+    the rod law and its parameters, gravity and N."""
+    cfg = p.config
+    key = (cfg.rod.law, p.params[3], float(cfg.gravity.g), cfg.rod.N)
+    try:
+        return _LIFT[key]
+    except (KeyError, TypeError):
+        value = lift_energy(cfg)
+        try:
+            _LIFT[key] = value
+        except TypeError:
+            pass
+        return value
+
+
+def _impact(values, pos, out, code, points) -> None:
+    """The IMPACT_COLUMNS (``records.observables.impact_values``) from the compiled
+    ``first_contact`` values ``out`` and codes."""
+    lift = code == I.LIFT_OFF
+    opened = code == I.OPEN_AT_END
+    w = out[:, I.O_W_IMPACT]
+    some = lift | opened
+    for name, col in (("w_impact", I.O_W_IMPACT), ("rebound_speed", I.O_REBOUND),
+                      ("min_u0_impact", I.O_MIN_U0)):
+        values[name][pos] = np.where(some, out[:, col], math.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = out[:, I.O_EV_IMPACT] / (0.5 * w * w)
+    values["vibration_ratio"][pos] = np.where(some & (w != 0), ratio, math.nan)
+    for name, col in (("restitution_first", I.O_RESTITUTION),
+                      ("restitution_apex", I.O_APEX),
+                      ("contact_time_first", I.O_CONTACT_TIME)):
+        values[name][pos] = np.where(lift, out[:, col], math.nan)
+    status = values["impact_status"]
+    reason = values["impact_reason"]
+    status[pos[lift]] = "lift-off"
+    reason[pos[lift]] = ""
+    for j in np.flatnonzero(~lift):
+        k = pos[j]
+        t_final = float(values["t_final"][k])
+        if code[j] == I.UNDEFINED:
+            status[k], reason[k] = "undefined", NO_SAMPLES
+        elif code[j] == I.NO_IMPACT:
+            status[k] = "no impact"
+            reason[k] = f"the bottom never touched the floor before t = {t_final:g}"
+        else:
+            e_end, lift_e = float(out[j, I.O_E_END]), _lift_energy(points[j])
+            if e_end < lift_e:
+                wi, reb = float(w[j]), float(out[j, I.O_REBOUND])
+                r = reb / abs(wi) if wi else math.nan
+                status[k] = "no lift-off"
+                reason[k] = (f"the rod never leaves the floor: its energy {e_end:.6g} at "
+                             f"t = {float(out[j, I.O_T_LAST]):g} is below the {lift_e:.6g} "
+                             f"a lift-off needs; the centre of mass rebounds at "
+                             f"{reb:.3g} ({r:.3g} of the impact speed)")
+                values["restitution_first"][k] = 0.0
+                values["restitution_apex"][k] = 0.0
+                values["contact_time_first"][k] = math.inf
+            else:
+                status[k] = "open"
+                reason[k] = (f"the first contact is still running at t = {t_final:g} "
+                             f"with energy {e_end:.6g} above the {lift_e:.6g} a lift-off "
+                             f"needs: run longer (time.t_end)")
+
+
+def _assemble(n, pieces, per_point):
+    """The batch's bounce columns in point order, and each point's row count; with the
+    bounce-derived summary columns (``point.bounce_values``) filled in ``values``."""
+    counts = np.zeros(n, np.int64)
+    rows_of: dict[int, np.ndarray] = {}
+    for pos, bout, iout, _, _ in pieces:
+        for j, k in enumerate(pos):
+            s, c = int(iout[j, E.I_BSTART]), int(iout[j, E.I_BOUNCES])
+            counts[k] = c
+            rows_of[int(k)] = bout[s:s + c]
+    parts = {name: [] for name in BOUNCE_COLUMNS}
+    for k in range(n):
+        if k in per_point:
+            b = per_point[k].bounces
+            counts[k] = b["t_impact"].size
+            for name in BOUNCE_COLUMNS:
+                parts[name].append(np.asarray(b[name]))
+        elif k in rows_of:
+            r = rows_of[k]
+            for c, name in enumerate(BOUNCE_COLUMNS):
+                parts[name].append(r[:, c])
+    out = {}
+    for c, name in enumerate(BOUNCE_COLUMNS):
+        col = np.concatenate(parts[name]) if parts[name] else np.zeros(0)
+        if name == "n_episodes":
+            col = col.astype(np.int64)
+        elif name in ("open", "ambiguous"):
+            col = col != 0
+        out[name] = col
+    return out, counts
+
+
+def fill_bounce_values(values, bounces, counts, per_point=()) -> None:
+    """``point.bounce_values`` of every point from the batch's bounce columns."""
+    starts = np.cumsum(counts) - counts
+    done = ~bounces["open"]
+    sure = ~bounces["ambiguous"]
+    e, e_energy = bounces["restitution"], bounces["restitution_energy"]
+    for k in range(counts.size):
+        if k in per_point:
+            continue
+        s, c = int(starts[k]), int(counts[k])
+        sl = slice(s, s + c)
+        ok = sure[sl]
+        values["n_bounces"][k] = c
+        values["n_complete_bounces"][k] = int(done[sl].sum())
+        if ok.any():
+            values["restitution_mean"][k] = float(np.mean(e[sl][ok]))
+            values["restitution_energy_mean"][k] = float(np.mean(e_energy[sl][ok]))
+        if values["impact_status"][k] == "undefined" and c and not bounces["open"][s]:
+            values["restitution_first"][k] = float(e[s])
+            values["contact_time_first"][k] = float(bounces["t_release"][s]
+                                                    - bounces["t_impact"][s])
+
+
+def split_bounces(result: BatchResult) -> list[dict]:
+    """Each point's bounce table from a BatchResult's columns (a sweep without a file
+    keeps them per point)."""
+    ends = np.cumsum(result.bounce_count)
+    starts = ends - result.bounce_count
+    return [{name: col[s:e].copy() for name, col in result.bounces.items()}
+            for s, e in zip(starts, ends)]
+
+
+def as_batch(results) -> BatchResult:
+    """PointResults and BatchResults as one BatchResult, in increasing point order."""
+    parts = [r if isinstance(r, BatchResult) else _from_point(r) for r in results]
+    idx = np.concatenate([p.index for p in parts])
+    counts = np.concatenate([p.bounce_count for p in parts])
+    values = {name: np.concatenate([np.asarray(p.values[name]) for p in parts])
+              for name in SUMMARY_COLUMNS}
+    starts = np.cumsum(counts) - counts
+    order = np.argsort(idx, kind="stable")
+    rows = (np.concatenate([np.arange(starts[k], starts[k] + counts[k]) for k in order])
+            if counts.sum() else np.zeros(0, np.int64))
+    bounces = {name: np.concatenate([np.asarray(p.bounces[name]) for p in parts])[rows]
+               for name in BOUNCE_COLUMNS}
+    return BatchResult(idx[order], {k: v[order] for k, v in values.items()}, bounces,
+                       counts[order])
+
+
+def _from_point(r) -> BatchResult:
+    values = empty_columns(1)
+    for name in SUMMARY_COLUMNS:
+        values[name][0] = r.values[name]
+    return BatchResult(np.array([r.index], np.int64), values,
+                       {name: np.asarray(r.bounces[name]) for name in BOUNCE_COLUMNS},
+                       np.array([len(r.bounces["t_impact"])], np.int64))

@@ -1,0 +1,155 @@
+"""The ensemble engine: a batch of points in one compiled call gives each point's row and
+bounce table exactly as the per-point path (``point.run_point``, the NumPy observables)."""
+import math
+from typing import NamedTuple
+
+import numpy as np
+import pytest
+
+import rodjit
+from custom_law import deriv, lower, primitive, value
+from rodjit.laws import Law, register
+from rodjit.presets import load_preset
+from rodjit.sweeps import ensemble
+from rodjit.sweeps.batch import BatchResult
+from rodjit.sweeps.ensemble import BatchTask, run_batch, split_bounces
+from rodjit.sweeps.grid import Grid
+from rodjit.sweeps.point import BOUNCE_COLUMNS, SUMMARY_COLUMNS, PointTask, run_point
+
+TIMINGS = ("wall_time", "compile_time", "run_time")
+BASE = rodjit.Config().override({"time.t_end": 0.8})
+# lift-off, a contact still running at the end (open), no impact yet, no diagnostics
+# (undefined), and a point that fails (fixed verlet steps at -100 m/s): several compiled
+# families in one batch
+MIXED = {"time.t_end": [0.8, 0.52, 0.05], "output.diagnostics_interval": [1e-3, 0.0],
+         "initial.velocity": [0.0, -100.0]}
+PAPER = {"rod.mu": [0.0, 25.0, 100.0], "floor.kappa_b": [1000.0, 3000.0],
+         "floor.beta": [0.03, 0.12]}
+
+
+def _equal(x, y) -> bool:
+    if isinstance(x, float) or isinstance(y, float):
+        return (math.isnan(x) and math.isnan(y)) or x == y
+    return x == y
+
+
+def _check_against_points(base, spec, **point_changes):
+    grid = Grid.from_spec(spec)
+    idx = np.arange(len(grid))
+    batch = run_batch(BatchTask(idx, base, grid, ()))
+    assert isinstance(batch, BatchResult)
+    assert list(batch.values) == list(SUMMARY_COLUMNS)
+    assert list(batch.bounces) == list(BOUNCE_COLUMNS)
+    tables = split_bounces(batch)
+    for k, i in enumerate(idx):
+        ref = run_point(PointTask(int(i), grid.config(base, int(i)), None, ()))
+        for name in SUMMARY_COLUMNS:
+            if name not in TIMINGS:
+                assert _equal(batch.values[name][k], ref.values[name]), (i, name)
+        assert batch.bounce_count[k] == ref.bounces["t_impact"].size
+        for name in BOUNCE_COLUMNS:
+            a, b = tables[k][name], np.asarray(ref.bounces[name])
+            assert a.dtype == b.dtype, name
+            assert np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), (i, name)
+    assert np.all(batch.values["run_time"] >= 0)
+    return batch
+
+
+def test_the_papers_grid_equals_its_points_run_alone_to_the_bit():
+    batch = _check_against_points(load_preset("paper-mu100"), PAPER)
+    status = set(batch.values["impact_status"])
+    assert {"lift-off", "no lift-off"} <= status
+    assert np.all(batch.values["steps"] > 1000)
+
+
+def test_every_first_contact_status_and_a_failing_point_equal_the_per_point_path():
+    batch = _check_against_points(BASE.override({"time.dt": 1e-3,
+                                                 "time.integrator": "verlet"}), MIXED)
+    v = batch.values
+    assert {"lift-off", "open", "no impact", "undefined"} <= set(v["impact_status"])
+    assert "failed" in set(v["status"]) and "completed" in set(v["status"])
+    failed = v["status"] == "failed"
+    assert all("fixed step time.dt = 0.001 failed" in m for m in v["message"][failed])
+
+
+class RaiseRod(NamedTuple):
+    kappa: float
+
+
+def _raising_params(rod):
+    if rod.kappa == 13.0:
+        raise ValueError("this law refuses rod.kappa = 13")
+    return RaiseRod(float(rod.kappa))
+
+
+register(Law(name="raise-test", kind="rod", params=RaiseRod, from_config=_raising_params,
+             value=value, deriv=deriv, primitive=primitive, lower=lower))
+
+
+def test_a_point_that_cannot_start_fails_alone_with_the_per_point_message():
+    base = BASE.override({"rod.law": "raise-test"})
+    batch = _check_against_points(base, {"rod.kappa": [100.0, 13.0, 50.0]})
+    assert list(batch.values["status"]) == ["completed", "failed", "completed"]
+    assert batch.values["message"][1] == "ValueError: this law refuses rod.kappa = 13"
+
+
+def test_a_point_that_overflows_its_arrays_runs_on_the_per_point_path(monkeypatch):
+    monkeypatch.setattr(ensemble, "BOUNCE_ROWS", 0)    # no room for any bounce row
+    batch = _check_against_points(BASE, {"rod.mu": [0.0, 10.0]})
+    assert np.all(batch.bounce_count > 0)
+
+
+def test_the_compiled_observables_equal_the_numpy_reference_on_a_run():
+    """``stepping.impact.first_contact`` against ``records.observables.first_impact`` on a
+    simulated run's own arrays."""
+    from rodjit.records.observables import TRACK_COLUMNS, first_impact, physics_of
+    from rodjit.stepping import impact as I
+
+    res = rodjit.simulate(load_preset("paper-mu100"))
+    d = res.diagnostics
+    track = np.stack([np.asarray(d[c], float) for c in TRACK_COLUMNS], axis=1)
+    eps = np.stack([res.episodes["t_start"], res.episodes["t_end"]], axis=1)
+    b = res.bounces
+    brows = np.stack([np.asarray(b[c], float) for c in BOUNCE_COLUMNS], axis=1)
+    phys = physics_of(res)
+    out, st = np.zeros(I.OUT_SIZE), np.zeros(3)
+    code = I.first_contact(track, len(track), eps, len(eps), brows, len(brows), phys.g,
+                           phys.flight_time, phys.t_final, phys.in_contact, out, st)
+    fi = first_impact(d, res.episodes, res.bounces, phys)
+    assert code == I.LIFT_OFF and fi.status == "lift-off"
+    assert out[I.O_RESTITUTION] == fi.restitution
+    assert out[I.O_APEX] == fi.restitution_apex
+    assert out[I.O_CONTACT_TIME] == fi.contact_time
+    assert out[I.O_REBOUND] == fi.rebound_speed and out[I.O_MIN_U0] == fi.min_u0
+    assert out[I.O_W_IMPACT] == fi.w_impact
+    assert out[I.O_EV_IMPACT] == fi.energy_vibration_impact
+
+
+def test_pool_dask_and_inline_give_the_same_table(tmp_path):
+    base = load_preset("paper-mu100").override({"time.t_end": 1.0})
+    grid = {"rod.mu": [0.0, 50.0, 100.0], "floor.beta": [0.03, 0.1]}
+    inline = rodjit.sweep(base, grid, scheduler="inline", batch_size=4)
+    pool = rodjit.sweep(base, grid, jobs=2, batch_size=2, output=tmp_path / "p.h5")
+    dask = rodjit.sweep(base, grid, scheduler="local", jobs=2, output=tmp_path / "d.h5")
+    for other in (pool, rodjit.load_sweep(tmp_path / "p.h5"), dask,
+                  rodjit.load_sweep(tmp_path / "d.h5")):
+        for name in SUMMARY_COLUMNS:
+            if name in TIMINGS:
+                continue
+            x, y = np.asarray(inline[name]), np.asarray(other[name])
+            if x.dtype.kind == "f":
+                assert np.array_equal(x, y, equal_nan=True), name
+            else:
+                assert list(x) == list(y), name
+        for i in range(6):
+            a, b = inline.bounces(i), other.bounces(i)
+            for name in BOUNCE_COLUMNS:
+                assert np.array_equal(np.asarray(a[name]), np.asarray(b[name]),
+                                      equal_nan=np.asarray(a[name]).dtype.kind == "f"), name
+
+
+@pytest.mark.parametrize("bad", [0, -3, 2.5, True, 10**9])
+def test_a_batch_size_out_of_range_is_refused(bad):
+    with pytest.raises(ValueError, match=r"batch_size = .* is out of range \(a whole number "
+                                         r"from 1 to 100000\)"):
+        rodjit.sweep(BASE, {"rod.mu": [0.0]}, batch_size=bad)
