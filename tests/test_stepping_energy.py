@@ -24,7 +24,9 @@ from rodjit.kernels.forces import INACCURATE, NO_CONVERGENCE, OK, energies
 from rodjit.model import reference as ref
 from rodjit.model.reference import rhs as ref_rhs
 from rodjit.model.system import masses
-from rodjit.stepping import energy as EN
+from rodjit.stepping import control as CT
+from rodjit.kernels import rates
+from rodjit.stepping.integrators import energy as EN
 from rodjit.stepping import layout as L
 from rodjit.stepping.loop import advance
 
@@ -184,7 +186,7 @@ def test_jerk_is_the_time_derivative_of_the_acceleration(gamma, mu, u_bottom):
     acc = lambda uu, vv: ref.acceleration(uu, vv, run.system, run.rod, run.floor)
     a = acc(u, v)
     out, k, strains = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
-    EN.jerk(run.system, run.rod, run.floor, u, v, a, out, k, strains)
+    rates.jerk(run.system, run.rod, run.floor, u, v, a, out, k, strains)
     dl = 1e-6
     fd = (acc(u + dl * v, v + dl * a) - acc(u - dl * v, v - dl * a)) / (2 * dl)
     np.testing.assert_allclose(out, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
@@ -373,14 +375,14 @@ def test_adaptive_steps_shrink_in_contact_and_grow_in_flight():
 def test_step_factor_is_the_clamped_inverse_cube_root():
     """The step-size factor SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX], without libm's cbrt:
     < 1e-7 relative over the unclamped range, the bounds outside it (0 included)."""
-    errs = np.concatenate([[0.0, 1e-300, 1e-9, EN.ERR_FAC_MAX, EN.ERR_FAC_MIN, 1e300],
-                           np.geomspace(EN.ERR_FAC_MAX / 10, EN.ERR_FAC_MIN * 10, 5001)])
-    got = np.array([EN._step_factor(e) for e in errs])
+    errs = np.concatenate([[0.0, 1e-300, 1e-9, CT.ERR_FAC_MAX, CT.ERR_FAC_MIN, 1e300],
+                           np.geomspace(CT.ERR_FAC_MAX / 10, CT.ERR_FAC_MIN * 10, 5001)])
+    got = np.array([CT.step_factor(e) for e in errs])
     with np.errstate(divide="ignore"):
-        want = np.clip(EN.SAFETY / np.cbrt(errs), EN.FAC_MIN, EN.FAC_MAX)
+        want = np.clip(CT.SAFETY / np.cbrt(errs), CT.FAC_MIN, CT.FAC_MAX)
     assert np.abs(got / want - 1.0).max() < 1e-7
-    assert got[0] == EN.FAC_MAX and got[-1] == want[-1]
-    inner = (errs > EN.ERR_FAC_MAX) & (errs < EN.ERR_FAC_MIN)
+    assert got[0] == CT.FAC_MAX and got[-1] == want[-1]
+    inner = (errs > CT.ERR_FAC_MAX) & (errs < CT.ERR_FAC_MIN)
     assert inner.sum() > 3000 and np.all(np.diff(got[6:]) <= 0)     # monotone in err
 
 

@@ -31,13 +31,17 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..kernels.forces import OK
+from ..kernels.rates import full_accel, jerk
 from . import registry
-from .._jit import step_kernel
+from .step_result import StepResult
+from .._jit import kernel, step_kernel
 
 __all__ = ["Control", "Rules", "RULES", "build", "output_tolerance", "propose", "gap_limit", "step_to",
            "gap_keep", "GROWTH", "GAP_MAX", "REJECT_SHRINK", "EVENT_MIN", "OUTPUT_TOL",
            "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry",
-           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH", "DENSE_OUTPUTS_MAX"]
+           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH", "DENSE_OUTPUTS_MAX", "step_factor",
+           "taylor_start", "SAFETY", "FAC_MIN", "FAC_MAX", "ERR_FAC_MAX", "ERR_FAC_MIN"]
 
 # A proposal grows at most by this factor per step: after a rejection the step recovers
 # over a few steps instead of jumping back to the size that just failed.
@@ -206,3 +210,65 @@ def retry(inaccurate, dt_suggest, dt):
     """The step to retry after a rejected trial of ``dt``: the scheme's ``dt_suggest`` when
     it rejected the trial for accuracy, else REJECT_SHRINK × dt."""
     return dt_suggest if inaccurate else REJECT_SHRINK * dt
+
+
+# The step factor of the second-order schemes (``kdk``, ``energy``): their local error is
+# O(dt³), so the next step over this one is SAFETY·err^(−1/3), in [FAC_MIN, FAC_MAX].
+SAFETY = 0.9
+FAC_MIN = 0.2
+FAC_MAX = 5.0
+# the range of errors where the step factor SAFETY·err^(−1/3) is not clamped
+ERR_FAC_MAX = (SAFETY / FAC_MAX) ** 3
+ERR_FAC_MIN = (SAFETY / FAC_MIN) ** 3
+
+
+@step_kernel
+def step_factor(err):
+    """SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX] (the next step over this one).
+
+    err^(−1/3) by Newton's iteration y ← y(4 − x y³)/3 on x = err·8^k ∈ [1, 8), from the
+    least-squares quadratic of x^(−1/3) on [1, 8] (7 % off at worst): three iterations
+    leave < 1e-7 relative, far below what a step-size heuristic needs, and cost less than
+    a libm cbrt call.  Plain arithmetic: the same bits everywhere."""
+    if not err > ERR_FAC_MAX:      # also err = 0
+        return FAC_MAX
+    if err >= ERR_FAC_MIN:
+        return FAC_MIN
+    x = err
+    scale = 1.0
+    while x < 1.0:
+        x *= 8.0
+        scale *= 2.0
+    while x >= 8.0:
+        x *= 0.125
+        scale *= 0.5
+    y = 1.07144173 + x * (-0.15170626 + x * 0.01044221)
+    for _ in range(3):
+        y = y * (4.0 - x * y * y * y) * (1.0 / 3.0)
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * scale * y))
+
+
+@step_kernel
+def _error_rate(scheme, u, ad):
+    """max_i |ȧ_i|/12 / (atol + rtol|u_i|): the predicted u error per dt³."""
+    r = 0.0
+    for i in range(u.size):
+        r = max(r, abs(ad[i]) / (12.0 * (scheme.atol + scheme.rtol * abs(u[i]))))
+    return r
+
+
+@kernel
+def taylor_start(scheme, system, rod, floor, u, v, a, s, k, ad, strains):
+    """Full acceleration of the initial state and the first step of an implicit scheme
+    (``energy``, ``radau5``): the step whose Taylor error dt³|ȧ|/12 is half the tolerance
+    (``scheme.rtol``, ``scheme.atol``), at most the explicit limit 2/ω (the controller
+    grows it from there).  ``s``, ``k``, ``ad``, ``strains``: scratch rows."""
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, s, k, bool(True))
+    if status != OK:
+        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
+    jerk(system, rod, floor, u, v, a, ad, k, strains)
+    dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
+    rate = _error_rate(scheme, u, ad)
+    if rate > 0.0:
+        dt = min(dt, 0.5 / np.cbrt(rate))
+    return StepResult(OK, 0.0, emin, fl, dt, 0.0, 0.0)

@@ -51,17 +51,16 @@ parameter class and one more row (plus its line in ``registry``).
 import math
 from typing import NamedTuple
 
-from ..kernels.banded import tridiag_solve
-from ..kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
-from ..kernels.mass import node_mass
-from . import workspace as W
-from .beam import beam_midpoint
-from .control import STABILITY_CFL
-from .energy import FAC_MIN, SAFETY, _step_factor
-from .stability import explicit_dt
-from .step_result import StepResult
-from .viscous import _factored, viscous_cn, viscous_sdirk2
-from .._jit import kernel, overload, step_kernel
+from ...kernels.banded import tridiag_solve
+from ...kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
+from ...kernels.mass import node_mass
+from .. import workspace as W
+from ..beam import beam_midpoint
+from ..control import FAC_MIN, STABILITY_CFL, step_factor
+from ..stability import explicit_dt
+from ..step_result import StepResult
+from ..viscous import factored, viscous_cn, viscous_sdirk2
+from ..._jit import kernel, overload, step_kernel
 
 __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "step"]
 
@@ -161,7 +160,7 @@ def _imex_first_kick(v, a, v2, tau, system, work):
     """v2 = (M + τμK)⁻¹ M (v + τ a): the half kick implicit in the viscous term."""
     n = system.n
     h = system.h
-    off = _factored(tau * system.mu, h, n, work)
+    off = factored(tau * system.mu, h, n, work)
     rhs = work[W.VRHS]
     for i in range(n + 1):
         rhs[i] = node_mass(i, n, h) * (v[i] + tau * a[i])
@@ -285,6 +284,6 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, diss)
         if err > 1.0:
             return StepResult(INACCURATE, err, emin, fl,
-                              min(dts, dt * max(FAC_MIN, _step_factor(err))), w, diss)
-        dts = min(dts, dt * _step_factor(err))
+                              min(dts, dt * max(FAC_MIN, step_factor(err))), w, diss)
+        dts = min(dts, dt * step_factor(err))
     return StepResult(OK, 0.0, emin, fl, dts, w, diss)
