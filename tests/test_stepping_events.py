@@ -28,7 +28,7 @@ class Tracker:
         ta, ua, _, wa = self.prev
         slope = (u0 - ua) / (t - ta)
         track(self.ev, self.count, self.episodes, self.bounces, ta, t - ta, g, ua, slope, u0,
-              slope, wa, w, ff, emin, evib)
+              slope, wa, w, ff, emin, evib, u0)
         self.prev = (t, u0, slope, w)
 
     @property

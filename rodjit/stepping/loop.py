@@ -53,6 +53,7 @@ from . import control as C
 from . import layout as L
 from . import registry
 from .events import crossing, hermite_exit, open_contact, track, vibration_energy
+from .extremes import step_extremes
 from .outputs import dense_target, emit, emit_dense, grid_time, next_target
 from .schemes import dense_setup, has_dense, initial, step
 from .._jit import kernel, overload
@@ -255,6 +256,12 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
                 # the step; one outside the admissible set retries the step shorter
                 status, val = dense_setup(scheme, system, rod, tfloor, u, v, cur[2], u2, v2,
                                           nxt[2], work, dt)
+        # a bounce open or opening: its extremes come from inside the step (``extremes``),
+        # by the dense output of a scheme that has one (set up here if no output needed it)
+        extremes = ev[L.B_NEP] > 0.0 or u2[0] < 0.0
+        if status == OK and has_dense(scheme) and extremes and not (interpolate and inside):
+            status, val = dense_setup(scheme, system, rod, tfloor, u, v, cur[2], u2, v2, nxt[2],
+                                      work, dt)
         if status != OK:
             count[L.REJECTED] += 1
             retry = C.retry(status == INACCURATE, r.dt_suggest, dt)
@@ -279,8 +286,14 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         evib = 0.0     # the vibration energy at a new bounce's impact (its step's start)
         if ev[L.B_NEP] == 0.0 and ev[L.IN_CONTACT] == 0.0 and u2[0] < 0.0:
             evib = vibration_energy(u, v, work[1], system, rod, floor)
+        u0x = u2[0]
+        ffx = r.floor_force
+        eminx = emin
+        if extremes:
+            u0x, ffx, eminx = step_extremes(scheme, cur, nxt, work, interp, system, floor, dt,
+                                            ffx, eminx)
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
-              w, r.w, r.floor_force, emin, evib)
+              w, r.w, ffx, eminx, evib, u0x)
         diss_old = diss
         diss += r.dissipated
         w = r.w
