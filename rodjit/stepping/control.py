@@ -41,7 +41,8 @@ __all__ = ["Control", "Rules", "RULES", "build", "output_tolerance", "propose", 
            "gap_keep", "GROWTH", "GAP_MAX", "REJECT_SHRINK", "EVENT_MIN", "OUTPUT_TOL",
            "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry",
            "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH", "DENSE_OUTPUTS_MAX", "step_factor",
-           "taylor_start", "SAFETY", "FAC_MIN", "FAC_MAX", "ERR_FAC_MAX", "ERR_FAC_MIN"]
+           "taylor_start", "height_scale", "velocity_scale",
+           "VELOCITY_SCALE", "SAFETY", "FAC_MIN", "FAC_MAX", "ERR_FAC_MAX", "ERR_FAC_MIN"]
 
 # A proposal grows at most by this factor per step: after a rejection the step recovers
 # over a few steps instead of jumping back to the size that just failed.
@@ -210,6 +211,30 @@ def retry(inaccurate, dt_suggest, dt):
     """The step to retry after a rejected trial of ``dt``: the scheme's ``dt_suggest`` when
     it rejected the trial for accuracy, else REJECT_SHRINK × dt."""
     return dt_suggest if inaccurate else REJECT_SHRINK * dt
+
+
+# The error norm of every adaptive integrator (docs/integrators.md, "What the tolerances
+# mean"): the largest over the components a scheme estimates of |e_k| / scale_k, where
+#   heights:    scale = atol + rtol·max(|u_k|, |u_k⁺|)                   (atol in m)
+#   velocities: scale = atol·VELOCITY_SCALE + rtol·max(|v_k|, |v_k⁺|)    (m/s)
+# A max, not a root mean square: each component's estimated local error stays within its
+# own tolerance, so the bottom node in contact (where the error concentrates) is not
+# averaged with N quiet nodes.  VELOCITY_SCALE = 1/s: a velocity error of atol m/s moves a
+# height by atol within 1 s, the time scale of a bounce of the 1 m rod (a 1 m drop takes
+# 0.45 s; MODEL.md "Units"), so heights and velocities are held to comparable accuracy.
+VELOCITY_SCALE = 1.0
+
+
+@step_kernel
+def height_scale(scheme, y, y2):
+    """The scale of a height's error between y and y2 (``scheme.atol``, ``scheme.rtol``)."""
+    return scheme.atol + scheme.rtol * max(abs(y), abs(y2))
+
+
+@step_kernel
+def velocity_scale(scheme, y, y2):
+    """The scale of a velocity's error between y and y2."""
+    return scheme.atol * VELOCITY_SCALE + scheme.rtol * max(abs(y), abs(y2))
 
 
 # The step factor of the second-order schemes (``kdk``, ``energy``): their local error is

@@ -83,16 +83,14 @@ def _kdk(tc, P):
 
 _ENERGY_WORK_ROWS = 17   # rows S … D of stepping/energy.py (tests check it)
 
-# the error norms (each scheme's module docstring derives its estimate); the norms differ
-# between schemes, so equal tolerances do not mean equal errors (docs/integrators.md)
-_KDK_NORM = ("max over nodes of |dt²/6·(a⁺ − a)| / (atol + rtol·max(|u|, |u⁺|)): the "
-             "heights' predicted local error")
-_ENERGY_NORM = ("max over nodes of the heights' and velocities' local error / (atol + "
-                "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
-_PAIR_NORM = ("root mean square over (u, v) of the embedded error / (atol + "
-              "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
-_RADAU_NORM = ("root mean square over (u, v) of Hairer's filtered embedded error / (atol + "
-               "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
+# the one error norm (control.height_scale, velocity_scale; docs/integrators.md): each
+# scheme's module docstring derives the estimate it measures in it
+_NORM = ("max over the estimated components of |e| / (atol + rtol·max(|y|, |y⁺|)), atol in m "
+         "for heights and atol·control.VELOCITY_SCALE (1/s) in m/s for velocities")
+_KDK_NORM = _NORM + "; estimated: the heights, |dt²/6·(a⁺ − a)|"
+_ENERGY_NORM = _NORM + "; estimated: heights and velocities (predictor–corrector)"
+_PAIR_NORM = _NORM + "; estimated: heights and velocities (embedded pair)"
+_RADAU_NORM = _NORM + "; estimated: heights and velocities (Hairer's filtered estimate)"
 _KDK_CAP = ("control.STABILITY_CFL × the stability limit 2/ω under tolerance control; the "
             "barrier approach: at most time.cfl (≤ control.GAP_MAX) of the gap per step")
 

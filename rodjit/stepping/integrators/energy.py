@@ -30,7 +30,8 @@ NO_CONVERGENCE (the loop retries a shorter step).
 Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ and
 v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
 and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
-step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1
+step's local error.  Its size in the one error norm (``control.height_scale``,
+``velocity_scale``: max over u and v of |e|/(atol + rtol·|y|)) decides: ≤ 1 accepts, > 1
 returns INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in
 [0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
@@ -53,7 +54,7 @@ from ...kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE
 from ...kernels.mass import inv_node_mass as _inv_mass, node_mass as _mass
 from ...kernels.rates import add_viscous, jerk
 from ...model.laws import lower
-from ..control import step_factor, taylor_start
+from ..control import height_scale, step_factor, taylor_start, velocity_scale
 from ..registry import counter_index
 from ..step_result import StepResult
 from ..._jit import kernel, step_kernel
@@ -398,8 +399,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         finite &= abs(a2[i]) < np.inf
         eu = abs(d[i] - dp[i])
         ev = abs(v2[i] - (v[i] + dt * a[i] + hdt2 * ad[i]))
-        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
-        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
+        su = height_scale(scheme, u[i], u2[i])        # the one norm (control.py)
+        sv = velocity_scale(scheme, v[i], v2[i])
         err = max(err, max(eu * sv, ev * su) / (su * sv))
         w += _mass(i, n, h) * v2[i]
     err /= 3.0

@@ -12,9 +12,10 @@ Ordinary Differential Equations I*, and SciPy's RK45/DOP853).  Both pairs are FS
 last stage is f(yⁿ⁺¹), so the new state's derivative (v, a) is the state's own rows and the
 next step reuses it; a resumed run reads it from the checkpointed state (``a`` row).
 
-Error norm (Hairer's): the root mean square over all 2(N+1) components of u and v of the
-error divided by atol + rtol·max(|yⁿ|, |yⁿ⁺¹|); for dop853 the combined 5th/3rd-order
-estimate err₅²/√(err₅² + 0.01 err₃²).  ≤ 1 accepts; > 1 returns INACCURATE and the loop
+Error norm: the one norm of every integrator (``control.height_scale``,
+``velocity_scale``), the largest over the 2(N+1) components of u and v of the error divided
+by atol + rtol·max(|yⁿ|, |yⁿ⁺¹|) (velocities: atol·``control.VELOCITY_SCALE``); for dop853
+Hairer's combined 5th/3rd-order estimate err₅²/√(err₅² + 0.01 err₃²), each in that norm.  ≤ 1 accepts; > 1 returns INACCURATE and the loop
 retries at ``dt_suggest``.  The next step is dt·0.9·err^(−1/(q+1)), at least 0.2 dt (q = 4
 for dp54, 7 for dop853); how much it may exceed the previous proposal is the loop's rule
 (``control.PAIR_GROWTH``: 10× for dp54, 6× for dop853, none right after a rejection).  Under fixed steps (``time.dt``) the loop accepts every valid step.
@@ -83,6 +84,7 @@ import numpy as np
 
 from ...kernels.forces import INACCURATE, NON_FINITE, OK, momentum
 from ...kernels.rates import dissipation_rate, full_accel
+from ..control import height_scale, velocity_scale
 from ..step_result import StepResult
 from . import erk_tableau as T
 from .erk_tableau import (DENSE_GROWTH, DENSE_TERMS_MAX, IMAG_SAFETY, Dense, Tableau,
@@ -333,17 +335,16 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                 if c3 != 0.0:
                     fu += c3 * work[2 * l, i]
                     fv += c3 * work[2 * l + 1, i]
-        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
-        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
-        e5 += (eu / su) ** 2 + (ev / sv) ** 2
+        su = height_scale(scheme, u[i], u2[i])       # the one norm (control.py): a max
+        sv = velocity_scale(scheme, v[i], v2[i])
+        e5 = max(e5, abs(eu) / su, abs(ev) / sv)
         if combined:
-            e3 += (fu / su) ** 2 + (fv / sv) ** 2
-    m = 2.0 * n1
+            e3 = max(e3, abs(fu) / su, abs(fv) / sv)
     if combined:
-        den = e5 + 0.01 * e3
-        err = dt * e5 / math.sqrt(den * m) if den > 0.0 else 0.0
+        den = e5 * e5 + 0.01 * e3 * e3
+        err = dt * e5 * e5 / math.sqrt(den) if den > 0.0 else 0.0
     else:
-        err = dt * math.sqrt(e5 / m)
+        err = dt * e5
     if not math.isfinite(err):
         return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
     w = momentum(v2, system.h)

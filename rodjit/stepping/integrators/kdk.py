@@ -37,7 +37,8 @@ of the stiffest viscous modes alternates in sign (CN's R → −1); v½ does not
 
 Error control (``tolerance``): the predicted local error of u is dt³/6·ȧ, estimated from
 the two kicks' accelerations as dt²/6·(a⁺ − a) (O(dt³), the leading term of the exact local
-error of the verlet step), scaled componentwise by atol + rtol·max(|u|, |u⁺|); a ratio
+error of the verlet step), scaled componentwise by atol + rtol·max(|u|, |u⁺|) (the heights of
+the one error norm, ``control.height_scale``); a ratio
 above 1 rejects the step (INACCURATE), and the next step is dt·0.9·ratio^(−1/3), capped at
 ``control.STABILITY_CFL`` × the stability limit.  The estimate costs one pass over the
 arrays, no force evaluation; under fixed steps (``time.dt``) it chooses nothing, so the
@@ -56,7 +57,7 @@ from ...kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
 from ...kernels.mass import node_mass
 from .. import workspace as W
 from ..beam import beam_midpoint
-from ..control import FAC_MIN, STABILITY_CFL, step_factor
+from ..control import FAC_MIN, STABILITY_CFL, height_scale, step_factor
 from ..stability import explicit_dt
 from ..step_result import StepResult
 from ..viscous import factored, viscous_cn, viscous_sdirk2
@@ -191,7 +192,7 @@ def _error_ratio(scheme, u, u2, a, a2, dt):
     c = dt * dt / 6.0
     r = 0.0
     for i in range(u.size):
-        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
+        su = height_scale(scheme, u[i], u2[i])
         r = max(r, c * abs(a2[i] - a[i]) / su)
     return r
 

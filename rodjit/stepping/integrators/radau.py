@@ -36,7 +36,9 @@ the uninterrupted one.
 Error estimate (Hairer's): err = (μ_r/dt I − J)⁻¹ (f(yⁿ) + Σ e_i Z_i / dt), an embedded
 third-order solution filtered by the real factor so stiff components do not inflate it; when
 it exceeds 1 it is refined once by err ← (μ_r/dt I − J)⁻¹ (f(yⁿ + err) + Σ e_i Z_i/dt).
-Norm: root mean square over the 2(N+1) components of err/(atol + rtol·max(|yⁿ|, |yⁿ⁺¹|)).
+Norm: the one error norm of every integrator (``control.height_scale``): the largest over
+the 2(N+1) components of |err| over atol + rtol·max(|yⁿ|, |yⁿ⁺¹|) (velocities: atol·
+``control.VELOCITY_SCALE``).
 ≤ 1 accepts; > 1 returns INACCURATE.  The next step is dt·fac·err^(−1/4) in [0.2, 10]×,
 fac = 0.9·(2 n_max + 1)/(2 n_max + n_newton) (fewer Newton iterations, bolder steps).
 The tolerances are used as given (like SciPy's ``Radau``; RADAU5 itself rescales them).
@@ -56,7 +58,7 @@ import numpy as np
 
 from ...kernels.forces import INACCURATE, NO_CONVERGENCE, NON_FINITE, OK, momentum
 from ...kernels.rates import dissipation_rate, full_accel
-from ..control import taylor_start
+from ..control import height_scale, taylor_start, velocity_scale
 from ..registry import counter_index
 from ..step_result import StepResult
 from .radau_linear import (DU, EA, EU, EV, FA, FP, K, S, WORK_ROWS, WU, YU, YV, ZU,
@@ -251,17 +253,15 @@ def _newton(scheme, system, rod, floor, u, v, a, work, sstats, dt):
 
 @step_kernel
 def _error(scheme, u, v, u2, v2, work):
-    """RMS of rows EU, EV over atol + rtol·max(|yⁿ|, |yⁿ⁺¹|)."""
+    """Rows EU, EV in the one error norm (``control.height_scale``, ``velocity_scale``):
+    the largest |err| over its scale."""
     e = 0.0
     eu = work[EU]
     ev = work[EV]
     for i in range(u.size):
-        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
-        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
-        x = eu[i] / su
-        y = ev[i] / sv
-        e += x * x + y * y
-    return math.sqrt(e / (2.0 * u.size))
+        e = max(e, abs(eu[i]) / height_scale(scheme, u[i], u2[i]),
+                abs(ev[i]) / velocity_scale(scheme, v[i], v2[i]))
+    return e
 
 
 @step_kernel
