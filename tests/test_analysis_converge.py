@@ -390,18 +390,28 @@ def test_verlet_time_error_on_the_paper_mu100_ladder():
 
 
 def test_predictability_time_of_synthetic_histories():
+    """The runs' own error bar: a ladder whose differences shrink by 4 per refinement keeps
+    the trajectory however large they grow; one whose differences saturate (chaos) loses
+    it when the finest pair's difference reaches half the coarsest pair's."""
     from rodjit.analysis.converge import predictability_time
 
-    t = np.linspace(0, 5, 501)
+    t = np.linspace(0, 5, 5001)
     u = np.stack([np.sin(t), 1 + np.sin(t)], axis=1)
-    same = [(t, u), (t, u + 1e-6), (t, u + 2e-6)]
-    assert predictability_time(same, 5.0) == math.inf
-    grow = [(t, u), (t, u + 1e-6 * np.exp(3 * t)[:, None]), (t, u)]
-    # 1 % of the range (3: from sin = −1 to 1 + sin = 2) is 0.03: the finest pair's
-    # difference 1e-6·e^{3t} passes it at t = ln(3e4)/3 = 3.44
-    assert predictability_time(grow, 5.0) == pytest.approx(math.log(3e4) / 3, abs=0.011)
-    assert math.isnan(predictability_time([(t, u), None], 5.0))
-    assert math.isnan(predictability_time([(t[:0], u[:0]), (t[:0], u[:0])], 5.0))
+    grow = np.exp(3 * t)[:, None]
+    # converging: differences 16, 4, 1 × 1e-4·e^{3t} (up to 3e2 m: no fixed fraction of the
+    # range would call that agreement, the ladder's convergence does)
+    conv = [(t, u + 16e-4 * grow), (t, u + 4e-4 * grow), (t, u + 1e-4 * grow)]
+    assert predictability_time(conv, 5.0) == math.inf
+    # chaotic: the same growth, saturating at 1 (unrelated trajectories); the coarse pair
+    # peaks at 0.75 when the coarsest saturates, the fine pair's 3e-6·e^{3t} reaches half
+    # of it at t = ln(1.25e5)/3 = 3.91 (a fixed 1 % of the range, 0.03, would say 3.07)
+    sat = [(t, u + np.minimum(d * grow, 1.0)) for d in (16e-6, 4e-6, 1e-6)]
+    assert predictability_time(sat, 5.0) == pytest.approx(math.log(1.25e5) / 3, abs=0.002)
+    same = [(t, u), (t, u + 1e-12), (t, u + 2e-12)]
+    assert predictability_time(same, 5.0) == math.inf       # below the noise floor
+    assert math.isnan(predictability_time([(t, u), None, (t, u)], 5.0))
+    assert math.isnan(predictability_time([(t, u), (t, u)], 5.0))   # two runs: no error bar
+    assert math.isnan(predictability_time([(t[:0], u[:0])] * 3, 5.0))
 
 
 def test_predictability_time_of_the_chaotic_and_the_damped_paper_runs():
