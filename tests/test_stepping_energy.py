@@ -102,7 +102,9 @@ def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
     """E^{n+1} − E^n = −μ dt Σ h ((v̄_{i+1} − v̄_i)/h)² at every accepted step of the real
     loop (crossing refinements, landings, rejections included), and the loop's dissipation
     grows by exactly that sum."""
-    cfg = energy_config(**{"rod.mu": mu, "time.rtol": 1e-4, "time.t_end": 1000.0})
+    # rtol 1e-3: the error per unit step (control.per_unit_step) takes about the steps that
+    # rtol 1e-4 took per step; the identity, not the accuracy, is under test
+    cfg = energy_config(**{"rod.mu": mu, "time.rtol": 1e-3, "time.t_end": 1000.0})
     run, rec = record_steps(cfg, 2_000_000, max_bounces=100)
     dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
     # 100 bounces at μ = 0; at μ = 0.005 the rod comes to rest on the floor after 47
@@ -125,7 +127,7 @@ def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
 def test_energy_identity_with_bending_on_a_stiff_floor():
     """The same per-step identity with γ > 0 (pentadiagonal Newton), viscosity, a finer rod
     and a stiff floor, through 5 bounces."""
-    cfg = energy_config(**{"rod.N": 40, "rod.gamma": 1e-3, "rod.mu": 0.02, "time.rtol": 1e-5,
+    cfg = energy_config(**{"rod.N": 40, "rod.gamma": 1e-3, "rod.mu": 0.02, "time.rtol": 1e-4,
                            "floor.kappa_b": 1e5, "floor.beta": 1e-3, "time.t_end": 100.0})
     run, rec = record_steps(cfg, 2_000_000, max_bounces=5)
     dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
@@ -335,8 +337,9 @@ def test_adaptive_error_follows_the_tolerance_on_the_paper_mu100_run():
     """The paper's second setting (N = 5, μ = 100: impacts, release, settling on the floor),
     snapshots of the first second against SciPy's Radau on the NumPy right-hand side at
     1e-11 (the measure of benchmarks/bench_scipy.py): the error of the error-controlled
-    step falls like tol^(2/3) (local error O(dt³) held at tol: ×100 in tol is ×21.5 in
-    error) and is below 1e-4 at tol = 1e-8; the snapshots land on their times."""
+    step follows the tolerance (local error O(dt³) held per unit step, control.per_unit_step:
+    ×100 in tol is ×100 in error; held per step it was ×21.5, tol^(2/3)) and is below 1e-4
+    at tol = 1e-8; the snapshots land on their times."""
     from scipy.integrate import solve_ivp
     from rodjit.model.system import build_system, initial_state
     from rodjit.presets import load_preset
@@ -354,7 +357,7 @@ def test_adaptive_error_follows_the_tolerance_on_the_paper_mu100_run():
         np.testing.assert_allclose(res.t, t, rtol=0, atol=1e-12)
         errs.append(max(np.abs(res.u.T - ref[:6]).max(), np.abs(res.v.T - ref[6:]).max() / vscale))
     ratios = np.array(errs[:-1]) / np.array(errs[1:])
-    assert np.all((ratios > 10) & (ratios < 45)), errs
+    assert np.all((ratios > 50) & (ratios < 200)), errs
     assert errs[-1] < 1e-4, errs
 
 

@@ -31,9 +31,10 @@ Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ 
 v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
 and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
 step's local error.  Its size in the one error norm (``control.height_scale``,
-``velocity_scale``: max over u and v of |e|/(atol + rtol·|y|)) decides: ≤ 1 accepts, > 1
-returns INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in
-[0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
+``velocity_scale``: max over u and v of |e|/(atol + rtol·|y|)), per unit step
+(``control.per_unit_step``: times ERROR_TIME/dt, so the global error follows the
+tolerance), decides: ≤ 1 accepts, > 1 returns INACCURATE with a shorter ``dt_suggest``; the
+next step is dt·0.9·err^(−1/2) (in [0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
 Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
 tiny there) and ``rtol`` that of the flight: raise atol to stop resolving every micro-contact.
@@ -54,7 +55,8 @@ from ...kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE
 from ...kernels.mass import inv_node_mass as _inv_mass, node_mass as _mass
 from ...kernels.rates import add_viscous, jerk
 from ...model.laws import lower
-from ..control import height_scale, step_factor, taylor_start, velocity_scale
+from ..control import (height_scale, per_unit_step, taylor_start, unit_step_factor,
+                       velocity_scale)
 from ..registry import counter_index
 from ..step_result import StepResult
 from ..._jit import kernel, step_kernel
@@ -403,7 +405,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         sv = velocity_scale(scheme, v[i], v2[i])
         err = max(err, max(eu * sv, ev * su) / (su * sv))
         w += _mass(i, n, h) * v2[i]
-    err /= 3.0
+    err = per_unit_step(err / 3.0, dt)   # per unit step (control.per_unit_step)
     if not finite:
         return StepResult(NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0)
     diss = 0.0
@@ -414,7 +416,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         diss *= dt * system.mu * ih
     if not math.isfinite(err):
         return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
-    fac = step_factor(err)
+    fac = unit_step_factor(err)
     if err > 1.0:
         return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
     return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)
