@@ -376,11 +376,12 @@ def test_the_knobs_named_in_the_refusals_measure_the_time_error_within_10x():
     for name in ("dp54", "radau5"):
         c = cfg.override({"time.integrator": name, "time.control": "cfl",
                           "time.rtol": 1e-3, "time.atol": 1e-6})
-        # max_floor_force is sampled at the steps (radau5 takes a few hundred): its
-        # sampling error, not the time error, sets the spread along the ladder
+        # max_floor_force from the dense output between the steps (stepping.extremes):
+        # from the step points alone radau5's spread along the ladder was their sampling
+        # error (0.55 against a true time error of 0.027)
         conv = _check_time_error(c, [5, 10, 20], tiny_ok=True,
-                                 names=("restitution_first", "contact_time_first"),
-                                 never_zero=("max_floor_force",))
+                                 names=("restitution_first", "contact_time_first",
+                                        "max_floor_force"))
         assert conv.time_key == "time.rtol"
 
 
