@@ -42,8 +42,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _util  # noqa: E402
 
 import rodjit  # noqa: E402
-from rodjit.stepping import kdk as verlet  # noqa: E402  (the Verlet row of the stage table)
-from rodjit.stepping.kdk import Verlet  # noqa: E402
+from rodjit.stepping.integrators import kdk as verlet  # noqa: E402  (the Verlet row of the stage table)
+from rodjit.stepping.integrators.kdk import Verlet  # noqa: E402
 
 try:      # rodjit's own options (no reference counting), without the disk cache
     from rodjit._jit import JIT_OPTIONS, load_numba

@@ -130,10 +130,14 @@ def test_apex_run_file_is_rebuilt_to_continue(tmp_path):
         assert "ambiguous" in f["bounces"]
     a = rodjit.load_file(path)
     fresh = rodjit.simulate(a.config.override({"time.t_end": 1.0}))
-    np.testing.assert_array_equal(a.u_final, fresh.u_final)
+    # the file's first 0.5 s were stepped by the energy step's controller of its time (error
+    # per step), the rest by today's (per unit step): the same run to its tolerance, not bit
+    # for bit (resuming today's files is bit for bit: tests/test_golden.py)
+    np.testing.assert_allclose(a.u_final, fresh.u_final, rtol=0, atol=1e-4)
     # the first impact was running at the checkpoint: one bounce, as a fresh run has it
     assert a.bounces["n_episodes"].tolist() == fresh.bounces["n_episodes"].tolist()
-    assert a.bounces["restitution"][0] == fresh.bounces["restitution"][0]
+    assert a.bounces["restitution"][0] == pytest.approx(fresh.bounces["restitution"][0],
+                                                        rel=1e-4)
     assert np.isnan(a.bounces["energy_vibration_impact"][0])    # not in that checkpoint
 
 

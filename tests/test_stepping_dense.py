@@ -21,8 +21,9 @@ from rodjit.driver.run import Run
 from rodjit.model import reference
 from rodjit.model.system import build_system
 from rodjit.records.result import MemorySink
-from rodjit.stepping import control, erk, layout as L, registry
-from rodjit.stepping.kdk import Verlet
+from rodjit.stepping import control, layout as L, registry
+from rodjit.stepping.integrators import erk
+from rodjit.stepping.integrators.kdk import Verlet
 
 PAIRS = {"dp54": 4, "dop853": 7}       # the order of each pair's continuous extension
 # every integrator with a dense output, and its order: radau5's collocation polynomial has
@@ -267,7 +268,7 @@ def test_free_flight_steps_stay_inside_the_stability_region():
     so only the cap does; every step keeps ω·dt ≤ STABILITY_CAP (ω the Gershgorin bound,
     the diagnostics' ``dt`` column being the proposal) and the motion stays the exact
     parabola to rounding."""
-    from rodjit.stepping.erk import STABILITY_CAP, DP54, DOP853
+    from rodjit.stepping.integrators.erk import STABILITY_CAP, DP54, DOP853
     for integrator, params in (("dp54", DP54), ("dop853", DOP853)):
         cfg = _paper(integrator, **{"initial.height": 50.0, "time.t_end": 2.0,
                                     "output.snapshot_interval": 0.5,

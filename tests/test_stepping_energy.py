@@ -24,7 +24,9 @@ from rodjit.kernels.forces import INACCURATE, NO_CONVERGENCE, OK, energies
 from rodjit.model import reference as ref
 from rodjit.model.reference import rhs as ref_rhs
 from rodjit.model.system import masses
-from rodjit.stepping import energy as EN
+from rodjit.stepping import control as CT
+from rodjit.kernels import rates
+from rodjit.stepping.integrators import energy as EN
 from rodjit.stepping import layout as L
 from rodjit.stepping.loop import advance
 
@@ -100,7 +102,9 @@ def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
     """E^{n+1} − E^n = −μ dt Σ h ((v̄_{i+1} − v̄_i)/h)² at every accepted step of the real
     loop (crossing refinements, landings, rejections included), and the loop's dissipation
     grows by exactly that sum."""
-    cfg = energy_config(**{"rod.mu": mu, "time.rtol": 1e-4, "time.t_end": 1000.0})
+    # rtol 1e-3: the error per unit step (control.per_unit_step) takes about the steps that
+    # rtol 1e-4 took per step; the identity, not the accuracy, is under test
+    cfg = energy_config(**{"rod.mu": mu, "time.rtol": 1e-3, "time.t_end": 1000.0})
     run, rec = record_steps(cfg, 2_000_000, max_bounces=100)
     dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
     # 100 bounces at μ = 0; at μ = 0.005 the rod comes to rest on the floor after 47
@@ -123,7 +127,7 @@ def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
 def test_energy_identity_with_bending_on_a_stiff_floor():
     """The same per-step identity with γ > 0 (pentadiagonal Newton), viscosity, a finer rod
     and a stiff floor, through 5 bounces."""
-    cfg = energy_config(**{"rod.N": 40, "rod.gamma": 1e-3, "rod.mu": 0.02, "time.rtol": 1e-5,
+    cfg = energy_config(**{"rod.N": 40, "rod.gamma": 1e-3, "rod.mu": 0.02, "time.rtol": 1e-4,
                            "floor.kappa_b": 1e5, "floor.beta": 1e-3, "time.t_end": 100.0})
     run, rec = record_steps(cfg, 2_000_000, max_bounces=5)
     dt, e0, e1, diss, diss_formula, scale, u0, nb, t = rec.T
@@ -184,7 +188,7 @@ def test_jerk_is_the_time_derivative_of_the_acceleration(gamma, mu, u_bottom):
     acc = lambda uu, vv: ref.acceleration(uu, vv, run.system, run.rod, run.floor)
     a = acc(u, v)
     out, k, strains = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
-    EN.jerk(run.system, run.rod, run.floor, u, v, a, out, k, strains)
+    rates.jerk(run.system, run.rod, run.floor, u, v, a, out, k, strains)
     dl = 1e-6
     fd = (acc(u + dl * v, v + dl * a) - acc(u - dl * v, v - dl * a)) / (2 * dl)
     np.testing.assert_allclose(out, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
@@ -333,8 +337,9 @@ def test_adaptive_error_follows_the_tolerance_on_the_paper_mu100_run():
     """The paper's second setting (N = 5, μ = 100: impacts, release, settling on the floor),
     snapshots of the first second against SciPy's Radau on the NumPy right-hand side at
     1e-11 (the measure of benchmarks/bench_scipy.py): the error of the error-controlled
-    step falls like tol^(2/3) (local error O(dt³) held at tol: ×100 in tol is ×21.5 in
-    error) and is below 1e-4 at tol = 1e-8; the snapshots land on their times."""
+    step follows the tolerance (local error O(dt³) held per unit step, control.per_unit_step:
+    ×100 in tol is ×100 in error; held per step it was ×21.5, tol^(2/3)) and is below 1e-4
+    at tol = 1e-8; the snapshots land on their times."""
     from scipy.integrate import solve_ivp
     from rodjit.model.system import build_system, initial_state
     from rodjit.presets import load_preset
@@ -352,7 +357,7 @@ def test_adaptive_error_follows_the_tolerance_on_the_paper_mu100_run():
         np.testing.assert_allclose(res.t, t, rtol=0, atol=1e-12)
         errs.append(max(np.abs(res.u.T - ref[:6]).max(), np.abs(res.v.T - ref[6:]).max() / vscale))
     ratios = np.array(errs[:-1]) / np.array(errs[1:])
-    assert np.all((ratios > 10) & (ratios < 45)), errs
+    assert np.all((ratios > 50) & (ratios < 200)), errs
     assert errs[-1] < 1e-4, errs
 
 
@@ -373,14 +378,14 @@ def test_adaptive_steps_shrink_in_contact_and_grow_in_flight():
 def test_step_factor_is_the_clamped_inverse_cube_root():
     """The step-size factor SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX], without libm's cbrt:
     < 1e-7 relative over the unclamped range, the bounds outside it (0 included)."""
-    errs = np.concatenate([[0.0, 1e-300, 1e-9, EN.ERR_FAC_MAX, EN.ERR_FAC_MIN, 1e300],
-                           np.geomspace(EN.ERR_FAC_MAX / 10, EN.ERR_FAC_MIN * 10, 5001)])
-    got = np.array([EN._step_factor(e) for e in errs])
+    errs = np.concatenate([[0.0, 1e-300, 1e-9, CT.ERR_FAC_MAX, CT.ERR_FAC_MIN, 1e300],
+                           np.geomspace(CT.ERR_FAC_MAX / 10, CT.ERR_FAC_MIN * 10, 5001)])
+    got = np.array([CT.step_factor(e) for e in errs])
     with np.errstate(divide="ignore"):
-        want = np.clip(EN.SAFETY / np.cbrt(errs), EN.FAC_MIN, EN.FAC_MAX)
+        want = np.clip(CT.SAFETY / np.cbrt(errs), CT.FAC_MIN, CT.FAC_MAX)
     assert np.abs(got / want - 1.0).max() < 1e-7
-    assert got[0] == EN.FAC_MAX and got[-1] == want[-1]
-    inner = (errs > EN.ERR_FAC_MAX) & (errs < EN.ERR_FAC_MIN)
+    assert got[0] == CT.FAC_MAX and got[-1] == want[-1]
+    inner = (errs > CT.ERR_FAC_MAX) & (errs < CT.ERR_FAC_MIN)
     assert inner.sum() > 3000 and np.all(np.diff(got[6:]) <= 0)     # monotone in err
 
 

@@ -14,7 +14,9 @@ from conftest import assert_resume_is_bit_identical, trial_step
 from rodjit.driver.run import Run, SimulationError
 from rodjit.kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE, OK
 from rodjit.records.result import MemorySink
-from rodjit.stepping import control, erk, layout as L, registry
+from rodjit.stepping import control, layout as L, registry
+from rodjit.kernels.rates import full_accel
+from rodjit.stepping.integrators import erk
 
 QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
 PAIRS = {"dp54": 5, "dop853": 8}
@@ -175,7 +177,7 @@ def test_step_is_ok_and_fsal():
     assert r.status == OK
     _, _, system, rod, floor = run._args()
     a = np.zeros_like(trial[2])
-    erk.full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1], False)
+    full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1], False)
     np.testing.assert_array_equal(a, trial[2])
 
 
@@ -270,7 +272,7 @@ def test_resume_through_bounces_and_outputs_is_bit_identical(integrator):
 def test_the_imaginary_stability_limit_is_where_the_amplification_passes_one():
     """``erk.imaginary_limit`` from the stability polynomial: |R(iy)| ≤ 1 up to it and > 1
     just beyond, R evaluated independently as 1 + z bᵀ(I − zA)⁻¹1; the cap is below it."""
-    from rodjit.stepping import erk
+    from rodjit.stepping.integrators import erk
     for params, t in erk.TABLEAUS.items():
         s = t.b.size
         a = np.zeros((s, s))

@@ -28,7 +28,7 @@ class Tracker:
         ta, ua, _, wa = self.prev
         slope = (u0 - ua) / (t - ta)
         track(self.ev, self.count, self.episodes, self.bounces, ta, t - ta, g, ua, slope, u0,
-              slope, wa, w, ff, emin, evib)
+              slope, wa, w, ff, emin, evib, u0)
         self.prev = (t, u0, slope, w)
 
     @property
@@ -123,7 +123,11 @@ def test_records_of_a_run_match_their_definitions():
     last = first + b["n_episodes"] - 1
     assert np.array_equal(b["t_release"][done], ep["t_end"][last[done]])
     assert np.allclose(b["restitution"][done], -b["w_release"][done] / b["w_impact"][done])
-    assert np.all(b["w_impact"] < 0) and np.all(b["w_release"][done] > 0)
+    # a bounce the run stopped in lists its release as provisional (docs/output.md: its
+    # restitution_energy NaN); every bounce that ended was released rising
+    ended = done & np.isfinite(b["restitution_energy"])
+    assert ended.sum() >= done.sum() - 1
+    assert np.all(b["w_impact"] < 0) and np.all(b["w_release"][ended] > 0)
     assert np.all((b["min_u0"] < 0) & (b["min_u0"] > -0.05))
     assert np.all(b["max_floor_force"] > 0) and np.all(b["min_strain"] > -1)
     # each gap between bounces is a flight: at least τ = π h/c long, w turns from + to −

@@ -129,8 +129,8 @@ register(Law(name="aiki-kosugi-plain-test", kind="floor", params=PlainFloor,
 
 
 def test_which_runs_hold_sides():
-    from rodjit.stepping.erk import DOP853, DP54
-    from rodjit.stepping.radau import Radau5
+    from rodjit.stepping.integrators.erk import DOP853, DP54
+    from rodjit.stepping.integrators.radau import Radau5
     assert _holds_sides(DP54, ak.AikiKosugiFloor) and _holds_sides(DOP853, ak.AikiKosugiFloor)
     assert not _holds_sides(DP54, PlainFloor)
     assert not _holds_sides(Radau5, ak.AikiKosugiFloor)

@@ -21,7 +21,7 @@ from rodjit.driver.run import Run
 from rodjit.kernels.forces import INACCURATE, OK
 from rodjit.model import reference as ref
 from rodjit.records.result import MemorySink
-from rodjit.stepping import kdk
+from rodjit.stepping.integrators import kdk
 
 
 def _flight(integrator, mu=0.0, gamma=0.0):
@@ -124,7 +124,7 @@ def test_fixed_steps_leave_the_error_estimate_off():
 
 _COUNT_ESTIMATES = """
 import json, sys, rodjit
-from rodjit.stepping import kdk
+from rodjit.stepping.integrators import kdk
 calls = [0]
 estimate = kdk._error_ratio
 def counted(*args):

@@ -19,7 +19,9 @@ from rodjit.driver.run import Run, SimulationError
 from rodjit.kernels.forces import BAD_FLOOR, BAD_STRAIN, NON_FINITE, NO_CONVERGENCE, OK
 from rodjit.model import reference
 from rodjit.records.result import MemorySink
-from rodjit.stepping import energy, radau, registry
+from rodjit.kernels.rates import full_accel
+from rodjit.stepping import registry
+from rodjit.stepping.integrators import radau
 
 QUIET = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0}
 TIGHT = {"time.rtol": 1e-13, "time.atol": 1e-15}   # Newton to rounding under fixed steps
@@ -115,24 +117,24 @@ def test_transformed_solves_invert_lambda_minus_the_jacobian(gamma):
     n1 = u.size
     work = np.zeros((radau.WORK_ROWS, n1))
     dt = 3e-3
-    qb = radau._jacobian(system, rod, floor, u, work[radau.FP])
+    qb = radau.hessian_diagonal(system, rod, floor, u, work[radau.FP])
     rng = np.random.default_rng(1)
     lr = radau.MU_REAL / dt
-    radau._real_matrix(system, work, lr, qb)
+    radau.real_matrix(system, work, lr, qb)
     r = rng.standard_normal(2 * n1)
     ru, rv = r[:n1].copy(), r[n1:].copy()
-    radau._solve_real(system, work, lr, ru, rv, True)
+    radau.solve_real(system, work, lr, ru, rv, True)
     want = np.linalg.solve(lr * np.eye(2 * n1) - J, r)
     np.testing.assert_allclose(np.concatenate([ru, rv]), want, rtol=1e-6, atol=1e-9)
     ru, rv = r[:n1].copy(), r[n1:].copy()   # again from the stored factor
-    radau._solve_real(system, work, lr, ru, rv, False)
+    radau.solve_real(system, work, lr, ru, rv, False)
     np.testing.assert_allclose(np.concatenate([ru, rv]), want, rtol=1e-6, atol=1e-9)
     cr, ci = radau.ALPHA / dt, -radau.BETA / dt
-    radau._complex_matrix(system, work, cr, ci, qb)
+    radau.complex_matrix(system, work, cr, ci, qb)
     rc = r + 1j * rng.standard_normal(2 * n1)
     rur, rui = rc[:n1].real.copy(), rc[:n1].imag.copy()
     rvr, rvi = rc[n1:].real.copy(), rc[n1:].imag.copy()
-    radau._solve_complex(system, work, cr, ci, rur, rui, rvr, rvi)
+    radau.solve_complex(system, work, cr, ci, rur, rui, rvr, rvi)
     want = np.linalg.solve((cr + 1j * ci) * np.eye(2 * n1) - J, rc)
     got = np.concatenate([rur + 1j * rui, rvr + 1j * rvi])
     np.testing.assert_allclose(got, want, rtol=1e-6, atol=1e-9)
@@ -221,7 +223,7 @@ def test_step_leaves_the_full_acceleration_of_the_new_state():
     assert r.status == OK
     _, _, system, rod, floor = run._args()
     a = np.zeros_like(trial[2])
-    energy.full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1],
+    full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1],
                       False)
     np.testing.assert_array_equal(a, trial[2])
     assert run.sstats[registry.counter_index("newton_iterations")] >= 2

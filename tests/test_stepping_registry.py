@@ -14,7 +14,8 @@ from rodjit import config
 from rodjit.kernels.forces import OK
 from rodjit.kernels.mass import inv_node_mass, node_mass
 from rodjit.model.system import masses
-from rodjit.stepping import control, kdk, registry, schemes, workspace
+from rodjit.stepping import control, registry, schemes, workspace
+from rodjit.stepping.integrators import kdk
 from rodjit.stepping.step_result import StepResult
 
 ROOT = Path(rodjit.__file__).resolve().parent
@@ -44,7 +45,7 @@ def test_every_entry_names_a_module_with_its_parameters_and_kernels():
 
 
 def test_work_rows_and_counters_match_the_scheme_modules():
-    from rodjit.stepping import energy
+    from rodjit.stepping.integrators import energy
     assert registry.get("energy").work_rows == energy.WORK_ROWS
     assert registry.get("verlet").work_rows == workspace.WORK_ROWS
     # the sstats layout of run files and Result.stats
@@ -196,7 +197,7 @@ def test_control_from_the_time_config():
                                 land=rules.land, split=rules.split, gap=control.GAP_MAX)
     c = control.build(rodjit.Config().time, kdk.SemiImplicit(0.05))
     assert c.gap == 0.05 and c.dt_max == math.inf
-    from rodjit.stepping.energy import Energy
+    from rodjit.stepping.integrators.energy import Energy
     c = control.build(rodjit.Config().override({"time.dt": 1e-4}).time, Energy(1e-6, 1e-9))
     assert c.gap == 0.0 and c.dt_fixed == 1e-4
     assert control.output_tolerance([0.5, 0.001, 2.0]) == control.OUTPUT_TOL * 0.001

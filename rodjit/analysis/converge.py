@@ -14,7 +14,8 @@ from .richardson import Study, study
 
 __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
            "FORMAT_VERSION", "default_time_ladder", "step_keys", "predictability_time",
-           "PREDICTABILITY_FRACTION", "NOT_MEASURED"]
+           "PREDICTABILITY_FRACTION", "PREDICTABILITY_CONVERGENCE",
+           "PREDICTABILITY_NOISE", "NOT_MEASURED"]
 
 DEFAULT_OBSERVABLES = ("restitution_first", "contact_time_first", "min_u0",
                        "max_floor_force")
@@ -22,9 +23,15 @@ FORMAT_VERSION = 2     # 2: time_status, predictability_time, time_steps
 # The status of a time study whose runs all took the same number of steps: the ladder did
 # not change the steps, so the spread of its values says nothing about the time error.
 NOT_MEASURED = "not measured"
-# The runs along the time ladder disagree in the heights by more than their error bar
-# once the two finest differ by more than this fraction of the heights' range over the run
-# (the trajectory is then no longer one trajectory; docs/MODEL.md §5).
+# The runs along the time ladder disagree in the heights by more than their own error bar
+# once the two finest differ by at least this share of what the two coarsest differ by (a
+# refinement that no longer halves the runs' difference: the trajectory is then no longer
+# one trajectory; docs/MODEL.md §5), counted above PREDICTABILITY_NOISE of the heights'
+# range (the rounding and tolerance noise of runs that agree).
+PREDICTABILITY_CONVERGENCE = 0.5
+PREDICTABILITY_NOISE = 1e-6
+# The former rule's fixed error bar (1 % of the heights' range); kept for callers that name
+# it, no longer used by ``predictability_time``.
 PREDICTABILITY_FRACTION = 0.01
 # the resolution keys whose level is a mesh width (1/value); any other key's value is used
 # as the level itself (time.rtol, time.dt, time.cfl: smaller is finer)
@@ -519,12 +526,21 @@ def _cap_text(base) -> str:
 
 
 def predictability_time(histories, t_end: float,
-                        fraction: float = PREDICTABILITY_FRACTION) -> float:
+                        convergence: float = PREDICTABILITY_CONVERGENCE,
+                        noise: float = PREDICTABILITY_NOISE) -> float:
     """The simulated time after which the runs of a time ladder disagree in the heights
-    by more than their error bar: the first common output time at which the two finest
-    runs differ (max over nodes) by more than ``fraction`` of the heights' range over the
-    finest run.  inf if they never do before ``t_end``; NaN without two runs with common
-    output times (no snapshots, or a failed run).
+    by more than their own error bar.
+
+    The error bar of the two finest runs is what the ladder itself says: a refinement that
+    converges shrinks the runs' difference (by the ratio of the errors, 4 to 16 for a
+    refinement by 4), so the two finest differ by less than the two coarsest.  With D_c(t)
+    and D_f(t) the largest difference (max over nodes, and over the output times up to t)
+    of the coarsest and of the finest pair of the last three runs, the trajectory is lost
+    at the first common output time with D_f ≥ ``convergence``·D_c and D_f above
+    ``noise`` of the heights' range: the refinement no longer halves the difference, as
+    when the runs have become unrelated trajectories of a chaotic motion.  inf if that
+    never happens before ``t_end``; NaN without three runs with common output times (no
+    snapshots, a failed run, a ladder of two).
 
     Parameters
     ----------
@@ -532,21 +548,29 @@ def predictability_time(histories, t_end: float,
         Each run's snapshot times and heights, coarse to fine.
     t_end : float
         The runs' end [s].
-    fraction : float
-        The error bar as a fraction of the heights' range.
+    convergence : float
+        The share of the coarse pair's difference at which the fine pair disagrees.
+    noise : float
+        Differences below this fraction of the heights' range are not counted.
     """
     hs = [h for h in histories if h is not None]
-    if len(hs) < 2 or len(hs) != len(histories):
+    if len(hs) < 3 or len(hs) != len(histories):
         return math.nan
-    (t1, u1), (t2, u2) = hs[-2], hs[-1]
-    n = min(len(t1), len(t2))
-    if n < 2 or not np.allclose(t1[:n], t2[:n], rtol=0, atol=1e-9 * max(1.0, t_end)):
+    (t0, u0), (t1, u1), (t2, u2) = hs[-3:]
+    n = min(len(t0), len(t1), len(t2))
+    tol = 1e-9 * max(1.0, t_end)
+    if (n < 2 or not np.allclose(t0[:n], t2[:n], rtol=0, atol=tol)
+            or not np.allclose(t1[:n], t2[:n], rtol=0, atol=tol)):
         return math.nan
     scale = float(np.max(u2[:n]) - np.min(u2[:n]))
     if not scale > 0:
         return math.nan
-    d = np.max(np.abs(u2[:n] - u1[:n]), axis=1)
-    bad = np.flatnonzero(~(d <= fraction * scale))      # NaN counts as a disagreement
+    # running maxima: a difference that passes through 0 (the runs cross) is not agreement
+    # (NaN counts as a disagreement: it propagates through the maxima)
+    d_c = np.maximum.accumulate(np.max(np.abs(u1[:n] - u0[:n]), axis=1))
+    d_f = np.maximum.accumulate(np.max(np.abs(u2[:n] - u1[:n]), axis=1))
+    lost = ~((d_f < convergence * d_c) | (d_f <= noise * scale))
+    bad = np.flatnonzero(lost)
     return float(t2[bad[0]]) if bad.size else math.inf
 
 

@@ -2,7 +2,7 @@
 
 Compiled without fused multiply-adds: the pivots' rounding errors must cancel as they do
 unfused (``rodjit._jit``)."""
-from .._jit import exact_kernel, exact_step_kernel
+from .._jit import exact_kernel, exact_step_kernel, step_kernel
 
 
 @exact_kernel
@@ -163,3 +163,17 @@ def _substitute(cp, x, k, n):
         i = k + j
         if i <= n:
             x[i] -= cp[i] * x[i - 1]
+
+
+# assembly, not a solve: compiled like the matrices it adds to (``step_kernel``)
+@step_kernel
+def add_bending(a0, a1, a2, w, n):
+    """Add w·h³·B to the diagonals a0, a1, a2 of a symmetric pentadiagonal matrix: the
+    bands of B = h CᵀC, C the curvature rows (1, −2, 1)/h² of nodes 1..N−1."""
+    for i in range(1, n):
+        a0[i - 1] += w
+        a0[i] += 4.0 * w
+        a0[i + 1] += w
+        a1[i - 1] -= 2.0 * w
+        a1[i] -= 2.0 * w
+        a2[i - 1] += w

@@ -10,11 +10,18 @@ and q → s(a) as b → a.  Two evaluations, chosen per call:
 
 * **quadrature** (Gauss–Legendre on ``value`` and ``deriv``) when the interval is short
   compared with its distance to the singularity, |b − a| ≤ TAU·d with d = min(a, b) −
-  lower(p), and does not contain 0 in its interior.  No cancellation.  The number of points
+  lower(p), and with its distance to 0, |b − a| ≤ TAU·min(|a|, |b|) (so it neither
+  contains nor touches 0).  No cancellation.  The number of points
   grows with r = |b − a|/d: 2 up to TAU2, 3 up to TAU3, 4 up to TAU.  For a pole of order 3
   the truncation at each switch is ≤ 2.5e-17 of the pole term (it scales as r⁴, r⁶, r⁸);
   for both Aiki–Kosugi laws it stays below half an ulp of q (measured with mpmath in the
   tests), i.e. below the rounding of the float nodes and weights.
+  The distance to 0 matters because the stress vanishes there (s(0) = 0: the rod's
+  natural length, the floor's switch): just below the floor's kink q is tiny against the
+  pole's scale, and a rule's truncation, small against the pole term, is not small
+  against q (2 points on (0, −9.67e-8) were 5e-14 off, 230 ulps of q).  The exact quotient
+  is accurate there: P(0) = 0, and with |b − a| > TAU·min(|a|, |b|) its cancellation
+  (|P(a)| + |P(b)|)/|P(b) − P(a)| ≲ 1 + 2/TAU.
 * **exact quotient** otherwise.  Its rounding error is ≈ ε_mach (|P(a)| + |P(b)|)/|b − a|;
   since P(0) = 0 and |s| is monotone away from 0 on each side, |P(x)| ≤ |x| max|s|, which
   with |b − a| > TAU·d (or 0 inside (a, b), where |a| + |b| = |b − a|) bounds it by
@@ -58,10 +65,13 @@ X21 = 0.5773502691896258
 @step_kernel
 def points(a, b, p):
     """Gauss–Legendre points ``quotient`` uses for q(a, b): 2, 3, 4, or 0 for the exact
-    quotient (interval long for its distance to the pole, or with 0 inside)."""
+    quotient (interval long for its distance to the pole or to 0, or with 0 inside)."""
     if a * b < 0.0:
         return 0
     r = abs(b - a)
+    if r > TAU * min(abs(a), abs(b)):
+        # next to 0, where the stress vanishes (module docstring): the exact quotient
+        return 0
     d = min(a, b) - lower(p)
     if r <= TAU2 * d:
         return 2

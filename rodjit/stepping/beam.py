@@ -2,24 +2,11 @@
 
 Exact on its quadratic energy ½vᵀMv + γ/2 uᵀBu; one pentadiagonal solve per step.
 """
-from ..kernels.banded import penta_factor, penta_solve
+from ..kernels.banded import add_bending, penta_factor, penta_solve
 from ..kernels.forces import add_beam_term
 from ..kernels.mass import node_mass
 from . import workspace as W
-from .._jit import kernel, step_kernel
-
-
-@step_kernel
-def add_bending(a0, a1, a2, w, n):
-    """Add w·h³·B to the diagonals a0, a1, a2 of a symmetric pentadiagonal matrix: the
-    bands of B = h CᵀC, C the curvature rows (1, −2, 1)/h² of nodes 1..N−1."""
-    for i in range(1, n):
-        a0[i - 1] += w
-        a0[i] += 4.0 * w
-        a0[i + 1] += w
-        a1[i - 1] -= 2.0 * w
-        a1[i] -= 2.0 * w
-        a2[i - 1] += w
+from .._jit import kernel
 
 
 @kernel

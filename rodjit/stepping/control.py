@@ -31,13 +31,19 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..kernels.forces import OK
+from ..kernels.rates import full_accel, jerk
 from . import registry
-from .._jit import step_kernel
+from .step_result import StepResult
+from .._jit import kernel, step_kernel
 
 __all__ = ["Control", "Rules", "RULES", "build", "output_tolerance", "propose", "gap_limit", "step_to",
            "gap_keep", "GROWTH", "GAP_MAX", "REJECT_SHRINK", "EVENT_MIN", "OUTPUT_TOL",
            "LAND_FIXED", "LAND_ADAPTIVE", "SPLIT_BELOW", "GAP_REJECT", "GAP_CLOSE_MAX", "retry",
-           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH", "DENSE_OUTPUTS_MAX"]
+           "STABILITY_CFL", "PAIR_GROWTH", "PAIR_STRETCH", "DENSE_OUTPUTS_MAX", "step_factor",
+           "taylor_start", "height_scale", "velocity_scale",
+           "VELOCITY_SCALE", "ERROR_TIME", "UNIT_STEP_MAX", "per_unit_step", "unit_step_factor",
+           "SAFETY", "FAC_MIN", "FAC_MAX", "ERR_FAC_MAX", "ERR_FAC_MIN"]
 
 # A proposal grows at most by this factor per step: after a rejection the step recovers
 # over a few steps instead of jumping back to the size that just failed.
@@ -206,3 +212,118 @@ def retry(inaccurate, dt_suggest, dt):
     """The step to retry after a rejected trial of ``dt``: the scheme's ``dt_suggest`` when
     it rejected the trial for accuracy, else REJECT_SHRINK × dt."""
     return dt_suggest if inaccurate else REJECT_SHRINK * dt
+
+
+# The error norm of every adaptive integrator (docs/integrators.md, "What the tolerances
+# mean"): the largest over the components a scheme estimates of |e_k| / scale_k, where
+#   heights:    scale = atol + rtol·max(|u_k|, |u_k⁺|)                   (atol in m)
+#   velocities: scale = atol·VELOCITY_SCALE + rtol·max(|v_k|, |v_k⁺|)    (m/s)
+# A max, not a root mean square: each component's estimated local error stays within its
+# own tolerance, so the bottom node in contact (where the error concentrates) is not
+# averaged with N quiet nodes.  VELOCITY_SCALE = 1/s: a velocity error of atol m/s moves a
+# height by atol within 1 s, the time scale of a bounce of the 1 m rod (a 1 m drop takes
+# 0.45 s; MODEL.md "Units"), so heights and velocities are held to comparable accuracy.
+VELOCITY_SCALE = 1.0
+
+
+@step_kernel
+def height_scale(scheme, y, y2):
+    """The scale of a height's error between y and y2 (``scheme.atol``, ``scheme.rtol``)."""
+    return scheme.atol + scheme.rtol * max(abs(y), abs(y2))
+
+
+@step_kernel
+def velocity_scale(scheme, y, y2):
+    """The scale of a velocity's error between y and y2."""
+    return scheme.atol * VELOCITY_SCALE + scheme.rtol * max(abs(y), abs(y2))
+
+
+# The second-order schemes (``kdk``, ``energy``) control the error per unit step: their
+# local error estimate, in the norm above, must stay below dt/ERROR_TIME of the tolerance.
+# A local error of O(dt³) controlled per step leaves a global error O(dt²) ∝ tol^(2/3),
+# which outgrows the tolerance as it tightens (verlet on paper-mu0: 1.8×, 5.6× and 20× tol
+# at tol 1e-3, 1e-5, 1e-7); per unit step the steps go as tol^(1/2) and the global error as
+# tol.  ERROR_TIME = 1 ms, the time scale on which an impact changes (the paper presets'
+# contacts last about 4 ms); it sets the constant: verlet's first restitution on paper-mu0
+# is then about the tolerance (at 1 s it was 1.3e-3 × tol, with 30× the steps).  Below
+# ERROR_TIME/UNIT_STEP_MAX (the short steps that end on a floor crossing) the factor
+# stops growing: a step's estimate has a floor of rounding and of the Newton solve, which
+# dt/ERROR_TIME would otherwise magnify without bound.
+ERROR_TIME = 1e-3
+UNIT_STEP_MAX = 1e3
+
+
+@step_kernel
+def per_unit_step(err, dt):
+    """A second-order scheme's error ratio per unit step: ``err`` · ERROR_TIME / dt (at
+    most ``err`` · UNIT_STEP_MAX)."""
+    return err * min(ERROR_TIME / dt, UNIT_STEP_MAX)
+
+
+@step_kernel
+def unit_step_factor(r):
+    """The next step over this one for a ratio ``r`` per unit step (∝ dt²):
+    SAFETY·r^(−1/2) in [FAC_MIN, FAC_MAX] (``step_factor`` of r^(3/2))."""
+    return step_factor(r * math.sqrt(r))
+
+
+# The step factor of the second-order schemes (``kdk``, ``energy``): their local error is
+# O(dt³), so the next step over this one is SAFETY·err^(−1/3), in [FAC_MIN, FAC_MAX].
+SAFETY = 0.9
+FAC_MIN = 0.2
+FAC_MAX = 5.0
+# the range of errors where the step factor SAFETY·err^(−1/3) is not clamped
+ERR_FAC_MAX = (SAFETY / FAC_MAX) ** 3
+ERR_FAC_MIN = (SAFETY / FAC_MIN) ** 3
+
+
+@step_kernel
+def step_factor(err):
+    """SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX] (the next step over this one).
+
+    err^(−1/3) by Newton's iteration y ← y(4 − x y³)/3 on x = err·8^k ∈ [1, 8), from the
+    least-squares quadratic of x^(−1/3) on [1, 8] (7 % off at worst): three iterations
+    leave < 1e-7 relative, far below what a step-size heuristic needs, and cost less than
+    a libm cbrt call.  Plain arithmetic: the same bits everywhere."""
+    if not err > ERR_FAC_MAX:      # also err = 0
+        return FAC_MAX
+    if err >= ERR_FAC_MIN:
+        return FAC_MIN
+    x = err
+    scale = 1.0
+    while x < 1.0:
+        x *= 8.0
+        scale *= 2.0
+    while x >= 8.0:
+        x *= 0.125
+        scale *= 0.5
+    y = 1.07144173 + x * (-0.15170626 + x * 0.01044221)
+    for _ in range(3):
+        y = y * (4.0 - x * y * y * y) * (1.0 / 3.0)
+    return min(FAC_MAX, max(FAC_MIN, SAFETY * scale * y))
+
+
+@step_kernel
+def _error_rate(scheme, u, ad):
+    """max_i |ȧ_i|/12 / (atol + rtol|u_i|): the predicted u error per dt³."""
+    r = 0.0
+    for i in range(u.size):
+        r = max(r, abs(ad[i]) / (12.0 * (scheme.atol + scheme.rtol * abs(u[i]))))
+    return r
+
+
+@kernel
+def taylor_start(scheme, system, rod, floor, u, v, a, s, k, ad, strains):
+    """Full acceleration of the initial state and the first step of an implicit scheme
+    (``energy``, ``radau5``): the step whose Taylor error dt³|ȧ|/12 is half the tolerance
+    (``scheme.rtol``, ``scheme.atol``), at most the explicit limit 2/ω (the controller
+    grows it from there).  ``s``, ``k``, ``ad``, ``strains``: scratch rows."""
+    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, s, k, bool(True))
+    if status != OK:
+        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
+    jerk(system, rod, floor, u, v, a, ad, k, strains)
+    dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
+    rate = _error_rate(scheme, u, ad)
+    if rate > 0.0:
+        dt = min(dt, 0.5 / np.cbrt(rate))
+    return StepResult(OK, 0.0, emin, fl, dt, 0.0, 0.0)

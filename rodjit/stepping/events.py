@@ -151,11 +151,13 @@ def open_contact(ev, t, w, u0, ff, emin, evib):
 
 @step_kernel
 def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ffb, eminb,
-          evib):
+          evib, u0x):
     """Update the bookkeeping for the accepted step (t, t+dt]; write finished episodes
     and bounces into their buffers (the caller guarantees one free row in each).
     ``evib``: the vibration energy at the step's start, needed (and computed by the
-    caller) only when the step touches down with no bounce open.
+    caller) only when the step touches down with no bounce open.  ``u0x``, ``ffb``,
+    ``eminb``: the smallest u_0, the largest floor force and the smallest strain over the
+    step (inside it too, ``stepping.extremes``), which the open bounce's extremes take in.
 
     Internal forces cancel in w = Σ m v, so out of contact w changes by g only: the
     centre-of-mass velocity at a crossing follows exactly from the step end that is out
@@ -163,11 +165,11 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
     if ev[L.IN_CONTACT] == 0.0:
         if u0b < 0.0:
             s = touchdown(u0a, v0a, u0b, dt)
-            open_contact(ev, t + s * dt, wa + g * s * dt, u0b, ffb, eminb, evib)
+            open_contact(ev, t + s * dt, wa + g * s * dt, u0x, ffb, eminb, evib)
         elif ev[L.B_NEP] > 0.0:
-            _update_extremes(ev, u0b, ffb, eminb)
+            _update_extremes(ev, u0x, ffb, eminb)
     else:
-        _update_extremes(ev, u0b, ffb, eminb)
+        _update_extremes(ev, u0x, ffb, eminb)
         if u0b >= 0.0:
             s = release(u0a, u0b, v0b, dt)
             tc = t + s * dt

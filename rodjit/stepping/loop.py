@@ -46,176 +46,17 @@ law itself and take an accepted step that crossed again, ending on the crossing.
 import numpy as np
 
 from ..kernels.forces import BAD_STRAIN, INACCURATE, OK, TOO_CLOSE, energies, worst_segment
-from ..model.laws import lower, value
+from ..kernels.rates import full_accel
+from ..model.laws import lower
 from ..model.laws.base import BOTH, CONTACT, FREE, Sided, has_extension
 from . import control as C
 from . import layout as L
 from . import registry
-from .energy import full_accel
 from .events import crossing, hermite_exit, open_contact, track, vibration_energy
-from .schemes import (dense, dense_dissipated, dense_setup, has_dense, has_dense_type, initial,
-                      step)
-from .._jit import kernel, overload, step_kernel
-
-
-@step_kernel
-def _next_target(clock, count):
-    target = clock[L.T_END]
-    if clock[L.SNAP_DT] > 0.0:
-        target = min(target, clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT])
-    if clock[L.DIAG_DT] > 0.0:
-        target = min(target, clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT])
-    return target
-
-
-@step_kernel
-def _skip_past(clock, count, kidx, dtidx, t):
-    """Advance the output index to the first grid time after t (+ tolerance)."""
-    while clock[L.T0] + count[kidx] * clock[dtidx] <= t + clock[L.TOL]:
-        count[kidx] += 1
-
-
-@step_kernel
-def _grid_time(clock, count, kidx, dtidx, ahead):
-    """The output time ``ahead`` places after the next one of a grid (inf: grid off)."""
-    if clock[dtidx] > 0.0:
-        return clock[L.T0] + (count[kidx] + ahead) * clock[dtidx]
-    return np.inf
-
-
-@step_kernel
-def _covered(clock, count, kidx, dtidx, t, limit):
-    """How many output times of a grid a step ending at t covers (at most ``limit``)."""
-    # a range, not a counter from a literal 0: ``_grid_time`` compiles once (rodjit._jit)
-    for n in range(limit):
-        if _grid_time(clock, count, kidx, dtidx, n) > t + clock[L.TOL]:
-            return n
-    return max(limit, 0)
-
-
-@step_kernel
-def _snapshot_row(u, v, t, step_no, count, snap_t, snap_step, snap_u, snap_v):
-    j = count[L.N_SNAP]
-    snap_t[j] = t
-    snap_step[j] = step_no
-    for i in range(u.size):   # element loops: a slice copy would allocate
-        snap_u[j, i] = u[i]
-        snap_v[j, i] = v[i]
-    count[L.N_SNAP] += 1
-
-
-@step_kernel
-def _diag_row(u, v, work, system, rod, floor, count, t, dt_prop, dissipated, diag):
-    j = count[L.N_DIAG]
-    ke, st, be, fe, ge, emin, z, w = energies(u, v, work[1], system, rod, floor)
-    row = diag[j]
-    row[L.D_T] = t
-    row[L.D_DT] = dt_prop
-    row[L.D_ENERGY_KINETIC] = ke
-    row[L.D_ENERGY_STRETCH] = st
-    row[L.D_ENERGY_BEND] = be
-    row[L.D_ENERGY_FLOOR] = fe
-    row[L.D_ENERGY_GRAVITY] = ge
-    row[L.D_ENERGY_TOTAL] = ke + st + be + fe + ge
-    row[L.D_DISSIPATED] = dissipated
-    row[L.D_U_BOTTOM] = u[0]
-    row[L.D_FLOOR_FORCE] = value(u[0], floor)
-    row[L.D_MIN_STRAIN] = emin
-    row[L.D_CM_HEIGHT] = z
-    row[L.D_CM_VELOCITY] = w
-    count[L.N_DIAG] += 1
-
-
-@step_kernel
-def _emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
-          snap_t, snap_step, snap_u, snap_v, diag, at_grid):
-    """Write the snapshot and/or diagnostics row due at time t, from the state ``cur``;
-    the rows' time is t, or with ``at_grid`` each grid's own output time (within the
-    output tolerance of t)."""
-    tol = clock[L.TOL]
-    ts = clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT]
-    if clock[L.SNAP_DT] > 0.0 and ts <= t + tol:
-        _snapshot_row(cur[0], cur[1], ts if at_grid else t, step_no, count, snap_t,
-                      snap_step, snap_u, snap_v)
-        _skip_past(clock, count, L.K_SNAP, L.SNAP_DT, t)
-    td = clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT]
-    if clock[L.DIAG_DT] > 0.0 and td <= t + tol:
-        _diag_row(cur[0], cur[1], work, system, rod, floor, count, td if at_grid else t,
-                  dt_prop, clock[L.DISSIPATED], diag)
-        _skip_past(clock, count, L.K_DIAG, L.DIAG_DT, t)
-
-
-@step_kernel
-def _dense_target(ctrl, fixed, clock, count, t, dtp):
-    """A dense-output step from t: ``(target, dt, land, snapshots, diagnostics)``, the step
-    toward t_end, shortened to end on the last output time it may cover
-    (``ctrl.dense_snapshots``, ``ctrl.dense_diagnostics``) if it would cover more, and at
-    most how many output times of each grid it covers."""
-    t_end = clock[L.T_END]
-    m_s = ctrl.dense_snapshots
-    m_d = ctrl.dense_diagnostics
-    dt, land = C.step_to(ctrl, fixed, t_end - t, dtp)
-    t_new = t_end if land else t + dt
-    n_s = _covered(clock, count, L.K_SNAP, L.SNAP_DT, t_new, m_s + 1)
-    n_d = _covered(clock, count, L.K_DIAG, L.DIAG_DT, t_new, m_d + 1)
-    target = t_end
-    if n_s > m_s:
-        target = min(target, _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, m_s - 1))
-    if n_d > m_d:
-        target = min(target, _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, m_d - 1))
-    if target < t_end:
-        dt, land = C.step_to(ctrl, fixed, target - t, dtp)
-        n_s = min(n_s, m_s)
-        n_d = min(n_d, m_d)
-    return target, dt, land, n_s, n_d
-
-
-@step_kernel
-def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                     t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                     diag):
-    """The rows of every output time in (t, t_new − tol) of the step of length dt from the
-    state ``old`` to ``new``, by the scheme's dense output into ``interp`` (module
-    docstring); ``dense_setup`` has run for the step."""
-    tol = clock[L.TOL]
-    while True:
-        ts = _grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0))
-        td = _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))
-        tau = min(ts, td)
-        if not tau < t_new - tol:
-            break
-        theta = (tau - t) / dt
-        dense(scheme, old[0], old[1], old[2], new[0], new[1], new[2], work, dt, theta,
-              interp[0], interp[1])
-        if ts == tau:
-            _snapshot_row(interp[0], interp[1], tau, step_no, count, snap_t, snap_step,
-                          snap_u, snap_v)
-            count[L.K_SNAP] += 1
-        if td == tau:
-            diss = diss_old + dense_dissipated(scheme, system, old[1], new[1], work, dt, theta)
-            _diag_row(interp[0], interp[1], work, system, rod, floor, count, tau, dt_prop,
-                      diss, diag)
-            count[L.K_DIAG] += 1
-
-
-def _emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v, diag):
-    """``_emit_dense_rows`` for a scheme with a dense output; compiled for one without, a
-    no-op, so its loop does not compile the interpolation it never runs."""
-    _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                     t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                     diag)
-
-
-@overload(_emit_dense)
-def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                   t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                   diag):
-    if not has_dense_type(scheme):
-        return (lambda scheme, old, new, work, interp, system, rod, floor, clock, count, t,
-                dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                diag: None)
-    return _emit_dense
+from .extremes import step_extremes
+from .outputs import dense_target, emit, emit_dense, grid_time, next_target
+from .schemes import dense_setup, has_dense, initial, step
+from .._jit import kernel, overload
 
 
 def _holds_sides(scheme_cls, floor_cls) -> bool:
@@ -276,7 +117,7 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
     clock[L.EMIN] = emin
     if u[0] < 0.0:
         open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin, ke - 0.5 * w * w + st + be)
-    _emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
+    emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
           count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
     count[L.STARTED] = 1
     return OK
@@ -331,12 +172,12 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
             code = L.FULL
             break
         if interpolate:
-            target, dt, land, n_s, n_d = _dense_target(ctrl, fixed, clock, count, t, dtp)
+            target, dt, land, n_s, n_d = dense_target(ctrl, fixed, clock, count, t, dtp)
             if count[L.N_SNAP] + n_s > cap_s or count[L.N_DIAG] + n_d > cap_d:
                 code = L.FULL   # before the step: it is the same whatever the buffers held
                 break
         else:
-            target = _next_target(clock, count)
+            target = next_target(clock, count)
             dt, land = C.step_to(ctrl, fixed, target - t, dtp)
         u = cur[0]
         v = cur[1]
@@ -408,13 +249,19 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
                 val = emin
         if status == OK and interpolate:
             t_new = target if land else t + dt
-            inside = min(_grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0)),
-                         _grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))) < t_new - tol
+            inside = min(grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0)),
+                         grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))) < t_new - tol
             if inside:
                 # the extra stages of the continuous extension, once for every output of
                 # the step; one outside the admissible set retries the step shorter
                 status, val = dense_setup(scheme, system, rod, tfloor, u, v, cur[2], u2, v2,
                                           nxt[2], work, dt)
+        # a bounce open or opening: its extremes come from inside the step (``extremes``),
+        # by the dense output of a scheme that has one (set up here if no output needed it)
+        extremes = ev[L.B_NEP] > 0.0 or u2[0] < 0.0
+        if status == OK and has_dense(scheme) and extremes and not (interpolate and inside):
+            status, val = dense_setup(scheme, system, rod, tfloor, u, v, cur[2], u2, v2, nxt[2],
+                                      work, dt)
         if status != OK:
             count[L.REJECTED] += 1
             retry = C.retry(status == INACCURATE, r.dt_suggest, dt)
@@ -439,8 +286,14 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         evib = 0.0     # the vibration energy at a new bounce's impact (its step's start)
         if ev[L.B_NEP] == 0.0 and ev[L.IN_CONTACT] == 0.0 and u2[0] < 0.0:
             evib = vibration_energy(u, v, work[1], system, rod, floor)
+        u0x = u2[0]
+        ffx = r.floor_force
+        eminx = emin
+        if extremes:
+            u0x, ffx, eminx = step_extremes(scheme, cur, nxt, work, interp, system, floor, dt,
+                                            ffx, eminx)
         track(ev, count, episodes, bounces, t, t_new - t, system.g, u[0], v[0], u2[0], v2[0],
-              w, r.w, r.floor_force, emin, evib)
+              w, r.w, ffx, eminx, evib, u0x)
         diss_old = diss
         diss += r.dissipated
         w = r.w
@@ -458,17 +311,17 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         emin_cur = emin
         if interpolate:
             if inside:
-                _emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, clock, count,
+                emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, clock, count,
                             t_old, dt, t, diss_old, dtp, count[L.STEP], snap_t, snap_step,
                             snap_u, snap_v, diag)
             clock[L.DISSIPATED] = diss
             # an output time at the step's end: its own state (at the grid's time unless
             # the step landed there, as on t_end)
-            _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
+            emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
                   snap_t, snap_step, snap_u, snap_v, diag, not land)
         elif land:
             clock[L.DISSIPATED] = diss
-            _emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
+            emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
                   snap_t, snap_step, snap_u, snap_v, diag, bool(False))
     clock[L.T] = t
     clock[L.DT] = dtp

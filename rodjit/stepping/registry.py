@@ -83,42 +83,42 @@ def _kdk(tc, P):
 
 _ENERGY_WORK_ROWS = 17   # rows S … D of stepping/energy.py (tests check it)
 
-# the error norms (each scheme's module docstring derives its estimate); the norms differ
-# between schemes, so equal tolerances do not mean equal errors (docs/integrators.md)
-_KDK_NORM = ("max over nodes of |dt²/6·(a⁺ − a)| / (atol + rtol·max(|u|, |u⁺|)): the "
-             "heights' predicted local error")
-_ENERGY_NORM = ("max over nodes of the heights' and velocities' local error / (atol + "
-                "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
-_PAIR_NORM = ("root mean square over (u, v) of the embedded error / (atol + "
-              "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
-_RADAU_NORM = ("root mean square over (u, v) of Hairer's filtered embedded error / (atol + "
-               "rtol·max(|y|, |y⁺|)), atol applied to velocities too")
+# the one error norm (control.height_scale, velocity_scale; docs/integrators.md): each
+# scheme's module docstring derives the estimate it measures in it
+_NORM = ("max over the estimated components of |e| / (atol + rtol·max(|y|, |y⁺|)), atol in m "
+         "for heights and atol·control.VELOCITY_SCALE (1/s) in m/s for velocities")
+_KDK_NORM = _NORM + "; estimated: the heights, |dt²/6·(a⁺ − a)|"
+_ENERGY_NORM = _NORM + "; estimated: heights and velocities (predictor–corrector)"
+_PAIR_NORM = _NORM + "; estimated: heights and velocities (embedded pair)"
+_RADAU_NORM = _NORM + "; estimated: heights and velocities (Hairer's filtered estimate)"
 _KDK_CAP = ("control.STABILITY_CFL × the stability limit 2/ω under tolerance control; the "
             "barrier approach: at most time.cfl (≤ control.GAP_MAX) of the gap per step")
 
 SCHEMES: tuple[Scheme, ...] = (
     # verlet's Crank–Nicolson viscous sub-step is split off the kicks: measured 2.8e-4 on
     # the first-bounce restitution at μ = 100 (N = 5) at every rtol, 1e-5 at μ = 1
-    Scheme("verlet", "rodjit.stepping.kdk", "Verlet", _kdk, workspace.WORK_ROWS,
+    Scheme("verlet", "rodjit.stepping.integrators.kdk", "Verlet", _kdk,
+           workspace.WORK_ROWS,
            order=2, cfl_control=True, error_norm=_KDK_NORM, cap_keys=("time.cfl",),
            viscous_mu_max=1.0,
            cap=_KDK_CAP + "; the viscous sub-step's limit time.cfl·h²/(2μ) (μ > 0)"),
-    Scheme("semi-implicit", "rodjit.stepping.kdk", "SemiImplicit", _kdk, workspace.WORK_ROWS,
+    Scheme("semi-implicit", "rodjit.stepping.integrators.kdk", "SemiImplicit", _kdk,
+           workspace.WORK_ROWS,
            order=2, cfl_control=True, error_norm=_KDK_NORM, cap_keys=("time.cfl",),
            cap=_KDK_CAP),
-    Scheme("energy", "rodjit.stepping.energy", "Energy",
+    Scheme("energy", "rodjit.stepping.integrators.energy", "Energy",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), _ENERGY_WORK_ROWS,
            counters=("newton_iterations", "newton_failures"), gap_control=False,
            order=2, error_norm=_ENERGY_NORM),
-    Scheme("dp54", "rodjit.stepping.erk", "DP54",
+    Scheme("dp54", "rodjit.stepping.integrators.erk", "DP54",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 16, gap_control=False,
            step_rules="pair-dp54", dense=True, order=5, error_norm=_PAIR_NORM,
            cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
-    Scheme("dop853", "rodjit.stepping.erk", "DOP853",
+    Scheme("dop853", "rodjit.stepping.integrators.erk", "DOP853",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 40, gap_control=False,
            step_rules="pair-dop853", dense=True, order=8, error_norm=_PAIR_NORM,
            cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
-    Scheme("radau5", "rodjit.stepping.radau", "Radau5",
+    Scheme("radau5", "rodjit.stepping.integrators.radau", "Radau5",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
            counters=("newton_iterations", "newton_failures"), gap_control=False,
            dense=True, order=5, error_norm=_RADAU_NORM),

@@ -24,7 +24,7 @@ def _matrix(d, c, h, n):
 
 
 @step_kernel
-def _factored(c, h, n, work):
+def factored(c, h, n, work):
     """Factor M + cK into work rows VCP, VINV unless they hold that factorisation already
     (same c: the two viscous sub-steps of a step, and every step while dt stays the same,
     e.g. at the viscous step limit); returns the off-diagonal.  A reused factorisation is
@@ -60,7 +60,7 @@ def viscous_cn(vin, vout, tau, system, work):
     c = 0.5 * tau * system.mu
     rhs = work[W.VRHS]
     v0 = work[W.V0]
-    off = _factored(c, h, n, work)
+    off = factored(c, h, n, work)
     for i in range(n + 1):
         v0[i] = vin[i]
     # rhs = (M − cK) v0
@@ -90,7 +90,7 @@ def viscous_sdirk2(vin, vout, tau, system, work):
     c = gs * tau * system.mu
     rhs = work[W.VRHS]
     v0 = work[W.V0]
-    off = _factored(c, h, n, work)
+    off = factored(c, h, n, work)
     for i in range(n + 1):
         v0[i] = vin[i]
         m = node_mass(i, n, h)

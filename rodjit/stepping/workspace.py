@@ -3,7 +3,7 @@ S = 0        # segment stresses
 K = 1        # curvatures
 VD = 2       # viscous sub-step: matrix diagonal
 VCP = 3      #   Thomas factor  } kept between calls: the factorisation of M + cK for
-VINV = 4     #   1/pivots       } c = MEMO[0] (see viscous._factored); write them nowhere else
+VINV = 4     #   1/pivots       } c = MEMO[0] (see viscous.factored); write them nowhere else
 VRHS = 5     #   right-hand side
 V0 = 6       #   copy of the incoming velocity
 BA0 = 7      # beam sub-step: diagonals of M + c B

@@ -27,8 +27,8 @@ _COMMON = {"time.t_end": 1.0, "time.dt": None, "time.dt_max": None, "time.dt_min
            "output.snapshot_interval": 0.01, "output.diagnostics_interval": 0.002,
            "output.compression": "none"}
 
-# name -> overrides; rtol/atol matter for the energy step, cfl (time.control = "cfl") for
-# the other two
+# name -> overrides; rtol/atol set the steps of energy, dp54, dop853 and radau5, cfl
+# (time.control = "cfl") those of verlet and semi-implicit
 CASES: dict[str, dict] = {
     "verlet_mu0": {"time.integrator": "verlet", "time.cfl": 0.05, "time.control": "cfl"},
     "verlet_mu10_gamma": {"time.integrator": "verlet", "time.cfl": 0.05, "time.control": "cfl", "rod.mu": 10.0,
@@ -42,6 +42,12 @@ CASES: dict[str, dict] = {
                            "time.atol": 1e-8, "rod.mu": 100.0, "rod.gamma": 1e-4,
                            "rod.N": 10},
     "verlet_fixed_dt": {"time.integrator": "verlet", "time.dt": 2e-4, "time.control": "cfl"},
+    "dp54_mu0": {"time.integrator": "dp54", "time.control": "tolerance", "time.rtol": 1e-6,
+                 "time.atol": 1e-9},
+    "dop853_mu1": {"time.integrator": "dop853", "time.control": "tolerance", "time.rtol": 1e-7,
+                   "time.atol": 1e-10, "rod.mu": 1.0},
+    "radau5_mu100": {"time.integrator": "radau5", "time.control": "tolerance",
+                     "time.rtol": 1e-5, "time.atol": 1e-8, "rod.mu": 100.0, "rod.N": 10},
 }
 RESUMED = ("energy_mu0", "semi_implicit_mu100")   # also written in two sessions
 SWEEP_GRID = {"rod.mu": [0.0, 10.0], "floor.kappa_b": [1000.0, 3000.0]}
@@ -127,13 +133,19 @@ def write_all(folder: Path) -> list[Path]:
     return written
 
 
-def main(folder: Path) -> None:
+def main(folder: Path, names: list[str] | None = None) -> None:
+    """Write every golden into ``folder``, or only the run files of ``names`` (cases)."""
     with tempfile.TemporaryDirectory() as tmp:
-        for path in write_all(Path(tmp)):
+        paths = write_all(Path(tmp)) if not names else []
+        for name in names or ():
+            write_run(name, Path(tmp) / f"{name}.h5")
+            paths.append(Path(tmp) / f"{name}.h5")
+        for path in paths:
             target = folder / (path.stem + ".npz")
             np.savez_compressed(target, **extract(path))
             print(target)
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else HERE)
+    # python tests/golden/make_golden.py [FOLDER [CASE ...]]
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else HERE, sys.argv[2:])

@@ -37,8 +37,10 @@ of the stiffest viscous modes alternates in sign (CN's R → −1); v½ does not
 
 Error control (``tolerance``): the predicted local error of u is dt³/6·ȧ, estimated from
 the two kicks' accelerations as dt²/6·(a⁺ − a) (O(dt³), the leading term of the exact local
-error of the verlet step), scaled componentwise by atol + rtol·max(|u|, |u⁺|); a ratio
-above 1 rejects the step (INACCURATE), and the next step is dt·0.9·ratio^(−1/3), capped at
+error of the verlet step), scaled componentwise by atol + rtol·max(|u|, |u⁺|) (the heights of
+the one error norm, ``control.height_scale``), per unit step (``control.per_unit_step``:
+times ERROR_TIME/dt, so the global error follows the tolerance); a ratio above 1 rejects
+the step (INACCURATE), and the next step is dt·0.9·ratio^(−1/2), capped at
 ``control.STABILITY_CFL`` × the stability limit.  The estimate costs one pass over the
 arrays, no force evaluation; under fixed steps (``time.dt``) it chooses nothing, so the
 parameters have ``tolerance`` off there (``registry``) and the step skips it.
@@ -51,17 +53,17 @@ parameter class and one more row (plus its line in ``registry``).
 import math
 from typing import NamedTuple
 
-from ..kernels.banded import tridiag_solve
-from ..kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
-from ..kernels.mass import node_mass
-from . import workspace as W
-from .beam import beam_midpoint
-from .control import STABILITY_CFL
-from .energy import FAC_MIN, SAFETY, _step_factor
-from .stability import explicit_dt
-from .step_result import StepResult
-from .viscous import _factored, viscous_cn, viscous_sdirk2
-from .._jit import kernel, overload, step_kernel
+from ...kernels.banded import tridiag_solve
+from ...kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
+from ...kernels.mass import node_mass
+from .. import workspace as W
+from ..beam import beam_midpoint
+from ..control import (FAC_MIN, STABILITY_CFL, height_scale, per_unit_step,
+                       unit_step_factor)
+from ..stability import explicit_dt
+from ..step_result import StepResult
+from ..viscous import factored, viscous_cn, viscous_sdirk2
+from ..._jit import kernel, overload, step_kernel
 
 __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "step"]
 
@@ -161,7 +163,7 @@ def _imex_first_kick(v, a, v2, tau, system, work):
     """v2 = (M + τμK)⁻¹ M (v + τ a): the half kick implicit in the viscous term."""
     n = system.n
     h = system.h
-    off = _factored(tau * system.mu, h, n, work)
+    off = factored(tau * system.mu, h, n, work)
     rhs = work[W.VRHS]
     for i in range(n + 1):
         rhs[i] = node_mass(i, n, h) * (v[i] + tau * a[i])
@@ -192,7 +194,7 @@ def _error_ratio(scheme, u, u2, a, a2, dt):
     c = dt * dt / 6.0
     r = 0.0
     for i in range(u.size):
-        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
+        su = height_scale(scheme, u[i], u2[i])
         r = max(r, c * abs(a2[i] - a[i]) / su)
     return r
 
@@ -280,11 +282,12 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             diss += _viscous(scheme, st, v2, v2, hdt, system, work)
     dts = _suggest(scheme, st, system, floor, om2, u2[0], v2[0])
     if scheme.tolerance:
-        err = _error_ratio(scheme, u, u2, a, a2, dt)
+        # per unit step (control.per_unit_step): the global error follows the tolerance
+        err = per_unit_step(_error_ratio(scheme, u, u2, a, a2, dt), dt)
         if not math.isfinite(err):
             return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, diss)
         if err > 1.0:
             return StepResult(INACCURATE, err, emin, fl,
-                              min(dts, dt * max(FAC_MIN, _step_factor(err))), w, diss)
-        dts = min(dts, dt * _step_factor(err))
+                              min(dts, dt * max(FAC_MIN, unit_step_factor(err))), w, diss)
+        dts = min(dts, dt * unit_step_factor(err))
     return StepResult(OK, 0.0, emin, fl, dts, w, diss)

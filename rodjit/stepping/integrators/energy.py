@@ -30,9 +30,11 @@ NO_CONVERGENCE (the loop retries a shorter step).
 Step size by accuracy: the Taylor predictors u_p = uⁿ + dt vⁿ + dt²/2 aⁿ and
 v_p = vⁿ + dt aⁿ + dt²/2 ȧⁿ have local errors −dt³ȧ/6 and −dt³ä/6, the step +dt³ȧ/12
 and +dt³ä/12 (exact for linear forces), so (uⁿ⁺¹ − u_p)/3 and (vⁿ⁺¹ − v_p)/3 estimate the
-step's local error.  Its max norm scaled by atol + rtol·|y| decides: ≤ 1 accepts, > 1
-returns INACCURATE with a shorter ``dt_suggest``; the next step is dt·0.9·err^(−1/3) (in
-[0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
+step's local error.  Its size in the one error norm (``control.height_scale``,
+``velocity_scale``: max over u and v of |e|/(atol + rtol·|y|)), per unit step
+(``control.per_unit_step``: times ERROR_TIME/dt, so the global error follows the
+tolerance), decides: ≤ 1 accepts, > 1 returns INACCURATE with a shorter ``dt_suggest``; the
+next step is dt·0.9·err^(−1/2) (in [0.2, 5]×).  Newton starts from u_p + dt³ȧ/4, where the step lands up to O(dt⁴).
 No stability limit enters: steps grow far beyond the explicit limit when the motion is smooth.
 Componentwise scaling makes ``atol`` the accuracy of the bottom height in contact (|u_0| is
 tiny there) and ``rtol`` that of the flight: raise atol to stop resolving every micro-contact.
@@ -45,16 +47,19 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..kernels.banded import penta_factor, penta_solve, sym_tridiag_apply, sym_tridiag_solve
-from ..kernels.discrete_gradient import difference
-from ..kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
-                              OK, accel, add_beam_term, assemble)
-from ..kernels.mass import inv_node_mass as _inv_mass, node_mass as _mass
-from ..model.laws import deriv, lower
-from .beam import add_bending
-from .registry import counter_index
-from .step_result import StepResult
-from .._jit import kernel, step_kernel
+from ...kernels.banded import (add_bending, penta_factor, penta_solve, sym_tridiag_apply,
+                               sym_tridiag_solve)
+from ...kernels.discrete_gradient import difference
+from ...kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
+                               OK, add_beam_term, assemble)
+from ...kernels.mass import inv_node_mass as _inv_mass, node_mass as _mass
+from ...kernels.rates import add_viscous, jerk
+from ...model.laws import lower
+from ..control import (height_scale, per_unit_step, taylor_start, unit_step_factor,
+                       velocity_scale)
+from ..registry import counter_index
+from ..step_result import StepResult
+from ..._jit import kernel, step_kernel
 
 __all__ = ["Energy", "initial", "step", "WORK_ROWS"]
 
@@ -67,9 +72,6 @@ MAX_NEWTON = 30
 MAX_BACKTRACK = 40
 ARMIJO = 1e-4
 CHORD = 1e-2  # the factor is used again while a full update shrinks the residual this much
-SAFETY = 0.9
-FAC_MIN = 0.2
-FAC_MAX = 5.0
 EPS = 2.220446049250313e-16
 
 # rows of the scratch array ``work`` (all per-step scratch: nothing survives a step)
@@ -103,108 +105,12 @@ class Energy(NamedTuple):
     chord: float = CHORD
 
 
-# the range of errors where the step factor SAFETY·err^(−1/3) is not clamped
-ERR_FAC_MAX = (SAFETY / FAC_MAX) ** 3
-ERR_FAC_MIN = (SAFETY / FAC_MIN) ** 3
-
-
-@step_kernel
-def _step_factor(err):
-    """SAFETY·err^(−1/3) in [FAC_MIN, FAC_MAX] (the next step over this one).
-
-    err^(−1/3) by Newton's iteration y ← y(4 − x y³)/3 on x = err·8^k ∈ [1, 8), from the
-    least-squares quadratic of x^(−1/3) on [1, 8] (7 % off at worst): three iterations
-    leave < 1e-7 relative, far below what a step-size heuristic needs, and cost less than
-    a libm cbrt call.  Plain arithmetic: the same bits everywhere."""
-    if not err > ERR_FAC_MAX:      # also err = 0
-        return FAC_MAX
-    if err >= ERR_FAC_MIN:
-        return FAC_MIN
-    x = err
-    scale = 1.0
-    while x < 1.0:
-        x *= 8.0
-        scale *= 2.0
-    while x >= 8.0:
-        x *= 0.125
-        scale *= 0.5
-    y = 1.07144173 + x * (-0.15170626 + x * 0.01044221)
-    for _ in range(3):
-        y = y * (4.0 - x * y * y * y) * (1.0 / 3.0)
-    return min(FAC_MAX, max(FAC_MIN, SAFETY * scale * y))
-
-
-@step_kernel
-def full_accel(system, rod, floor, u, v, a, s, k, bound):
-    """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
-    ``accel``'s ``(status, value, min_strain, floor_force, omega2)`` (omega2 = 0 unless
-    ``bound``: only the first step's proposal uses it)."""
-    res = accel(u, a, s, k, system, rod, floor, True, bound)
-    if res[0] == OK:
-        _add_viscous(system, v, a)
-    return res
-
-
-@step_kernel
-def _add_viscous(system, v, a):
-    """a −= M⁻¹μKv, the viscous part of the full acceleration."""
-    if system.mu > 0.0:
-        n = system.n
-        ih = 1.0 / system.h
-        c = system.mu * ih
-        for i in range(n):
-            t = c * (v[i + 1] - v[i])
-            a[i] += t * _inv_mass(i, n, ih)
-            a[i + 1] -= t * _inv_mass(i + 1, n, ih)
-
-
-@step_kernel
-def jerk(system, rod, floor, u, v, a, out, k, strains):
-    """ȧ = M⁻¹(−H(u)v − μKa), the time derivative of the acceleration along the motion
-    (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself).  Also leaves the
-    segment strains of u in ``strains`` (the step needs them, and they are computed here)."""
-    n = system.n
-    h = system.h
-    ih = 1.0 / h
-    mu = system.mu
-    # out_i = (t_i − t_{i−1})/m_i with the segment terms t (no zeroing pass: LLVM makes it
-    # a memset call, which costs more than the whole loop for a short rod); the bending
-    # term is added already divided by the masses, as in ``forces.assemble``
-    t_prev = -deriv(u[0], floor) * v[0]
-    for i in range(n):
-        e = (u[i + 1] - u[i]) * ih - 1.0
-        strains[i] = e
-        t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
-        out[i] = (t - t_prev) * _inv_mass(i, n, ih)
-        t_prev = t
-    out[n] = -t_prev * _inv_mass(n, n, ih)
-    if system.gamma > 0.0:
-        add_beam_term(v, out, k, h, -system.gamma, bool(True))
-
-
-@step_kernel
-def _error_rate(scheme, u, ad):
-    """max_i |ȧ_i|/12 / (atol + rtol|u_i|): the predicted u error per dt³."""
-    r = 0.0
-    for i in range(u.size):
-        r = max(r, abs(ad[i]) / (12.0 * (scheme.atol + scheme.rtol * abs(u[i]))))
-    return r
-
-
 @kernel
 def initial(scheme, system, rod, floor, u, v, a, work):
-    """Full acceleration of the initial state.  The first step: the accuracy estimate from ȧ, at most the explicit limit
-    2/ω (the controller grows it from there)."""
-    status, val, emin, fl, om2 = full_accel(system, rod, floor, u, v, a, work[S], work[K],
-                                            bool(True))
-    if status != OK:
-        return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
-    jerk(system, rod, floor, u, v, a, work[AD], work[K], work[E1])
-    dt = 2.0 / math.sqrt(om2) if om2 > 0.0 else np.inf
-    rate = _error_rate(scheme, u, work[AD])
-    if rate > 0.0:
-        dt = min(dt, 0.5 / np.cbrt(rate))
-    return StepResult(OK, 0.0, emin, fl, dt, 0.0, 0.0)
+    """Full acceleration of the initial state and the first step (``control.taylor_start``:
+    the accuracy estimate from ȧ, at most the explicit limit 2/ω)."""
+    return taylor_start(scheme, system, rod, floor, u, v, a, work[S], work[K], work[AD],
+                        work[E1])
 
 
 @step_kernel
@@ -485,7 +391,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     # the full acceleration of the new state from the stresses of Newton's last evaluation,
     # which was at this state (``full_accel`` without evaluating the laws again)
     assemble(u2, a2, work[S], work[K], fl, system, True)
-    _add_viscous(system, v2, a2)
+    add_viscous(system, v2, a2)
     # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
     # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node
     err = 0.0
@@ -495,11 +401,11 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         finite &= abs(a2[i]) < np.inf
         eu = abs(d[i] - dp[i])
         ev = abs(v2[i] - (v[i] + dt * a[i] + hdt2 * ad[i]))
-        su = scheme.atol + scheme.rtol * max(abs(u[i]), abs(u2[i]))
-        sv = scheme.atol + scheme.rtol * max(abs(v[i]), abs(v2[i]))
+        su = height_scale(scheme, u[i], u2[i])        # the one norm (control.py)
+        sv = velocity_scale(scheme, v[i], v2[i])
         err = max(err, max(eu * sv, ev * su) / (su * sv))
         w += _mass(i, n, h) * v2[i]
-    err /= 3.0
+    err = per_unit_step(err / 3.0, dt)   # per unit step (control.per_unit_step)
     if not finite:
         return StepResult(NON_FINITE, np.nan, emin, fl, 0.0, 0.0, 0.0)
     diss = 0.0
@@ -510,7 +416,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         diss *= dt * system.mu * ih
     if not math.isfinite(err):
         return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
-    fac = _step_factor(err)
+    fac = unit_step_factor(err)
     if err > 1.0:
         return StepResult(INACCURATE, err, emin, fl, dt * fac, w, diss)
     return StepResult(OK, 0.0, emin, fl, dt * fac, w, diss)
