@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ..config import Config
 from ..records.extremes import Extremes
 from ..records.overview import RunFacts, energy_label
 from ..records.observables import ImpactTrack, impact_line, impact_values
@@ -29,7 +30,7 @@ class RunSummary:
     path: str
     status: str
     message: str
-    config: object
+    config: Config
     t: float
     t_end: float
     counts: dict
@@ -108,6 +109,8 @@ def closed_summary(writer: RunWriter) -> RunSummary:
     """The summary of the file ``writer`` has just closed, from what it wrote: equal to
     ``summarize(writer.path)``."""
     fin = writer.final
+    if fin is None:
+        raise ValueError(f"{writer.path!r} is not closed yet: no summary to take")
     return _summary(writer.path, fin["status"], fin["message"], writer.config,
                     writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
                     writer.track, fin["attrs"], None)
