@@ -305,16 +305,16 @@ def test_a_ladder_that_does_not_change_the_steps_refines_the_cap_key():
     assert true > 1e-9 * abs(oc.value)
     assert true / 10 <= oc.time_error <= 10 * true, (oc.time_error, true)
     cv = importlib.import_module("rodjit.analysis.converge")
-    assert cv._same_steps([{"steps": 7}, {"steps": 7}, {"steps": 7}])
-    assert not cv._same_steps([{"steps": 7}, {"steps": 8}])
-    assert not cv._same_steps([{"steps": -1}, {"steps": -1}])
+    assert cv.same_steps([{"steps": 7}, {"steps": 7}, {"steps": 7}])
+    assert not cv.same_steps([{"steps": 7}, {"steps": 8}])
+    assert not cv.same_steps([{"steps": -1}, {"steps": -1}])
 
 
 def test_unchanged_steps_print_not_measured_never_zero(monkeypatch):
     """The same ladder with the cap's key closed: "not measured", never 0 or exact."""
     cv = importlib.import_module("rodjit.analysis.converge")
     cfg = _mu100(0.6, **{"time.integrator": "verlet", "rod.mu": 1.0, "rod.N": 40})
-    monkeypatch.setattr(cv, "_cap_key", lambda base, key: None)
+    monkeypatch.setattr(cv, "cap_key", lambda base, key: None)
     conv = converge(cfg, {"rod.N": [20, 40]}, also={"time.rtol": [1e-1, 5e-2, 2.5e-2]},
                     time_at=40, observables=["restitution_first", "max_floor_force"], jobs=1)
     assert len(set(conv.time_steps)) == 1

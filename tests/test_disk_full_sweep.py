@@ -98,8 +98,9 @@ def test_a_write_that_fails_despite_the_reservation_ends_in_one_line(tmp_path, r
 @pytest.mark.parametrize("fail_at", [1, 3, N + 1])
 def test_a_refused_reservation_keeps_exactly_the_points_written_before(
         tmp_path, reference, monkeypatch, fail_at):
-    """Each point its own write (flush_interval tiny): the k-th reservation refused
-    (write k <= N: the rows of point k; N + 1: closing the file) leaves k - 1 points."""
+    """Each point its own write (batches of one point, flush_interval tiny): the k-th
+    reservation refused (write k <= N: the rows of point k; N + 1: closing the file) leaves
+    k - 1 points."""
     ref = reference[0]
     calls = []
     reserve = sweep_file.reserve_space
@@ -115,7 +116,7 @@ def test_a_refused_reservation_keeps_exactly_the_points_written_before(
     with pytest.raises(WriteFailed, match=rf"keeps the points written \({fail_at - 1} of "
                                           rf"{N}\).*sweep --resume -o") as caught:
         rodjit.sweep(ref.base, {k: list(v) for k, v in zip(ref.grid.keys, ref.grid.values)},
-                     output=out, scheduler="inline", flush_interval=1e-9)
+                     output=out, scheduler="inline", flush_interval=1e-9, batch_size=1)
     assert caught.value.table.status == "failed"
     kept = rodjit.load_sweep(out)
     assert kept.counts["completed"] == fail_at - 1 and kept.status == "running"

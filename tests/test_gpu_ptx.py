@@ -84,7 +84,7 @@ def test_retargeted_functions_are_the_cpu_source():
     from rodjit.gpu.retarget import Retarget
     from rodjit.model.laws import aiki_kosugi
     from rodjit.model.laws.base import value
-    from rodjit.stepping import energy
+    from rodjit.stepping.integrators import energy
 
     _nvvm_or_skip()
     r = Retarget(import_cuda())

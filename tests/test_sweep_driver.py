@@ -332,9 +332,9 @@ def test_dask_runs_short_points_several_to_a_task_and_isolates_a_killer_among_th
     """Batching given the durations (here: every point counts as far shorter than a task,
     whatever the machine's load), and the killer isolated among its batch."""
     pytest.importorskip("distributed")
-    import rodjit.sweeps.executors as executors
+    import rodjit.sweeps.dask_cluster as dask_cluster
 
-    monkeypatch.setattr(executors, "TASK_SECONDS", 1e9)
+    monkeypatch.setattr(dask_cluster, "TASK_SECONDS", 1e9)
     kappas = [100.0 + i for i in range(40)]
     kappas[25] = 13.0                      # kills its worker, inside a task of several points
     base = BASE.override({**KILLER, "time.t_end": 0.2})
@@ -356,9 +356,9 @@ def test_an_existing_dask_cluster_by_address(tmp_path, inline_table, monkeypatch
     distributed = pytest.importorskip("distributed")
     import logging
 
-    import rodjit.sweeps.executors as executors
+    import rodjit.sweeps.dask_cluster as dask_cluster
 
-    monkeypatch.setattr(executors, "CONNECT_TIMEOUT", 1.0)
+    monkeypatch.setattr(dask_cluster, "CONNECT_TIMEOUT", 1.0)
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None, silence_logs=logging.ERROR,
                                   scheduler_kwargs={"dashboard_address": ":0"}) as cluster:

@@ -10,6 +10,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .evaluate import evaluate
+from .ladders import (TIME_KEYS, cap_key, cap_text, check_ladder, check_time_key,
+                      default_time_ladder, levels, same_steps, step_keys, steps_text)
+from .predictability import (PREDICTABILITY_CONVERGENCE, PREDICTABILITY_FRACTION,
+                             PREDICTABILITY_NOISE, predictability_time)
 from .richardson import Study, study
 
 __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
@@ -23,45 +27,6 @@ FORMAT_VERSION = 2     # 2: time_status, predictability_time, time_steps
 # The status of a time study whose runs all took the same number of steps: the ladder did
 # not change the steps, so the spread of its values says nothing about the time error.
 NOT_MEASURED = "not measured"
-# The runs along the time ladder disagree in the heights by more than their own error bar
-# once the two finest differ by at least this share of what the two coarsest differ by (a
-# refinement that no longer halves the runs' difference: the trajectory is then no longer
-# one trajectory; docs/MODEL.md §5), counted above PREDICTABILITY_NOISE of the heights'
-# range (the rounding and tolerance noise of runs that agree).
-PREDICTABILITY_CONVERGENCE = 0.5
-PREDICTABILITY_NOISE = 1e-6
-# The former rule's fixed error bar (1 % of the heights' range); kept for callers that name
-# it, no longer used by ``predictability_time``.
-PREDICTABILITY_FRACTION = 0.01
-# the resolution keys whose level is a mesh width (1/value); any other key's value is used
-# as the level itself (time.rtol, time.dt, time.cfl: smaller is finer)
-_INVERSE_KEYS = ("rod.N",)
-
-
-def _levels(key: str, values) -> list[float]:
-    return [1.0 / v for v in values] if key in _INVERSE_KEYS else [float(v) for v in values]
-
-
-def _check_ladder(name: str, ladder, base) -> tuple[str, list]:
-    if not isinstance(ladder, dict) or len(ladder) != 1:
-        raise ValueError(f"{name} must be one key and its values, e.g. "
-                         f"{{'rod.N': [25, 50, 100]}}, not {ladder!r}")
-    from ..sweeps.grid import Grid
-
-    grid = Grid.from_spec(ladder)      # lists, or text as on the command line
-    key, values = grid.keys[0], list(grid.values[0])
-    configs = [base.override({key: v}) for v in values]     # validates key and values
-    values = [c.get(key) for c in configs]
-    if len(values) < 2:
-        raise ValueError(f"{name} {key}: at least two levels, three for an order")
-    lv = _levels(key, values)
-    if any(b >= a for a, b in zip(lv, lv[1:])):
-        raise ValueError(f"{name} {key}: the levels must refine monotonically "
-                         f"({'increasing' if key in _INVERSE_KEYS else 'decreasing'}), "
-                         f"got {values}")
-    return key, values
-
-
 @dataclass
 class ObservableConvergence:
     """One observable: the space ladder study, the time ladder study and the time
@@ -357,8 +322,8 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     if not isinstance(base, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(base).__name__}")
     ladder = {"rod.N": [25, 50, 100, 200, 400]} if ladder is None else ladder
-    key, values = _check_ladder("ladder", ladder, base)
-    _check_time_key("ladder", key, base)
+    key, values = check_ladder("ladder", ladder, base)
+    check_time_key("ladder", key, base)
     extra = dict(extra or {})
     observables = list(observables)
     unknown = [o for o in observables if o not in OBSERVABLES and o not in extra]
@@ -367,11 +332,11 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                          f"{', '.join([*OBSERVABLES, *extra])}")
     configs = [base.override({key: v}) for v in values]
     t_key, t_values, t_configs = None, [], []
-    if also is None and key not in _TIME_KEYS:
+    if also is None and key not in TIME_KEYS:
         also = default_time_ladder(base)
     if also:
-        t_key, t_values = _check_ladder("also", also, base)
-        _check_time_key("also", t_key, base)
+        t_key, t_values = check_ladder("also", also, base)
+        check_time_key("also", t_key, base)
         if t_key == key:
             raise ValueError(f"also: {t_key} is already the ladder's key")
         time_at = values[-2] if time_at is None else time_at
@@ -391,8 +356,8 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
     warnings += list(dict.fromkeys(w for c in configs for w in c.warnings()))
     measured = True
     if t_key is not None:
-        if _same_steps(t_runs):
-            cap = _cap_key(base, t_key)
+        if same_steps(t_runs):
+            cap = cap_key(base, t_key)
             if cap is not None:
                 # the tolerance does not change the steps: the cap binds; refine what
                 # scales the cap by the same factors
@@ -406,25 +371,25 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                                   histories=True, **limits)
                 warnings.append(
                     f"{t_key} does not change the steps of time.integrator = "
-                    f"{base.time.integrator!r} here ({_steps_text(t_runs)} steps at every "
+                    f"{base.time.integrator!r} here ({steps_text(t_runs)} steps at every "
                     f"level: its step cap, which scales with {cap}, binds); the time "
                     f"error is measured on "
                     f"{cap} = {', '.join(f'{v:g}' for v in c_values)} instead "
-                    f"(registry: {_cap_text(base)})")
+                    f"(registry: {cap_text(base)})")
                 t_key, t_values, t_runs = cap, c_values, c_runs
-            if _same_steps(t_runs):
+            if same_steps(t_runs):
                 measured = False
                 warnings.append(
                     f"time error not measured: {t_key} = "
                     f"{', '.join(f'{v:g}' for v in t_values)} did not change the steps "
-                    f"({_steps_text(t_runs)} at every level)")
+                    f"({steps_text(t_runs)} at every level)")
         base_t = base.get(t_key)
     histories = [r.pop("history", None) for r in t_runs]
     for r in runs:
         r.pop("history", None)
     out = {}
     for name in observables:
-        s = study(name, _levels(key, values), _values_of(runs, name))
+        s = study(name, levels(key, values), _values_of(runs, name))
         statuses = [r.get("status", "") for r in runs]
         if len(set(statuses)) > 1 and name in OBSERVABLES:
             s.message = (s.message + "; " if s.message else "") + (
@@ -434,7 +399,7 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
                 s.status = "pre-asymptotic"
         oc = ObservableConvergence(name, s, statuses=statuses)
         if t_key is not None:
-            ts = study(name, _levels(t_key, t_values), _values_of(t_runs, name))
+            ts = study(name, levels(t_key, t_values), _values_of(t_runs, name))
             oc.time = ts
             if not measured:
                 ts.status, ts.message = NOT_MEASURED, "the ladder did not change the steps"
@@ -465,123 +430,6 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         p_time = predictability_time(histories, base.time.t_end)
     return Convergence(base, key, values, t_key, t_values, time_at, out, warnings, runs,
                        t_runs, p_time, [r.get("steps", -1) for r in t_runs])
-
-
-_TIME_KEYS = ("time.rtol", "time.atol", "time.cfl", "time.dt")
-
-
-def step_keys(base) -> tuple[str, ...]:
-    """The keys that set the steps of the base config's integrator (the registry's
-    ``Scheme.step_keys`` under its ``time.control`` and ``time.dt``)."""
-    from ..stepping.registry import get
-
-    return get(base.time.integrator).steps_of(base.time)
-
-
-def _by_tolerance(base) -> bool:
-    """Whether time.rtol/atol set the steps (the registry's facts of the integrator)."""
-    return "time.rtol" in step_keys(base)
-
-
-def _check_time_key(name: str, key: str, base) -> None:
-    """A ladder over a time key must vary what sets the integrator's steps."""
-    if key not in _TIME_KEYS or key == "time.dt":      # time.dt fixes every scheme's steps
-        return
-    keys = step_keys(base)
-    if key in keys:
-        return
-    tc = base.time
-    why = ("with the fixed step time.dt" if tc.dt is not None else
-           f"under time.control = {tc.control!r}")
-    raise ValueError(f"{name}: {key} does not set the steps of time.integrator = "
-                     f"{tc.integrator!r} {why}: ladder {keys[0]} instead "
-                     f"(e.g. --{'also' if name == 'also' else 'ladder'} {keys[0]}=...)")
-
-
-def _same_steps(t_runs) -> bool:
-    """Every run of the time ladder ran and took the same number of accepted steps."""
-    steps = [r.get("steps", -1) for r in t_runs]
-    return len(steps) >= 2 and steps[0] >= 0 and all(n == steps[0] for n in steps)
-
-
-def _steps_text(t_runs) -> str:
-    return f"{t_runs[0].get('steps', -1):,}"
-
-
-def _cap_key(base, t_key):
-    """The key that scales the integrator's step cap (the registry's ``cap_keys``), when
-    the time ladder was over a tolerance and a cap can bind; None otherwise."""
-    from ..stepping.registry import get
-
-    entry = get(base.time.integrator)
-    if t_key not in ("time.rtol", "time.atol") or base.time.dt is not None:
-        return None
-    return next((k for k in entry.cap_keys if k != t_key), None)
-
-
-def _cap_text(base) -> str:
-    from ..stepping.registry import get
-
-    return "its step cap (" + get(base.time.integrator).cap + ")"
-
-
-def predictability_time(histories, t_end: float,
-                        convergence: float = PREDICTABILITY_CONVERGENCE,
-                        noise: float = PREDICTABILITY_NOISE) -> float:
-    """The simulated time after which the runs of a time ladder disagree in the heights
-    by more than their own error bar.
-
-    The error bar of the two finest runs is what the ladder itself says: a refinement that
-    converges shrinks the runs' difference (by the ratio of the errors, 4 to 16 for a
-    refinement by 4), so the two finest differ by less than the two coarsest.  With D_c(t)
-    and D_f(t) the largest difference (max over nodes, and over the output times up to t)
-    of the coarsest and of the finest pair of the last three runs, the trajectory is lost
-    at the first common output time with D_f ≥ ``convergence``·D_c and D_f above
-    ``noise`` of the heights' range: the refinement no longer halves the difference, as
-    when the runs have become unrelated trajectories of a chaotic motion.  inf if that
-    never happens before ``t_end``; NaN without three runs with common output times (no
-    snapshots, a failed run, a ladder of two).
-
-    Parameters
-    ----------
-    histories : sequence of (t, u) or None
-        Each run's snapshot times and heights, coarse to fine.
-    t_end : float
-        The runs' end [s].
-    convergence : float
-        The share of the coarse pair's difference at which the fine pair disagrees.
-    noise : float
-        Differences below this fraction of the heights' range are not counted.
-    """
-    hs = [h for h in histories if h is not None]
-    if len(hs) < 3 or len(hs) != len(histories):
-        return math.nan
-    (t0, u0), (t1, u1), (t2, u2) = hs[-3:]
-    n = min(len(t0), len(t1), len(t2))
-    tol = 1e-9 * max(1.0, t_end)
-    if (n < 2 or not np.allclose(t0[:n], t2[:n], rtol=0, atol=tol)
-            or not np.allclose(t1[:n], t2[:n], rtol=0, atol=tol)):
-        return math.nan
-    scale = float(np.max(u2[:n]) - np.min(u2[:n]))
-    if not scale > 0:
-        return math.nan
-    # running maxima: a difference that passes through 0 (the runs cross) is not agreement
-    # (NaN counts as a disagreement: it propagates through the maxima)
-    d_c = np.maximum.accumulate(np.max(np.abs(u1[:n] - u0[:n]), axis=1))
-    d_f = np.maximum.accumulate(np.max(np.abs(u2[:n] - u1[:n]), axis=1))
-    lost = ~((d_f < convergence * d_c) | (d_f <= noise * scale))
-    bad = np.flatnonzero(lost)
-    return float(t2[bad[0]]) if bad.size else math.inf
-
-
-def default_time_ladder(base) -> dict:
-    """The time ladder of the base config's integrator: the key that sets its steps
-    (``step_keys``: time.dt with fixed steps, time.rtol under tolerance control or for an
-    integrator without cfl control, time.cfl under cfl control), the base value and two
-    refinements by 4."""
-    k = step_keys(base)[0]
-    v = base.get(k)
-    return {k: [v, v / 4, v / 16]}
 
 
 def _at_base(base_t, t_values, t_obs, runs, values, time_at, name) -> float:

@@ -150,17 +150,18 @@ class _Objective:
                 for x, r in zip(todo, runs):
                     self.cache[x] = (float(r.get(self.name, math.nan)), r.get("reason", ""))
             else:
-                from .converge import _check_ladder, _levels
+                from .ladders import check_ladder
+                from .ladders import levels as mesh_levels
                 from .richardson import study
 
-                lkey, levels = _check_ladder("ladder", self.ladder, self.base)
+                lkey, levels = check_ladder("ladder", self.ladder, self.base)
                 cfgs = [self.config(x).override({lkey: v}) for x in todo for v in levels]
                 runs = evaluate(cfgs, jobs=self.jobs, scheduler=self.scheduler,
                                 merge_time=self.merge_time, **self.limits)
                 n = len(levels)
                 for i, x in enumerate(todo):
                     part = runs[i * n:(i + 1) * n]
-                    s = study(self.name, _levels(lkey, levels),
+                    s = study(self.name, mesh_levels(lkey, levels),
                               [r.get(self.name, math.nan) for r in part])
                     value = s.extrapolated if s.status in ("converged", "exact",
                                                            "pre-asymptotic") else math.nan
@@ -353,9 +354,9 @@ def _resolution_shift(out: FitResult, obj, base, key, name, coarse, ladder, jobs
     if not math.isfinite(out.sensitivity) or out.sensitivity == 0:
         return
     if ladder is not None:
-        from .converge import _check_ladder
+        from .ladders import check_ladder
 
-        lkey, levels = _check_ladder("ladder", ladder, base)
+        lkey, levels = check_ladder("ladder", ladder, base)
         if coarse is None:
             coarse = {lkey: levels[-1]}        # the finest level alone vs the continuum
     if coarse is None:

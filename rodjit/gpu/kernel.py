@@ -18,6 +18,7 @@ compiles for the GPU.
 from __future__ import annotations
 
 import contextlib
+import sys
 import threading
 from typing import NamedTuple
 
@@ -27,7 +28,7 @@ from . import trajectory as T
 from ._cuda import import_cuda
 
 __all__ = ["Family", "family_of", "pack", "make_kernel", "compile_ptx", "simulated",
-           "N_MAX"]
+           "deep_stack", "N_MAX"]
 
 # the largest rod (segments N) a thread runs: its state, trial states, integrator scratch
 # and interpolation rows are (8 + work rows) × (N + 1) doubles of local memory (3 kB for the
@@ -162,6 +163,24 @@ def _simulated_run_one(*args):
     return T.run_one(*(getattr(a, "_ary", a) for a in args))
 
 
+# Python frames a GPU compile may nest: each device function is typed and compiled inside
+# its caller's typing (run_one -> advance -> the step -> the rates -> a law), dozens of
+# Numba's frames a level, and a compile error is re-raised through every level; the
+# default limit of 1000 frames is too shallow for the integrators' deepest chains
+COMPILE_FRAMES = 5000
+
+
+@contextlib.contextmanager
+def deep_stack():
+    """Python's recursion limit raised to COMPILE_FRAMES while a kernel compiles."""
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(old, COMPILE_FRAMES))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(old)
+
+
 class _Device(NamedTuple):
     compute_capability: tuple
 
@@ -201,7 +220,7 @@ def compile_ptx(family: Family, cc=(9, 0)) -> str:
     from .retarget import Retarget
 
     cuda = import_cuda()
-    with _LOCK, _compute_capability(cc):
+    with _LOCK, _compute_capability(cc), deep_stack():
         run_one = Retarget(cuda).device(T.run_one)
         ptx, _ = cuda.compile_ptx(kernel_function(family, cuda, run_one), signature(family),
                                   cc=tuple(cc))

@@ -8,10 +8,8 @@ point; ``resume=True`` runs only the points that are still pending or failed.
 """
 from __future__ import annotations
 
-import math
 import signal
 import time
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +30,7 @@ from .plan import check_runs_dir, plan_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
+from .outcome import SweepFailed, SweepInterrupted, SweepProgress, sweep_stats
 from .sweep_table import SweepTable
 
 __all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
@@ -40,79 +39,6 @@ FLUSH_INTERVAL = 1.0
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
 BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
 ENGINE = True          # False: every point alone through ``point.run_point`` (benchmarks)
-
-
-class SweepInterrupted(RuntimeError):
-    """A sweep stopped by SIGINT/SIGTERM; its file holds every finished point (``table``).
-
-    Running the same sweep again with ``resume=True`` runs only the points not finished.
-
-    Parameters
-    ----------
-    message : str
-        Which signal stopped the sweep, how many points finished, and how to resume.
-    signum : int or None
-        The signal number; None when a second interrupt arrived while stopping.
-    table : SweepTable
-        The table at the stop: finished points ``"completed"`` or ``"failed"``, the rest
-        ``"pending"``.
-    """
-
-    def __init__(self, message: str, signum: int | None, table: SweepTable):
-        super().__init__(message)
-        self.signum = signum
-        self.table = table
-
-
-class SweepFailed(RuntimeError):
-    """Every point of a sweep failed (the file, if any, was closed with their messages).
-
-    Parameters
-    ----------
-    message : str
-        What failed, in one line.
-    table : SweepTable
-        The sweep's table, each point's message in its ``message`` column.
-    """
-
-    def __init__(self, message: str, table: SweepTable):
-        super().__init__(message)
-        self.table = table
-
-
-@dataclass
-class SweepProgress:
-    """Where a sweep stands, passed to ``progress`` after every result and heartbeat.
-
-    Attributes
-    ----------
-    done : int
-        Points finished, earlier sessions of a resumed sweep included.
-    total : int
-        Points in the grid.
-    failed : int
-        Points failed so far.
-    run : int
-        Points finished in this call.
-    todo : int
-        Points this call set out to run.
-    elapsed : float
-        Seconds since this call started.
-    """
-
-    done: int          # points finished, earlier sessions included
-    total: int
-    failed: int
-    run: int           # points finished in this call
-    todo: int          # points this call set out to run
-    elapsed: float     # seconds since this call started
-
-    @property
-    def eta(self) -> float:
-        """Seconds left at the rate of this call so far (NaN before the first point)."""
-        if self.run == 0:
-            return math.nan
-        return self.elapsed / self.run * (self.todo - self.run)
 
 
 def check_jobs(jobs) -> int:
@@ -280,7 +206,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                        path=str(output) if output is not None else None, status="running")
     if not todo:                                   # a resume with nothing left to run
         table.status = "completed"
-        table.stats = _stats(0.0, 0, 0, None)
+        table.stats = sweep_stats(0.0, 0, 0, None)
         sweep_file.finish(output, "completed")
         return table
     if scheduler != "inline" and device != "cuda":    # the GPU engine starts no workers
@@ -362,20 +288,6 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
     exc = WriteFailed(table.message, cause)
     exc.table = table
     raise exc
-
-
-def _stats(wall: float, ran: int, failed: int, executor, teardown: float = 0.0) -> dict:
-    """What ``SweepTable.stats`` reports of this call: wall time from the start of the
-    executor, of which ``startup_time`` until its workers were ready and ``teardown_time``
-    after the last result (stopping them, the last write)."""
-    return {"wall_time": wall, "points_run": ran, "points_failed": failed,
-            "points_per_second": ran / wall if wall > 0 else 0.0,
-            "startup_time": getattr(executor, "startup_time", None),
-            "teardown_time": teardown,
-            "worker_deaths": getattr(executor, "deaths", 0),
-            "tasks": getattr(executor, "tasks", ran),
-            "backend": executor.name if executor is not None else "none",
-            "jobs": executor.jobs if executor is not None else 0}
 
 
 def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
@@ -489,7 +401,7 @@ def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handl
         if disk is not None:
             _disk_failed(table, output, batch, written + done0, disk)
         now = time.perf_counter()
-        table.stats = _stats(now - t0, ran, failed, executor, teardown=now - t_last)
+        table.stats = sweep_stats(now - t0, ran, failed, executor, teardown=now - t_last)
         if status == "interrupted":
             name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
             message = (f"interrupted by {name} after {done0 + ran} of {n} points"
