@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
 
@@ -179,7 +180,7 @@ def macroscopic_contacts(diag, episodes, bounces, phys: Physics) -> dict[str, np
     names = ("t_impact", "t_release", "n_episodes", "w_impact", "w_release", "z_impact",
              "z_release", "ev_impact", "ev_release", "restitution", "restitution_apex",
              "rebound_speed", "min_u0", "max_floor_force", "vibration_ratio", "open")
-    rows = {k: [] for k in names}
+    rows: dict[str, list[float]] = {k: [] for k in names}
     ts, w_all = diag["t"], diag["cm_velocity"]
     b_imp, b_rel = np.asarray(bounces["t_impact"]), np.asarray(bounces["t_release"])
     b_open = np.asarray(bounces.get("open", np.zeros(b_imp.size, bool)), bool)
@@ -345,10 +346,11 @@ def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
                            f"t = {phys.t_final:g}", nan, nan, nan, nan, nan, 0, nan, nan,
                            nan, nan, nan, nan, nan)
     r = {k: v[0] for k, v in rows.items()}
-    common = dict(t_impact=float(r["t_impact"]), n_episodes=int(r["n_episodes"]),
-                  w_impact=float(r["w_impact"]), rebound_speed=float(r["rebound_speed"]),
-                  min_u0=float(r["min_u0"]), max_floor_force=float(r["max_floor_force"]),
-                  energy_vibration_impact=float(r["ev_impact"]))
+    common: dict[str, Any] = dict(
+        t_impact=float(r["t_impact"]), n_episodes=int(r["n_episodes"]),
+        w_impact=float(r["w_impact"]), rebound_speed=float(r["rebound_speed"]),
+        min_u0=float(r["min_u0"]), max_floor_force=float(r["max_floor_force"]),
+        energy_vibration_impact=float(r["ev_impact"]))
     if not r["open"]:
         return FirstImpact("lift-off", "", float(r["restitution"]),
                            float(r["restitution_apex"]),
