@@ -84,7 +84,7 @@ def current_checkpoint(ck: dict, config) -> dict:
     ev = np.asarray(ck["ev"])
     if ev.shape != (_EV_SIZE_FORMAT2,):
         return ck
-    from ..records.observables import flight_time
+    from ..records.physics import flight_time
 
     new = np.zeros(L.EV_SIZE)
     new[:_EV_SIZE_FORMAT2] = ev

@@ -18,7 +18,7 @@ import numpy as np
 from ..records.bounces import bounce_table
 from ..records.columns import BOOL_COLUMNS
 from ..records.extremes import Extremes
-from ..records.observables import ImpactTrack
+from ..records.impact_track import ImpactTrack
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .cf import LIBVER

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from ..config import Config
 from ..records.extremes import Extremes
 from ..records.overview import RunFacts, energy_label
-from ..records.observables import ImpactTrack, impact_line, impact_values
+from ..records.impact_track import ImpactTrack, impact_line, impact_values
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive
@@ -48,7 +48,7 @@ class RunSummary:
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
     impact: dict = field(default_factory=dict)   # the first macroscopic contact
-                                                 # (records.observables.IMPACT_COLUMNS)
+                                                 # (records.impact_track.IMPACT_COLUMNS)
     writer_alive: bool | None = None
 
     @property
