@@ -5,7 +5,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .laws import get_law, law_of, lower
+from .laws import get_law, lower
 
 __all__ = ["RodSystem", "build_system", "grid", "masses", "initial_state", "check_admissible"]
 
