@@ -176,6 +176,7 @@ def _points(base: Config, grid: Grid, max_steps: float) -> tuple[int, Estimate, 
         total += e.file_bytes * share
         if worst is None or e.file_bytes > worst.file_bytes:
             worst_index, worst = index, e
+    assert worst is not None, "Grid.combinations yields at least one combination"
     return worst_index, worst, total
 
 

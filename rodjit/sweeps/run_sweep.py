@@ -285,9 +285,9 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
                         if output is not None
                         else f" after {int(np.sum(table.columns['status'] != 'pending'))} of "
                              f"{n} points"))
-    exc = WriteFailed(table.message, cause)
-    exc.table = table
-    raise exc
+    failure = WriteFailed(table.message, cause)
+    failure.table = table
+    raise failure
 
 
 def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
