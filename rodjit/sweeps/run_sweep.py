@@ -8,9 +8,11 @@ point; ``resume=True`` runs only the points that are still pending or failed.
 """
 from __future__ import annotations
 
+import os
 import signal
 import time
 from pathlib import Path
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -78,9 +80,12 @@ def _open_resume(output, config, grid, max_points):
     return base, file_grid, columns, header["attrs"]
 
 
-def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, save_runs=None,
-          resume: bool = False, overwrite: bool = False, progress=None, command=None,
-          handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL,
+def sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | None = None, *,
+          output: str | os.PathLike[str] | None = None, jobs: int | None = None,
+          scheduler: str | None = None, save_runs: str | os.PathLike[str] | None = None,
+          resume: bool = False, overwrite: bool = False,
+          progress: bool | Callable[[SweepProgress], object] | None = None,
+          command: str | None = None, handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL,
           max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
           max_points: float = MAX_POINTS, device: str | None = None,
           batch_size: int | None = None) -> SweepTable:
