@@ -257,7 +257,7 @@ def _scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows) -> tuple:
             np.zeros((cap_s, n1)), np.zeros((cap_s, n1)),
             np.zeros((cap_d, len(L.DIAG_COLUMNS))),
             np.zeros((ev_cap, len(L.EPISODE_COLUMNS))),
-            np.zeros((ev_cap, len(L.BOUNCE_COLUMNS))), np.zeros(L.FAIL_SIZE),
+            np.zeros((ev_cap, len(L.BOUNCE_ROW_COLUMNS))), np.zeros(L.FAIL_SIZE),
             np.zeros((track_rows, I.TRACK_SIZE)), np.zeros((EPISODE_ROWS, 2)))
 
 
