@@ -241,7 +241,7 @@ class Run:
         return (np.zeros(cap), np.zeros(cap, dtype=np.int64), np.zeros((cap, n1)),
                 np.zeros((cap, n1)), np.zeros((diag_capacity, len(L.DIAG_COLUMNS))),
                 np.zeros((event_capacity, len(L.EPISODE_COLUMNS))),
-                np.zeros((event_capacity, len(L.BOUNCE_COLUMNS))))
+                np.zeros((event_capacity, len(L.BOUNCE_ROW_COLUMNS))))
 
     def double_buffer(self) -> None:
         """Give the loop a second set of output buffers: ``take`` then switches to the other
@@ -445,7 +445,7 @@ class Run:
         """
         if self.ev[L.B_NEP] <= 0:
             return None
-        row = np.zeros(len(L.BOUNCE_COLUMNS))
+        row = np.zeros(len(L.BOUNCE_ROW_COLUMNS))
         is_open = bool(self.ev[L.IN_CONTACT])
         # copies and one division: the kernel's Python function (``_jit.python_function``)
         _WRITE_BOUNCE(row, self.ev, is_open)

@@ -52,7 +52,7 @@ BOUNCE_ROWS = 64            # bounce rows kept per point (more are counted and w
 EVENT_ROWS = 16             # local buffer rows of episodes and of bounces between drains
 THREADS = 128               # threads per block
 MEMORY = 2 << 30            # bytes of output buffers per launch (the batch is split)
-UNDEFINED = ("not computed by the GPU engine (it keeps no diagnostics rows); "
+UNDEFINED_REASON = ("not computed by the GPU engine (it keeps no diagnostics rows); "
              "restitution_first and contact_time_first are the first bounce record's")
 
 
@@ -159,8 +159,8 @@ def _launch(runs, cuda):
            cuda.device_array((n, cs, n1)), cuda.device_array((n, cs, n1)),
            cuda.device_array((n, cd, len(L.DIAG_COLUMNS))),
            cuda.device_array((n, EVENT_ROWS, len(L.EPISODE_COLUMNS))),
-           cuda.device_array((n, EVENT_ROWS, len(L.BOUNCE_COLUMNS))),
-           cuda.device_array((n, BOUNCE_ROWS + 1, len(L.BOUNCE_COLUMNS))),
+           cuda.device_array((n, EVENT_ROWS, len(L.BOUNCE_ROW_COLUMNS))),
+           cuda.device_array((n, BOUNCE_ROWS + 1, len(L.BOUNCE_ROW_COLUMNS))),
            cuda.device_array((n, T.F_SIZE)), cuda.device_array((n, T.I_SIZE), np.int64)]
     threads = min(THREADS, n) if not simulated() else min(32, n)
     max_steps = max(1, NODE_STEPS_PER_CALL // n1)
@@ -254,7 +254,7 @@ def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
               "energy_error": ext.energy_error(float(fout[T.F_E0])),
               "steps": int(iout[T.I_STEPS]), "rejected_steps": int(iout[T.I_REJECTED]),
               "t_final": float(fout[T.F_T]), "run_file": "",
-              "impact_status": "undefined", "impact_reason": UNDEFINED}
+              "impact_status": "undefined", "impact_reason": UNDEFINED_REASON}
     values.update(bounce_values(values, bounces))
     said = ""
     if iout[T.I_DROPPED]:
@@ -326,8 +326,8 @@ def _bytes_per_point(run) -> int:
     cs, cd = _capacities(run)
     n1 = run.system.n + 1
     return 8 * (cs * (2 + 2 * n1) + cd * len(L.DIAG_COLUMNS)
-                + EVENT_ROWS * (len(L.EPISODE_COLUMNS) + len(L.BOUNCE_COLUMNS))
-                + (BOUNCE_ROWS + 1) * len(L.BOUNCE_COLUMNS) + 64 + 2 * n1)
+                + EVENT_ROWS * (len(L.EPISODE_COLUMNS) + len(L.BOUNCE_ROW_COLUMNS))
+                + (BOUNCE_ROWS + 1) * len(L.BOUNCE_ROW_COLUMNS) + 64 + 2 * n1)
 
 
 def _worker(cuda) -> dict:

@@ -7,7 +7,7 @@
 * ``track`` rows: the diagnostics columns TRACK (``T_*`` below; ``ImpactTrack``'s
   TRACK_COLUMNS) of every sample, in time order;
 * ``eps`` rows: the finished contact episodes (t_start, t_end);
-* ``brows`` rows: the bounce table (``layout.BOUNCE_COLUMNS`` and ``open`` last), the
+* ``brows`` rows: the bounce table (``layout.BOUNCE_ROW_COLUMNS`` and ``open`` last), the
   pending bounce included.
 
 Every operation is the reference's, in its order, compiled without fused multiply-adds
@@ -37,7 +37,7 @@ TRACK_SIZE = 9
 TRACK_FROM_DIAG = (L.D_T, L.D_CM_VELOCITY, L.D_CM_HEIGHT, L.D_ENERGY_KINETIC,
                    L.D_ENERGY_STRETCH, L.D_ENERGY_BEND, L.D_U_BOTTOM, L.D_FLOOR_FORCE,
                    L.D_ENERGY_TOTAL)
-BR_OPEN = len(L.BOUNCE_COLUMNS)    # the ``open`` column of a bounce row here
+BR_OPEN = len(L.BOUNCE_ROW_COLUMNS)    # the ``open`` column of a bounce row here
 BROW_SIZE = BR_OPEN + 1
 
 # codes of ``first_contact``
