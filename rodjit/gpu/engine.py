@@ -40,7 +40,7 @@ from ..sweeps.batch import BatchResult
 from ..sweeps.point import bounce_values, empty_columns, pass_on
 from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
-from .kernel import N_MAX, deep_stack, family_of, make_kernel, pack, signature, simulated
+from .kernel import N_MAX, deep_call, family_of, make_kernel, pack, signature, simulated
 
 __all__ = ["run_batch", "check_device", "check_point", "prepare", "resolve_device",
            "GPU_INTEGRATORS",
@@ -179,8 +179,7 @@ def _compile(k, fam, config) -> None:
     if simulated():
         return
     try:
-        with deep_stack():
-            k.compile(signature(fam))
+        deep_call(k.compile, signature(fam))
     except Exception as exc:
         raise GpuUnsupported(f"the GPU cannot compile this model (rod.law = "
                              f"{config.rod.law!r}, floor.law = {config.floor.law!r}, "
