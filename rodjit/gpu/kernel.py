@@ -22,6 +22,7 @@ import sys
 import threading
 from typing import NamedTuple
 
+from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS, work_rows
 from . import trajectory as T
@@ -99,6 +100,7 @@ def sweep_kernel(params, state0, clock0, ev0, snap_t, snap_step, snap_u, snap_v,
     count = cuda.local.array({L.COUNT_SIZE}, int64)
     ev = cuda.local.array({L.EV_SIZE}, float64)
     fail = cuda.local.array({L.FAIL_SIZE}, float64)
+    imp = cuda.local.array({S.SIZE}, float64)
     for j in range({n1}):
         state[0, j] = state0[i, 0, j]
         state[1, j] = state0[i, 1, j]
@@ -116,7 +118,7 @@ def sweep_kernel(params, state0, clock0, ev0, snap_t, snap_step, snap_u, snap_v,
 {zero}
     run_one(t0, t1, t2, t3, t4, state, trial, work, interp, sstats, clock, count, ev,
             snap_t[i], snap_step[i], snap_u[i], snap_v[i], diag[i], episodes[i], bounces[i],
-            fail, bounce_out[i], fout[i], iout[i], max_steps)
+            fail, imp, bounce_out[i], fout[i], iout[i], max_steps)
 """
 
 

@@ -73,7 +73,8 @@ R_FIRST = R_PRE + I.TRACK_SIZE      # the first sample
 R_LAST = R_FIRST + I.TRACK_SIZE     # the last sample
 R_NEAR = R_LAST + I.TRACK_SIZE      # the first sample of the latest time
 R_POST = R_NEAR + I.TRACK_SIZE      # the first sample at or after S_EB
-SIZE = R_POST + I.TRACK_SIZE
+ST = R_POST + I.TRACK_SIZE          # 3 doubles of scratch for ``finish`` (its ``st``)
+SIZE = ST + 3
 
 
 @exact_kernel
