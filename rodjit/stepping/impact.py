@@ -120,7 +120,7 @@ def _episode(eps, ne, k, open_start, start):
 
 
 @exact_step_kernel
-def _apex(g, w_i, z_i, w_r, z_r):
+def apex(g, w_i, z_i, w_r, z_r):
     """``observables._apex_restitution``."""
     if g > 0 or w_i >= 0:
         return np.nan
@@ -235,6 +235,6 @@ def first_contact(track, nd, eps, ne, brows, nb, g, tau, t_final, in_contact, ou
     if is_open:
         return OPEN_AT_END
     out[O_RESTITUTION] = -w_r / w_i if w_i < 0 else np.nan
-    out[O_APEX] = _apex(g, w_i, z_i, w_r, z_r)
+    out[O_APEX] = apex(g, w_i, z_i, w_r, z_r)
     out[O_CONTACT_TIME] = t_rel - t_imp
     return LIFT_OFF

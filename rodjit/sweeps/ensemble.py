@@ -46,7 +46,7 @@ from .point import (SUMMARY_COLUMNS, PointResult, PointTask, died, empty_columns
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
            "timed", "batches", "check_batch_size", "split_bounces", "as_batch", "EPISODE_ROWS",
-           "BATCH_SECONDS", "MAX_BATCH_SIZE"]
+           "BATCH_SECONDS", "MAX_BATCH_SIZE", "impact_columns"]
 
 EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
 BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
@@ -313,8 +313,8 @@ def _run_group(members, values):
     values["energy_error"][pos] = fout[:, E.F_ENERGY_ERROR]
     values["t_final"][pos] = fout[:, E.F_T_FINAL]
     values["status"][pos] = np.where(res == E.R_COMPLETED, "completed", "failed")
-    _impact(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + I.OUT_SIZE], iout[:, E.I_IMPACT],
-            [p for _, p in members])
+    impact_columns(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + I.OUT_SIZE],
+                   iout[:, E.I_IMPACT], [p for _, p in members])
     for j, (k, p) in enumerate(members):
         if res[j] == E.R_FAILED:
             values["message"][k] = failure_text(fout[j, E.F_FAIL:E.F_FAIL + L.FAIL_SIZE],
@@ -348,9 +348,11 @@ def _lift_energy(p: _Point) -> float:
         return value
 
 
-def _impact(values, pos, out, code, points) -> None:
-    """The IMPACT_COLUMNS (``records.observables.impact_values``) from the compiled
-    ``first_contact`` values ``out`` and codes."""
+def impact_columns(values, pos, out, code, points) -> None:
+    """The IMPACT_COLUMNS (``records.observables.impact_values``) of the points at rows
+    ``pos`` of ``values`` (their ``t_final`` already there) from the compiled
+    ``first_contact`` values ``out`` and codes; ``points`` have ``config`` and ``params``
+    (for the lift-off energy).  The GPU engine's streamed values go the same way."""
     lift = code == I.LIFT_OFF
     opened = code == I.OPEN_AT_END
     w = out[:, I.O_W_IMPACT]
