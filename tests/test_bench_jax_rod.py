@@ -18,14 +18,26 @@ jax = pytest.importorskip("jax")
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import jax_rod  # noqa: E402
-from test_bench_peers import random_states  # noqa: E402
 
 from rodjit.model.reference import rhs as reference_rhs  # noqa: E402
-from rodjit.model.system import build_system  # noqa: E402
+from rodjit.model.system import build_system, check_admissible  # noqa: E402
 from rodjit.presets import load_preset  # noqa: E402
 
 POINTS = [{}, {"rod.mu": 0.0, "floor.beta": 0.03, "floor.kappa_b": 3000.0},
           {"rod.mu": 37.5, "floor.beta": 0.12}, {"rod.N": 9, "floor.beta": 0.08}]
+
+
+def random_states(cfg, rng, count):
+    """Admissible states: strains in (−0.6, 0.6), the bottom from −0.9β (in the floor) to
+    above it, velocities O(5 m/s)."""
+    n, beta = cfg.rod.N, cfg.floor.beta
+    _, rod, floor = build_system(cfg)
+    for k in range(count):
+        eps = rng.uniform(-0.6, 0.6, n)
+        u0 = -0.9 * beta * rng.uniform() if k % 2 == 0 else rng.uniform(0.0, 0.5)
+        u = u0 + np.concatenate([[0.0], np.cumsum((1.0 + eps) / n)])
+        check_admissible(u, rod, floor)
+        yield np.concatenate([u, rng.normal(0.0, 5.0, n + 1)])
 
 
 def _close(got, want):
