@@ -16,7 +16,8 @@ Measured, each in this one run:
   (``start_of``, the set-up it replaced), the points' ``Config`` made beforehand.
 - CPU path: ``rodjit.sweep`` on every core (the process pool), 2^10 points.
 - diffrax 0.7 (if importable): Tsit5 with a PID controller, ``jax.jit(jax.vmap(...))`` over
-  (μ, κ_b), on the semi-discrete system of MODEL.md §2 written in JAX here (γ = 0), compile
+  (μ, κ_b), on the semi-discrete system of MODEL.md §2 written in JAX (benchmarks/jax_rod.py,
+  γ = 0; shared with bench_sweep.py), compile
   apart; its tolerance chosen from ``DIFFRAX_TOLS`` as the loosest whose final-state error
   is at most rodjit's (matched accuracy).
 - Accuracy, on ``SAMPLE`` points spread over the grid: against a CPU reference at rtol
@@ -45,13 +46,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _util  # noqa: E402
+import jax_rod  # noqa: E402
 
 import rodjit  # noqa: E402
 from rodjit.config import Config  # noqa: E402
 from rodjit.sweeps.grid import Grid  # noqa: E402
 
 SAMPLE = 16          # points of the accuracy comparison
-DIFFRAX_TOLS = (1e-6, 1e-7, 1e-8, 1e-9, 1e-10)
+DIFFRAX_TOLS = jax_rod.TOLS
 COMPARED = ("restitution_first", "contact_time_first", "min_u0", "max_floor_force",
             "min_strain", "energy_error", "steps", "rejected_steps", "t_final", "n_bounces")
 
@@ -114,16 +116,13 @@ def agreement(res, integrator, t_end, n):
 
 
 def reference_states(t_end, n):
-    """u(T), v(T) of the sample points at tight tolerance, and rodjit's error at default."""
+    """u(T) of the sample points at tight tolerance (by index), their configs, and rodjit's
+    error at default tolerances."""
     g = grid_of(n)
-    ref, err = {}, 0.0
-    for i in sample_indices(n):
-        c = g.config(base("energy", t_end), i)
-        tight = rodjit.simulate(c.override({"time.rtol": 1e-11, "time.atol": 1e-14}))
-        dflt = rodjit.simulate(c)
-        ref[i] = (np.asarray(tight.u_final), np.asarray(tight.v_final), c)
-        err = max(err, float(np.max(np.abs(np.asarray(dflt.u_final) - ref[i][0]))))
-    return ref, err
+    idx = sample_indices(n)
+    configs = [g.config(base("energy", t_end), i) for i in idx]
+    states, err = jax_rod.reference_states(configs)
+    return {i: (u, c) for i, u, c in zip(idx, states, configs)}, err
 
 
 def cpu_sweep(integrator, t_end, n):
@@ -135,71 +134,30 @@ def cpu_sweep(integrator, t_end, n):
 
 
 def diffrax_runs(t_end, exps, ref, target_err):
-    """diffrax Tsit5 jit(vmap) at the loosest tolerance that matches rodjit's accuracy."""
-    try:
-        import diffrax
-        import jax
-        import jax.numpy as jnp
-    except ImportError as exc:
-        return {"skipped": f"jax/diffrax not installed ({exc})"}
-    jax.config.update("jax_enable_x64", True)
+    """diffrax Tsit5 jit(vmap) (benchmarks/jax_rod.py) at the loosest tolerance that matches
+    rodjit's accuracy."""
+    reason = jax_rod.missing()
+    if reason:
+        return {"skipped": reason}
     c0 = base("energy", t_end)
-    n_seg, kappa, beta, g = c0.rod.N, c0.rod.kappa, c0.floor.beta, c0.gravity.g
-    if c0.rod.gamma != 0.0:
-        return {"skipped": "the JAX right-hand side here has gamma = 0 only"}
-    h = 1.0 / n_seg
-    m = jnp.full(n_seg + 1, h).at[0].set(h / 2).at[-1].set(h / 2)
-
-    def rhs(t, y, args):       # MODEL.md §2, γ = 0, Aiki–Kosugi laws
-        mu, kb = args
-        u, v = y[: n_seg + 1], y[n_seg + 1:]
-        e = (u[1:] - u[:-1]) / h - 1.0
-        q = 1.0 + e
-        seg = 0.5 * kappa * (e + 0.5 - 0.5 / q**3) + mu * (v[1:] - v[:-1]) / h
-        f = jnp.zeros(n_seg + 1).at[:-1].add(seg).at[1:].add(-seg) + m * g
-        sb = jnp.where(u[0] <= 0.0, kb * (beta**3 / (u[0] + beta) ** 3 - 1.0), 0.0)
-        f = f.at[0].add(sb)
-        return jnp.concatenate([v, f / m])
-
-    u0 = np.asarray(rodjit.simulate(c0.override({"time.t_end": 1e-9})).u[0])
-    v0 = np.full(n_seg + 1, float(c0.initial.velocity))
-    y0 = jnp.concatenate([jnp.asarray(u0), jnp.asarray(v0)])
-
-    def make(tol):
-        def one(mu, kb):
-            sol = diffrax.diffeqsolve(
-                diffrax.ODETerm(rhs), diffrax.Tsit5(), t0=0.0, t1=t_end, dt0=1e-5, y0=y0,
-                args=(mu, kb), saveat=diffrax.SaveAt(t1=True), max_steps=10_000_000,
-                stepsize_controller=diffrax.PIDController(rtol=tol, atol=tol * 1e-3))
-            return sol.ys[-1]
-        return jax.jit(jax.vmap(one))
-
+    reason = jax_rod.unsupported(c0)
+    if reason:
+        return {"skipped": reason}
+    solve = jax_rod.make_solver(c0)
     idx = sorted(ref)
-    mus = jnp.asarray([ref[i][2].rod.mu for i in idx])
-    kbs = jnp.asarray([ref[i][2].floor.kappa_b for i in idx])
-    chosen, err = None, math.inf
-    for tol in DIFFRAX_TOLS:
-        ys = np.asarray(make(tol)(mus, kbs))
-        err = max(float(np.max(np.abs(ys[q, : n_seg + 1] - ref[i][0])))
-                  for q, i in enumerate(idx))
-        if err <= target_err:
-            chosen = tol
-            break
-    if chosen is None:
-        chosen = DIFFRAX_TOLS[-1]
-    solve = make(chosen)
+    chosen, err = jax_rod.matched_tolerance(solve, [ref[i][1] for i in idx],
+                                            [ref[i][0] for i in idx], target_err,
+                                            DIFFRAX_TOLS)
     rows = []
     for k in exps:
         n = 2 ** k
         gr = grid_of(n)
-        cs = [gr.config(c0, i) for i in range(n)]
-        mu = jnp.asarray([c.rod.mu for c in cs])
-        kb = jnp.asarray([c.floor.kappa_b for c in cs])
+        args = jax_rod.point_arrays([gr.config(c0, i) for i in range(n)])
         t = time.perf_counter()
-        solve(mu, kb).block_until_ready()       # compile (per shape) and run
+        solve(*args, chosen).block_until_ready()       # compile (per shape) and run
         first = time.perf_counter() - t
         t = time.perf_counter()
-        solve(mu, kb).block_until_ready()
+        solve(*args, chosen).block_until_ready()
         wall = time.perf_counter() - t
         rows.append({"points": n, "wall_s": wall, "compile_and_run_s": first,
                      "traj_per_s": n / wall})

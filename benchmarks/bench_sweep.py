@@ -34,6 +34,14 @@ the overhead per point.
    sweeps' total steps, and the speed-up per step (the target's allowance for points that
    now take more steps).  With ``--memory`` the 20000-point sweep once more through the
    command line, its process tree's resident memory summed every 20 ms: the peak.
+   The diffrax row (when jax and diffrax import; ``--diffrax`` runs only it): diffrax Tsit5
+   ``jax.jit(jax.vmap(...))`` on the CPU over (μ, κ_b, β) of the 2000-point grid
+   (benchmarks/jax_rod.py: MODEL.md §2 in JAX, γ = 0, refused in one line for a base it
+   cannot represent), at the loosest tolerance whose final-state error on DIFFRAX_SAMPLE
+   random points is at most rodjit's (both against rodjit at rtol 1e-11, atol 1e-14);
+   timed on DIFFRAX_POINTS points drawn at random from the 2000 (``--diffrax-points``; 0
+   for all of them), compile apart (the first call of a shape, minus a second), in turns
+   with the same points as one ensemble batch in this process (one core each).
 
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
 start-up (the workers importing rodjit and loading the kernels, until all report ready; a
@@ -44,6 +52,7 @@ end-to-end ratios are printed too.  Each configuration is timed --repeat times i
 
     python benchmarks/bench_sweep.py [--repeat 3] [--quick] [--baseline CHECKOUT]
     python benchmarks/bench_sweep.py --engine [--full] [--baseline CHECKOUT] [--memory]
+    python benchmarks/bench_sweep.py --diffrax [--diffrax-points 200]
 """
 from __future__ import annotations
 
@@ -61,6 +70,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _util  # noqa: E402
+import jax_rod  # noqa: E402
 
 import rodjit  # noqa: E402
 from rodjit.presets import load_preset  # noqa: E402
@@ -70,6 +80,8 @@ GRID = {"rod.mu": [0.0, 1.0, 10.0, 100.0], "floor.kappa_b": "logspace(3, 5, 4)",
 SMALL_GRID = {"rod.mu": "linspace(0, 10, 16)", "floor.beta": "linspace(0.01, 0.05, 16)"}
 TARGET_SCALING, TARGET_DASK, TARGET_OVERHEAD = 1.8, 0.15, 0.020
 TARGET_STEPPING, TARGET_OBJECTS = 1.3, 300
+DIFFRAX_SAMPLE = 8          # points of part 5's grid where diffrax's tolerance is matched
+DIFFRAX_POINTS = 200        # the points diffrax is timed on (of the 2000; 0: all)
 
 
 def big_grid(mu_values: int) -> dict:
@@ -340,6 +352,57 @@ def engine_part(base, tmp, full: bool) -> dict:
     return out
 
 
+def diffrax_part(base, points: int, repeat: int = 2) -> dict:
+    """Part 5's diffrax row (module docstring): points/s of diffrax ``jit(vmap)`` on the CPU
+    at rodjit's accuracy, against the same points as one ensemble batch in this process."""
+    from rodjit.sweeps.ensemble import BatchTask, run_batch
+    from rodjit.sweeps.grid import Grid
+
+    reason = jax_rod.missing() or jax_rod.unsupported(base)
+    if reason:
+        print(f"   diffrax row skipped: {reason}")
+        return {"skipped": reason}
+    grid = Grid.from_spec(big_grid(200))
+    n = len(grid)
+    rng = np.random.default_rng(0)
+    sample = sorted(rng.choice(n, DIFFRAX_SAMPLE, replace=False).tolist())
+    idx = np.arange(n) if not points or points >= n else np.sort(
+        rng.choice(n, points, replace=False))
+    configs = [grid.config(base, int(i)) for i in sample]
+    ref, rodjit_err = jax_rod.reference_states(configs)
+    solve = jax_rod.make_solver(base)
+    t0 = time.perf_counter()
+    tol, err = jax_rod.matched_tolerance(solve, configs, ref, rodjit_err)
+    matching = time.perf_counter() - t0
+    args = jax_rod.point_arrays([grid.config(base, int(i)) for i in idx])
+    t0 = time.perf_counter()
+    solve(*args, tol).block_until_ready()             # compiles for this shape, and runs
+    first = time.perf_counter() - t0
+    run_batch(BatchTask(idx[:2], base, grid, ()))     # the batch kernels loaded
+    walls, batches = [], []
+    for _ in range(repeat):                            # in turns: the load hits both alike
+        t0 = time.perf_counter()
+        solve(*args, tol).block_until_ready()
+        walls.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        run_batch(BatchTask(idx, base, grid, ()))
+        batches.append(time.perf_counter() - t0)
+    wall, batch = min(walls), min(batches)
+    out = {"points": int(idx.size), "of": n, "tol": tol, "atol": tol * 1e-3,
+           "final_state_error": err, "rodjit_final_state_error": rodjit_err,
+           "sample": sample, "wall": wall, "compile": first - wall,
+           "tolerance_matching": matching, "points_per_second": idx.size / wall,
+           "rodjit_batch_wall": batch, "rodjit_batch_points_per_second": idx.size / batch}
+    subset = "" if idx.size == n else f" ({idx.size} of the {n} points, drawn at random)"
+    print(f"   diffrax Tsit5 jit(vmap), CPU{subset}: rtol {tol:g}, atol {tol * 1e-3:g} "
+          f"(final-state error {err:.2g} on {len(sample)} points, rodjit's {rodjit_err:.2g}); "
+          f"{wall:.2f} s, {out['points_per_second']:.3g} points/s (best of {repeat}), "
+          f"compile {out['compile']:.1f} s apart; the same points as one rodjit batch in "
+          f"this process {batch:.2f} s, {out['rodjit_batch_points_per_second']:.3g} points/s "
+          f"(rodjit / diffrax points/s: {wall / batch:.2f}x, one core each)")
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -358,7 +421,20 @@ def main(argv=None):
                     help="part 5: only --baseline and --memory, not the engine's timings")
     ap.add_argument("--memory", action="store_true",
                     help="part 5: the peak memory of the 20000-point sweep")
+    ap.add_argument("--diffrax", action="store_true",
+                    help="part 5: only the diffrax jit(vmap) row")
+    ap.add_argument("--diffrax-points", type=int, default=DIFFRAX_POINTS,
+                    help=f"points diffrax is timed on (default {DIFFRAX_POINTS}; 0: all 2000)")
     args = ap.parse_args(argv)
+    if args.diffrax_points < 0:
+        ap.error("--diffrax-points must be >= 0")
+    if args.diffrax:
+        _util.header("parameter sweeps: diffrax jit(vmap) on the CPU")
+        base = load_preset("paper-mu100")
+        out = diffrax_part(base, args.diffrax_points)
+        path = _util.save("sweep_diffrax", out)
+        print(f"   -> {path}")
+        return out
     if args.engine:
         _util.header("parameter sweeps: the ensemble engine")
         base = load_preset("paper-mu100")
@@ -370,6 +446,7 @@ def main(argv=None):
                 out = {}
             else:
                 out = engine_part(base, tmp, args.full)
+                out["diffrax"] = diffrax_part(base, args.diffrax_points)
             here = str(Path(__file__).resolve().parents[1])
             if args.baseline:
                 out["baseline"] = baseline_part(here, args.baseline, tmp, args.repeat)
