@@ -1,0 +1,140 @@
+"""What a run derives from its configuration alone, derived once per ``Config`` object.
+
+A ``Config`` is frozen, so everything ``driver.run.Run`` computes from it before stepping
+— the run checks, the parameter tuples of the compiled loop, the buffer sizes, the
+flight time, the initial values of the clock and event arrays, the default initial state
+and its admissibility, the compiled loop's key and the ahead-of-time loop, the model
+warnings — is the same for every run of that object.  Computing it cost a short run most
+of its set-up (tens of µs of Python and small NumPy calls: ``benchmarks/bench_fixed_cost.py``),
+paid again by every ``simulate`` of the same Config, as a benchmark or a loop over
+repeats does.  ``prepare`` keeps it for the few most recent Config objects (by identity,
+checked through a weak reference, so a new object that reuses a dead one's ``id`` is not
+mistaken for it).  The values are exactly those computed before: the arrays a run gets
+are copies of the templates here, made by the same operations, so results do not change
+by a bit.  Nothing is kept for a configuration that fails a check: it raises again at
+the next run.
+"""
+from __future__ import annotations
+
+import threading
+import weakref
+
+import numpy as np
+
+from ..model.system import build_system, check_admissible, initial_state
+from ..records.observables import flight_time
+from ..stepping import aot, control
+from ..stepping import layout as L
+from ..stepping.schemes import make_scheme
+
+__all__ = ["Prepared", "prepare", "model_warnings", "parameters", "snapshot_bound", "rows_needed",
+           "tolerance"]
+
+CACHE_SIZE = 8    # Config objects kept: a sweep's points are new objects, a repeat is one
+
+
+def snapshot_bound(n1: int) -> int:
+    """The most snapshot rows a run's buffers hold (a memory bound, 2 MiB of floats)."""
+    return int(min(1024, max(1, 2**21 // n1)))
+
+
+def rows_needed(interval: float, span: float) -> int:
+    """Output rows a run over ``span`` writes every ``interval`` (both ends and a rounding
+    row included; 1 when the output is off).  A buffer of this size is never FULL, and a
+    short run does not allocate (and page in) buffers for thousands of rows it never writes;
+    a run extended later (``set_t_end``) fills its buffers and drains them, as any long run
+    does, with the same steps."""
+    return int(min(2**31, span / interval)) + 2 if interval > 0 else 1
+
+
+def tolerance(clock: np.ndarray) -> float:
+    """The time below which two output times coincide, for the intervals and the remaining
+    run in ``clock`` (``control.output_tolerance``)."""
+    spans = [x for x in (clock[L.SNAP_DT], clock[L.DIAG_DT], clock[L.T_END] - clock[L.T])
+             if x > 0]
+    return control.output_tolerance(spans)
+
+
+def parameters(config) -> tuple:
+    """``(scheme, control, system, rod law, floor law)``: the parameter tuples the compiled
+    loop takes for ``config``."""
+    system, rod, floor = build_system(config)
+    scheme = make_scheme(config.time)
+    ctrl = control.build(config.time, scheme, config.output.interpolate,
+                         snapshot_rows=snapshot_bound(config.rod.N + 1))
+    return scheme, ctrl, system, rod, floor
+
+
+class Prepared:
+    """A configuration's run-independent values (module docstring).  Read-only by
+    convention: runs copy the arrays before writing to them."""
+
+    def __init__(self, config):
+        config.check_runnable()     # a tolerance the integrator cannot honour: one line
+        self.args = parameters(config)
+        ctrl = self.args[1]
+        n1 = config.rod.N + 1
+        out, t_end = config.output, config.time.t_end
+        snap = min(snapshot_bound(n1), rows_needed(out.snapshot_interval, t_end))
+        diag = min(4096, rows_needed(out.diagnostics_interval, t_end))
+        if out.snapshot_interval > 0:
+            snap = max(snap, ctrl.dense_snapshots)
+        if out.diagnostics_interval > 0:
+            diag = max(diag, ctrl.dense_diagnostics)
+        self.capacities = (snap, diag)
+        clock = np.zeros(L.CLOCK_SIZE)
+        clock[L.T_END] = t_end
+        clock[L.SNAP_DT] = out.snapshot_interval
+        clock[L.DIAG_DT] = out.diagnostics_interval
+        clock[L.TOL] = tolerance(clock)
+        self.clock = clock
+        ev = np.zeros(L.EV_SIZE)
+        ev[L.FLIGHT_TIME] = flight_time(config)
+        self.ev = ev
+        self.key = aot.key(self.args)
+        # the loop compiled at install for the default run's types, or None: the JIT
+        self.aot = aot.loop_for(self.args, self.key)
+        self.warnings = tuple(config.warnings())
+        self._config = weakref.ref(config)
+        self._state: np.ndarray | None = None
+
+    def initial(self) -> np.ndarray:
+        """The (3, N + 1) state array of the configuration's initial state (heights,
+        velocities, zeros), checked admissible; a new array each call."""
+        if self._state is None:
+            config = self._config()
+            u, v = initial_state(config)
+            rod, floor = self.args[3], self.args[4]
+            check_admissible(u, rod, floor, "initial state")
+            state = np.zeros((3, u.size))
+            state[0] = u
+            state[1] = v
+            self._state = state
+        return self._state.copy()
+
+
+_CACHE: dict[int, tuple[weakref.ref, Prepared]] = {}
+_LOCK = threading.Lock()
+
+
+def prepare(config) -> Prepared:
+    """The ``Prepared`` values of ``config``: kept from an earlier run of the same object,
+    or computed now (raising, and keeping nothing, where a check fails)."""
+    hit = _CACHE.get(id(config))
+    if hit is not None and hit[0]() is config:
+        return hit[1]
+    prepared = Prepared(config)
+    with _LOCK:
+        if len(_CACHE) >= CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)), None)     # the oldest entry
+        _CACHE[id(config)] = (weakref.ref(config), prepared)
+    return prepared
+
+
+def model_warnings(config) -> tuple[str, ...]:
+    """``config.warnings()``, kept where the config has been prepared (its checks alone
+    never run here: a config that is only shown, not run, is not refused)."""
+    hit = _CACHE.get(id(config))
+    if hit is not None and hit[0]() is config:
+        return hit[1].warnings
+    return tuple(config.warnings())
