@@ -124,11 +124,20 @@ def prepare(config) -> Prepared:
     if hit is not None and hit[0]() is config:
         return hit[1]
     prepared = Prepared(config)
+    key = id(config)
     with _LOCK:
         if len(_CACHE) >= CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)), None)     # the oldest entry
-        _CACHE[id(config)] = (weakref.ref(config), prepared)
+        _CACHE[key] = (weakref.ref(config, lambda ref: _forget(key, ref)), prepared)
     return prepared
+
+
+def _forget(key: int, ref: weakref.ref) -> None:
+    """Drop the entry of a Config that no longer exists (its weak reference's callback;
+    no lock: it may run inside ``prepare`` itself, when a collection frees a Config)."""
+    entry = _CACHE.get(key)
+    if entry is not None and entry[0] is ref:
+        _CACHE.pop(key, None)
 
 
 def model_warnings(config) -> tuple[str, ...]:
