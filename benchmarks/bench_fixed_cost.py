@@ -18,9 +18,10 @@ after the other in the same order:
   result     ``MemorySink.result``: the Result, its columns, bounce table and stats
 
 ``config`` (building the Config from the preset and overrides, not part of the call) is
-printed apart.  Every part is the median over the repeats, in ms, with its share of the
-whole call (the sum of the parts); ``simulate`` is the median of whole ``rodjit.simulate``
-calls timed alone, interleaved with the split ones, to check that the split adds up.
+printed apart.  Every part is the median over the repeats, printed in µs (saved in ms),
+with its share of the whole call (the sum of the parts); ``simulate`` is the median of
+whole ``rodjit.simulate`` calls timed alone, interleaved with the split ones, to check
+that the split adds up.
 
 Cases: the bench_peers settings (paper μ = 0 and μ = 100, T = 1 s, snapshots and
 diagnostics every 5 ms) on ``dop853`` at rtol = atol = 1e-6 and ``dp54`` at 1e-4 (the

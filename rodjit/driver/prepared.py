@@ -91,6 +91,7 @@ class Prepared:
         ev = np.zeros(L.EV_SIZE)
         ev[L.FLIGHT_TIME] = flight_time(config)
         self.ev = ev
+        self.x = np.arange(n1) / self.args[2].n     # the nodes' reference positions
         self.key = aot.key(self.args)
         # the loop compiled at install for the default run's types, or None: the JIT
         self.aot = aot.loop_for(self.args, self.key)

@@ -209,6 +209,7 @@ class Run:
         self.run_time = 0.0
         self._warm = False
         self._advance = None        # the compiled entry of ``advance`` (``warm_up``)
+        self.x = prep.x             # reference positions x_i = i/N (shared: read only)
         self._key = prep.key
         # the loop compiled at install for the default run's types, or None: the JIT
         self._aot = prep.aot

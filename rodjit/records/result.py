@@ -232,7 +232,7 @@ class MemorySink(Sink):
         ep = _joined(self._ep, (0, len(EPISODE_COLUMNS)))
         return Result(
             config=run.config,
-            x=np.arange(n1) / run.system.n,
+            x=run.x.copy(),
             t=_joined(self._t, (0,)),
             u=_joined(self._u, (0, n1)),
             v=_joined(self._v, (0, n1)),
