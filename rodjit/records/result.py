@@ -191,9 +191,14 @@ class MemorySink(Sink):
     here, and the Result takes its columns from the buffers with one copy or none
     (``simulate``, which owns the run and drops it after)."""
 
-    def __init__(self, views: bool = False):
-        self._t, self._step, self._u, self._v = [], [], [], []
-        self._diag, self._ep, self._b = [], [], []
+    def __init__(self, views: bool = False) -> None:
+        self._t: list[np.ndarray] = []
+        self._step: list[np.ndarray] = []
+        self._u: list[np.ndarray] = []
+        self._v: list[np.ndarray] = []
+        self._diag: list[np.ndarray] = []
+        self._ep: list[np.ndarray] = []
+        self._b: list[np.ndarray] = []
         self._views = views
         self._unsettled: list[tuple[list, int]] = []   # (list, index) of kept views
 
