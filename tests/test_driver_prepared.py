@@ -114,3 +114,19 @@ def test_a_viewing_sink_settled_between_calls_equals_a_copying_one():
     # what settle is for: without it the kept views are refilled by later calls
     unsettled = _in_pieces(cfg, MemorySink(views=True), settle=False)
     assert not np.array_equal(unsettled.t, copied.t)
+
+
+def test_a_changed_registry_or_output_cap_prepares_the_config_anew(monkeypatch):
+    from rodjit.stepping import control, registry
+
+    cfg = rodjit.Config().override({"time.integrator": "dp54", "time.t_end": 0.1})
+    p = prepared.prepare(cfg)
+    assert p.args[1].dense_snapshots == control.DENSE_OUTPUTS_MAX
+    monkeypatch.setattr(control, "DENSE_OUTPUTS_MAX", 2)
+    q = prepared.prepare(cfg)
+    assert q is not p and q.args[1].dense_snapshots == 2
+    monkeypatch.setattr(registry, "SCHEMES",      # another registry (as a registration makes)
+                        (*registry.SCHEMES[1:], registry.SCHEMES[0]))
+    assert prepared.prepare(cfg) is not q
+    monkeypatch.undo()
+    assert prepared.prepare(cfg).args[1].dense_snapshots == control.DENSE_OUTPUTS_MAX

@@ -1,18 +1,20 @@
 """What a run derives from its configuration alone, derived once per ``Config`` object.
 
 A ``Config`` is frozen, so everything ``driver.run.Run`` computes from it before stepping
-— the run checks, the parameter tuples of the compiled loop, the buffer sizes, the
-flight time, the initial values of the clock and event arrays, the default initial state
-and its admissibility, the compiled loop's key and the ahead-of-time loop, the model
-warnings — is the same for every run of that object.  Computing it cost a short run most
-of its set-up (tens of µs of Python and small NumPy calls: ``benchmarks/bench_fixed_cost.py``),
-paid again by every ``simulate`` of the same Config, as a benchmark or a loop over
-repeats does.  ``prepare`` keeps it for the few most recent Config objects (by identity,
-checked through a weak reference, so a new object that reuses a dead one's ``id`` is not
-mistaken for it).  The values are exactly those computed before: the arrays a run gets
-are copies of the templates here, made by the same operations, so results do not change
-by a bit.  Nothing is kept for a configuration that fails a check: it raises again at
-the next run.
+(the run checks, the parameter tuples of the compiled loop, the buffer sizes, the flight
+time, the initial values of the clock and event arrays, the default initial state and
+its admissibility, the compiled loop's key, the model warnings) is the same for every
+run of that object.  Computing it cost a short run most of its set-up (tens of µs of
+Python and small NumPy calls: ``benchmarks/bench_fixed_cost.py``), paid again by every
+``simulate`` of the same Config, as a benchmark or a loop over repeats does.
+
+``prepare`` keeps it for the few most recent Config objects, by identity, checked through
+a weak reference (a new object that reuses a dead one's ``id`` is not mistaken for it; a
+dead one's entry is dropped), and only while the registered laws, integrators and the
+dense output's cap it was built from are the same (``_stamp``).  The values are exactly
+those computed before: a run gets copies of the templates here, made by the same
+operations, so results do not change by a bit.  Nothing is kept for a configuration that
+fails a check: it raises again at the next run.
 """
 from __future__ import annotations
 
@@ -21,9 +23,10 @@ import weakref
 
 import numpy as np
 
+from ..model.laws import get_law
 from ..model.system import build_system, check_admissible, initial_state
 from ..records.observables import flight_time
-from ..stepping import aot, control
+from ..stepping import aot, control, registry
 from ..stepping import layout as L
 from ..stepping.schemes import make_scheme
 
@@ -92,12 +95,13 @@ class Prepared:
         ev[L.FLIGHT_TIME] = flight_time(config)
         self.ev = ev
         self.x = np.arange(n1) / self.args[2].n     # the nodes' reference positions
+        # the compiled loop's key; the ahead-of-time loop for it is looked up by each run
+        # (``aot.loop_for``: whether the extension is in use may change in a process)
         self.key = aot.key(self.args)
-        # the loop compiled at install for the default run's types, or None: the JIT
-        self.aot = aot.loop_for(self.args, self.key)
         self.warnings = tuple(config.warnings())
         self._config = weakref.ref(config)
         self._state: np.ndarray | None = None
+        self.stamp: tuple = ()      # ``prepare``'s ``_stamp`` of the module state
 
     def initial(self) -> np.ndarray:
         """The (3, N + 1) state array of the configuration's initial state (heights,
@@ -122,15 +126,27 @@ def prepare(config) -> Prepared:
     """The ``Prepared`` values of ``config``: kept from an earlier run of the same object,
     or computed now (raising, and keeping nothing, where a check fails)."""
     hit = _CACHE.get(id(config))
-    if hit is not None and hit[0]() is config:
+    stamp = _stamp(config)
+    if hit is not None and hit[0]() is config and hit[1].stamp == stamp:
         return hit[1]
     prepared = Prepared(config)
+    prepared.stamp = stamp
     key = id(config)
     with _LOCK:
         if len(_CACHE) >= CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)), None)     # the oldest entry
         _CACHE[key] = (weakref.ref(config, lambda ref: _forget(key, ref)), prepared)
     return prepared
+
+
+def _stamp(config) -> tuple:
+    """What the prepared values depend on besides the config's own fields: the laws
+    registered under its law names, the integrators' registry (a new tuple at each
+    registration) and the dense output's cap.  A kept entry whose stamp differs (a law
+    registered again under the same name, as a notebook cell run twice does) is
+    prepared anew."""
+    return (get_law("rod", config.rod.law), get_law("floor", config.floor.law),
+            registry.SCHEMES, control.DENSE_OUTPUTS_MAX)
 
 
 def _forget(key: int, ref: weakref.ref) -> None:

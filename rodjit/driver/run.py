@@ -29,6 +29,7 @@ from ..records.stats import run_stats
 
 if TYPE_CHECKING:
     from ..records.result import Result
+from ..stepping import aot
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
@@ -212,7 +213,7 @@ class Run:
         self.x = prep.x             # reference positions x_i = i/N (shared: read only)
         self._key = prep.key
         # the loop compiled at install for the default run's types, or None: the JIT
-        self._aot = prep.aot
+        self._aot = aot.loop_for(prep.args, self._key)
 
     def _buffers(self) -> tuple[np.ndarray, ...]:
         """A set of empty output buffers, in the order of ``_BUFFERS``."""
