@@ -74,6 +74,10 @@ class SimulationError(RuntimeError):
 _WRITE_BOUNCE = python_function(write_bounce)
 
 _BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
+# the counters of rows filled since the last drain, next to each other in ``count``: read
+# and reset as one slice
+_ROWS = slice(L.N_SNAP, L.N_BOUNCE + 1)
+assert (L.N_DIAG, L.N_EP, L.N_BOUNCE) == (L.N_SNAP + 1, L.N_SNAP + 2, L.N_SNAP + 3)
 
 
 class Block:
@@ -81,13 +85,12 @@ class Block:
     return code of the last call; ``Run.drain`` hands them to a sink."""
 
     def __init__(self, run, code: int):
-        c = run.count
-        k = int(c[L.N_SNAP])
+        k, n_diag, n_ep, n_bounce = run.count[_ROWS].tolist()
         self.code = code
         self.snapshots = (run.snap_t[:k], run.snap_step[:k], run.snap_u[:k], run.snap_v[:k])
-        self.diagnostics = run.diag[:int(c[L.N_DIAG])]
-        self.episodes = run.episodes[:int(c[L.N_EP])]
-        self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
+        self.diagnostics = run.diag[:n_diag]
+        self.episodes = run.episodes[:n_ep]
+        self.bounces = run.bounces[:n_bounce]
         self.finite = _all_finite(self.diagnostics)
 
 
@@ -389,8 +392,7 @@ class Run:
         """The rows in the buffers as a Block (``code``: that of the call that filled them);
         the loop starts the next block empty, in the spare buffers if there are any."""
         block = Block(self, code)
-        c = self.count
-        c[L.N_SNAP] = c[L.N_DIAG] = c[L.N_EP] = c[L.N_BOUNCE] = 0
+        self.count[_ROWS] = 0
         if self._spare is not None:
             current = tuple(getattr(self, name) for name in _BUFFERS)
             for name, array in zip(_BUFFERS, self._spare):
