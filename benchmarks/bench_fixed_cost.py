@@ -27,6 +27,9 @@ Cases: the bench_peers settings (paper μ = 0 and μ = 100, T = 1 s, snapshots a
 diagnostics every 5 ms) with the integrators that are rodjit's best there (μ = 0:
 ``dop853`` at rtol = atol = 1e-6 and ``dp54`` at 1e-4; μ = 100: ``radau5`` at 1e-6 and
 1e-3), and a tiny run (t_end = 1 ms) where the fixed cost is nearly all of the call.
+The ``new-config/`` cases make a new Config for every call, as ``bench_peers.py`` does
+(``override`` of the setting's Config with the integrator and tolerance, outside the
+timed call): what a run derives from the Config object itself is then derived again.
 """
 from __future__ import annotations
 
@@ -59,6 +62,15 @@ CASES = {
     "paper-mu100/radau5/1e-3": ("paper-mu100", {**PEERS, "time.integrator": "radau5",
                                                 "time.rtol": 1e-3, "time.atol": 1e-3}),
     "tiny/paper-mu0/energy/t_end=1ms": ("paper-mu0", {"time.t_end": 1e-3}),
+}
+# bench_peers' pattern: every call gets a new Config, ``override`` of the setting's one
+# with its integrator and tolerance (built outside the timed call)
+NEW_CONFIG = {
+    "new-config/paper-mu0/dop853/1e-6": ("paper-mu0/dop853/1e-6", ("time.integrator",
+                                                                   "time.rtol", "time.atol")),
+    "new-config/paper-mu100/radau5/1e-3": ("paper-mu100/radau5/1e-3", ("time.integrator",
+                                                                       "time.rtol",
+                                                                       "time.atol")),
 }
 PARTS = ("checks", "setup", "warn", "start", "loop", "glue", "result")
 
@@ -100,19 +112,28 @@ def split_call(cfg) -> dict:
             "loop": loop, "glue": t5 - t4 - loop, "result": t6 - t5}
 
 
-def measure(preset: str, over: dict, repeat: int) -> dict:
+def measure(preset: str, over: dict, repeat: int, new_keys: tuple = ()) -> dict:
+    """The parts of ``repeat`` calls of one Config; with ``new_keys``, of a new Config
+    for every call (``override`` of the same one with ``new_keys`` of ``over``)."""
     t0 = time.perf_counter()
     cfg = load_preset(preset).override(over)
     config_s = time.perf_counter() - t0
+    base = load_preset(preset).override({k: v for k, v in over.items() if k not in new_keys})
+    again = {k: over[k] for k in new_keys}
+
+    def config():
+        return base.override(again) if new_keys else cfg
+
     for _ in range(3):
-        rodjit.simulate(cfg)                    # compile, warm caches
+        rodjit.simulate(config())               # compile, warm caches
     parts = {p: [] for p in PARTS}
     whole = []
     for _ in range(repeat):
-        for p, s in split_call(cfg).items():
+        for p, s in split_call(config()).items():
             parts[p].append(s)
+        c = config()
         t0 = time.perf_counter()
-        rodjit.simulate(cfg)
+        rodjit.simulate(c)
         whole.append(time.perf_counter() - t0)
     med = {p: statistics.median(v) for p, v in parts.items()}
     return {"config_ms": 1e3 * config_s, "parts_ms": {p: 1e3 * s for p, s in med.items()},
@@ -128,11 +149,12 @@ def main(argv=None) -> None:
     ap.add_argument("--out", default="fixed_cost")
     args = ap.parse_args(argv)
     warnings.simplefilter("ignore", rodjit.config.ModelWarning)
-    names = list(CASES) if args.cases is None else args.cases.split(",")
+    names = list(CASES) + list(NEW_CONFIG) if args.cases is None else args.cases.split(",")
     results = {}
     for name in names:
-        preset, over = CASES[name]
-        r = results[name] = measure(preset, over, args.repeat)
+        case, new_keys = NEW_CONFIG.get(name, (name, ()))
+        preset, over = CASES[case]
+        r = results[name] = measure(preset, over, args.repeat, new_keys)
         total = r["sum_ms"]
         rows = [[p, r["parts_ms"][p] * 1e3, 100 * r["parts_ms"][p] / total] for p in PARTS]
         rows.append(["outside the loop", r["outside_loop_ms"] * 1e3,

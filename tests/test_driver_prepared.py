@@ -130,3 +130,30 @@ def test_a_changed_registry_or_output_cap_prepares_the_config_anew(monkeypatch):
     assert prepared.prepare(cfg) is not q
     monkeypatch.undo()
     assert prepared.prepare(cfg).args[1].dense_snapshots == control.DENSE_OUTPUTS_MAX
+
+
+def test_configs_that_differ_in_time_keys_share_their_body_and_run_unchanged():
+    base = rodjit.load_preset("paper-mu0").override({"time.t_end": 0.3})
+    a = base.override({"time.integrator": "dp54", "time.rtol": 1e-5, "time.atol": 1e-5})
+    b = base.override({"time.integrator": "dop853", "time.rtol": 1e-6, "time.atol": 1e-6})
+    pa, pb = prepared.prepare(a), prepared.prepare(b)
+    assert pa is not pb and pa.body is pb.body          # the rod's values derived once
+    assert pa.args[0] is not pb.args[0]                  # each its own scheme
+    # the same runs as from configurations that share nothing with them
+    for cfg in (a, b):
+        fresh = rodjit.Config.from_dict(_flat(cfg))      # every section a new object
+        assert fresh == cfg and fresh.rod is not cfg.rod
+        assert prepared.prepare(fresh).body is not pa.body
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ModelWarning)
+            _same(rodjit.simulate(cfg), rodjit.simulate(fresh))
+    # a changed rod section gets its own body
+    c = a.override({"rod.mu": 1.0})
+    assert prepared.prepare(c).body is not pa.body
+
+
+def _flat(cfg):
+    import dataclasses
+    return {f"{section}.{k}": v for section in ("rod", "floor", "gravity", "initial", "time",
+                                                "output")
+            for k, v in dataclasses.asdict(getattr(cfg, section)).items()}

@@ -15,6 +15,11 @@ dense output's cap it was built from are the same (``_stamp``).  The values are 
 those computed before: a run gets copies of the templates here, made by the same
 operations, so results do not change by a bit.  Nothing is kept for a configuration that
 fails a check: it raises again at the next run.
+
+A new Config object still shares the values of its ``rod``, ``floor``, ``gravity`` and
+``initial`` sections (``Body``) with the configurations it was derived from by
+``override`` where those sections are the same objects: a scan over tolerances,
+integrators or output keys builds one new Config per run.
 """
 from __future__ import annotations
 
@@ -30,10 +35,11 @@ from ..stepping import aot, control, registry
 from ..stepping import layout as L
 from ..stepping.schemes import make_scheme
 
-__all__ = ["Prepared", "prepare", "model_warnings", "parameters", "snapshot_bound", "rows_needed",
+__all__ = ["Body", "Prepared", "prepare", "model_warnings", "parameters", "snapshot_bound", "rows_needed",
            "tolerance"]
 
 CACHE_SIZE = 8    # Config objects kept: a sweep's points are new objects, a repeat is one
+_LOCK = threading.Lock()
 
 
 def snapshot_bound(n1: int) -> int:
@@ -68,14 +74,67 @@ def parameters(config) -> tuple:
     return scheme, ctrl, system, rod, floor
 
 
+class Body:
+    """The values of a configuration's ``rod``, ``floor``, ``gravity`` and ``initial``
+    sections alone (with the laws registered under its law names): the system and law
+    tuples, the flight time, the nodes' positions and the default initial state.  Kept
+    apart from ``Prepared`` because ``Config.override`` keeps the sections it does not
+    change as the same objects: configurations that differ in their ``time`` or
+    ``output`` keys only (a scan over tolerances, integrators or run lengths) share one."""
+
+    def __init__(self, config, laws: tuple):
+        self.sections = (config.rod, config.floor, config.gravity, config.initial)
+        self.laws = laws
+        self.system, self.rod, self.floor = build_system(config)
+        self.flight_time = flight_time(config)
+        self.x = np.arange(config.rod.N + 1) / self.system.n   # reference positions
+        self._state: np.ndarray | None = None
+
+    def matches(self, config, laws: tuple) -> bool:
+        s = self.sections
+        return (s[0] is config.rod and s[1] is config.floor and s[2] is config.gravity
+                and s[3] is config.initial and self.laws == laws)
+
+    def initial(self, config) -> np.ndarray:
+        """The (3, N + 1) state array of the initial state of ``config`` (whose sections
+        are this body's): heights, velocities, zeros, checked admissible; a new array."""
+        if self._state is None:
+            u, v = initial_state(config)
+            check_admissible(u, self.rod, self.floor, "initial state")
+            state = np.zeros((3, u.size))
+            state[0] = u
+            state[1] = v
+            self._state = state
+        return self._state.copy()
+
+
+_BODIES: list[Body] = []     # the most recent first
+
+
+def _body(config, laws: tuple) -> Body:
+    for body in _BODIES:
+        if body.matches(config, laws):
+            return body
+    body = Body(config, laws)
+    with _LOCK:
+        _BODIES.insert(0, body)
+        del _BODIES[CACHE_SIZE:]
+    return body
+
+
 class Prepared:
     """A configuration's run-independent values (module docstring).  Read-only by
-    convention: runs copy the arrays before writing to them."""
+    convention: runs copy the arrays before writing to them.  ``stamp``: ``_stamp`` of
+    the module state it was built under."""
 
-    def __init__(self, config):
+    def __init__(self, config, stamp: tuple):
         config.check_runnable()     # a tolerance the integrator cannot honour: one line
-        self.args = parameters(config)
-        ctrl = self.args[1]
+        self.stamp = stamp
+        body = self.body = _body(config, stamp[:2])
+        scheme = make_scheme(config.time)
+        ctrl = control.build(config.time, scheme, config.output.interpolate,
+                             snapshot_rows=snapshot_bound(config.rod.N + 1))
+        self.args = (scheme, ctrl, body.system, body.rod, body.floor)
         n1 = config.rod.N + 1
         out, t_end = config.output, config.time.t_end
         snap = min(snapshot_bound(n1), rows_needed(out.snapshot_interval, t_end))
@@ -92,34 +151,22 @@ class Prepared:
         clock[L.TOL] = tolerance(clock)
         self.clock = clock
         ev = np.zeros(L.EV_SIZE)
-        ev[L.FLIGHT_TIME] = flight_time(config)
+        ev[L.FLIGHT_TIME] = body.flight_time
         self.ev = ev
-        self.x = np.arange(n1) / self.args[2].n     # the nodes' reference positions
+        self.x = body.x
         # the compiled loop's key; the ahead-of-time loop for it is looked up by each run
         # (``aot.loop_for``: whether the extension is in use may change in a process)
         self.key = aot.key(self.args)
         self.warnings = tuple(config.warnings())
         self._config = weakref.ref(config)
-        self._state: np.ndarray | None = None
-        self.stamp: tuple = ()      # ``prepare``'s ``_stamp`` of the module state
 
     def initial(self) -> np.ndarray:
         """The (3, N + 1) state array of the configuration's initial state (heights,
         velocities, zeros), checked admissible; a new array each call."""
-        if self._state is None:
-            config = self._config()
-            u, v = initial_state(config)
-            rod, floor = self.args[3], self.args[4]
-            check_admissible(u, rod, floor, "initial state")
-            state = np.zeros((3, u.size))
-            state[0] = u
-            state[1] = v
-            self._state = state
-        return self._state.copy()
+        return self.body.initial(self._config())
 
 
 _CACHE: dict[int, tuple[weakref.ref, Prepared]] = {}
-_LOCK = threading.Lock()
 
 
 def prepare(config) -> Prepared:
@@ -129,8 +176,7 @@ def prepare(config) -> Prepared:
     stamp = _stamp(config)
     if hit is not None and hit[0]() is config and hit[1].stamp == stamp:
         return hit[1]
-    prepared = Prepared(config)
-    prepared.stamp = stamp
+    prepared = Prepared(config, stamp)
     key = id(config)
     with _LOCK:
         if len(_CACHE) >= CACHE_SIZE:
