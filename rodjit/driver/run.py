@@ -23,21 +23,21 @@ from .._jit import python_function
 from ..config import ModelWarning
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
-from ..model.system import build_system, check_admissible, initial_state
-from ..records.observables import flight_time
+from ..model.system import check_admissible, initial_state
 from ..records.sink import Sink
 from ..records.stats import run_stats
 
 if TYPE_CHECKING:
     from ..records.result import Result
-from ..stepping import aot, control
+from ..stepping import aot
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
-from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
+from ..stepping.schemes import SCHEME_STATS, work_rows
+from .prepared import (model_warnings, parameters, prepare, rows_needed, snapshot_bound,
+                       tolerance)
 
-__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities",
-           "snapshot_rows"]
+__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
 
 # node-steps per compiled call: long enough that returning to Python costs nothing, short
 # enough that signals, progress and checkpoints are seen promptly
@@ -71,24 +71,13 @@ class SimulationError(RuntimeError):
         self.result = result
 
 
-def snapshot_rows(n1: int) -> int:
-    """The most snapshot rows a run's buffer holds for ``n1`` nodes (the control tuple's
-    ``snapshot_rows``, and the default buffer)."""
-    return int(min(1024, max(1, 2**21 // n1)))
-
-
-def _rows_needed(interval: float, span: float) -> int:
-    """Output rows a run over ``span`` writes every ``interval`` (both ends and a rounding
-    row included; 1 when the output is off).  A buffer of this size is never FULL, and a
-    short run does not allocate (and page in) buffers for thousands of rows it never writes;
-    a run extended later (``set_t_end``) fills its buffers and drains them, as any long run
-    does, with the same steps."""
-    return int(min(2**31, span / interval)) + 2 if interval > 0 else 1
-
-
 _WRITE_BOUNCE = python_function(write_bounce)
 
 _BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
+# the counters of rows filled since the last drain, next to each other in ``count``: read
+# and reset as one slice
+_ROWS = slice(L.N_SNAP, L.N_BOUNCE + 1)
+assert (L.N_DIAG, L.N_EP, L.N_BOUNCE) == (L.N_SNAP + 1, L.N_SNAP + 2, L.N_SNAP + 3)
 
 
 class Block:
@@ -96,13 +85,12 @@ class Block:
     return code of the last call; ``Run.drain`` hands them to a sink."""
 
     def __init__(self, run, code: int):
-        c = run.count
-        k = int(c[L.N_SNAP])
+        k, n_diag, n_ep, n_bounce = run.count[_ROWS].tolist()
         self.code = code
         self.snapshots = (run.snap_t[:k], run.snap_step[:k], run.snap_u[:k], run.snap_v[:k])
-        self.diagnostics = run.diag[:int(c[L.N_DIAG])]
-        self.episodes = run.episodes[:int(c[L.N_EP])]
-        self.bounces = run.bounces[:int(c[L.N_BOUNCE])]
+        self.diagnostics = run.diag[:n_diag]
+        self.episodes = run.episodes[:n_ep]
+        self.bounces = run.bounces[:n_bounce]
         self.finite = _all_finite(self.diagnostics)
 
 
@@ -114,16 +102,6 @@ def _all_finite(rows: np.ndarray) -> bool:
     return math.isfinite(rows.sum()) or bool(np.isfinite(rows).all())
 
 
-def parameters(config) -> tuple:
-    """``(scheme, control, system, rod law, floor law)``: the parameter tuples the compiled
-    loop takes for ``config`` (``Run._args``)."""
-    system, rod, floor = build_system(config)
-    scheme = make_scheme(config.time)
-    ctrl = control.build(config.time, scheme, config.output.interpolate,
-                         snapshot_rows=snapshot_rows(config.rod.N + 1))
-    return scheme, ctrl, system, rod, floor
-
-
 def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tuple[int, int]:
     """The rows of a run's snapshot and diagnostics buffers (``Run``): by default what the
     run needs, up to a memory bound, and always at least what a dense-output step writes
@@ -131,9 +109,9 @@ def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tupl
     n1 = config.rod.N + 1
     out, t_end = config.output, config.time.t_end
     if snapshot_capacity is None:
-        snapshot_capacity = min(snapshot_rows(n1), _rows_needed(out.snapshot_interval, t_end))
+        snapshot_capacity = min(snapshot_bound(n1), rows_needed(out.snapshot_interval, t_end))
     if diag_capacity is None:
-        diag_capacity = min(4096, _rows_needed(out.diagnostics_interval, t_end))
+        diag_capacity = min(4096, rows_needed(out.diagnostics_interval, t_end))
     if out.snapshot_interval > 0:
         snapshot_capacity = max(snapshot_capacity, ctrl.dense_snapshots)
     if out.diagnostics_interval > 0:
@@ -142,8 +120,9 @@ def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tupl
 
 
 def warn_config(config, stacklevel: int = 3) -> None:
-    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller)."""
-    for text in config.warnings():
+    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller;
+    the texts kept by ``prepared.prepare`` once the config has run)."""
+    for text in model_warnings(config):
         warnings.warn(text, ModelWarning, stacklevel=stacklevel)
 
 
@@ -199,31 +178,31 @@ class Run:
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
         self.config = config
-        config.check_runnable()     # a tolerance the integrator cannot honour: one line
-        self.scheme, self.ctrl, self.system, self.rod, self.floor = parameters(config)
-        tc = config.time
+        prep = prepare(config)      # the checks and the values of config alone, once
+        self.scheme, self.ctrl, self.system, self.rod, self.floor = prep.args
         n1 = config.rod.N + 1
-        u, v = initial_state(config, u0, v0)
-        check_admissible(u, self.rod, self.floor, "u0" if u0 is not None else "initial state")
-        self.state = np.zeros((3, n1))
-        self.state[0] = u
-        self.state[1] = v
+        if u0 is None and v0 is None:
+            self.state = prep.initial()
+        else:
+            u, v = initial_state(config, u0, v0)
+            check_admissible(u, self.rod, self.floor,
+                             "u0" if u0 is not None else "initial state")
+            self.state = np.zeros((3, n1))
+            self.state[0] = u
+            self.state[1] = v
         self.trial = np.zeros((3, n1))
         self.work = np.zeros((work_rows(self.scheme), n1))
         self.interp = np.zeros((2, n1))   # a dense output's interpolated (u, v)
         self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
-        self.clock = np.zeros(L.CLOCK_SIZE)
+        self.clock = prep.clock.copy()    # t_end, the output intervals and tolerance set
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
-        self.ev = np.zeros(L.EV_SIZE)
-        self.ev[L.FLIGHT_TIME] = flight_time(config)
+        self.ev = prep.ev.copy()          # the flight time set
         self.fail = np.zeros(L.FAIL_SIZE)
-        out = config.output
-        self.clock[L.T_END] = tc.t_end
-        self.clock[L.SNAP_DT] = out.snapshot_interval
-        self.clock[L.DIAG_DT] = out.diagnostics_interval
-        self._set_tolerance()
-        snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
-                                                      diag_capacity)
+        if snapshot_capacity is None and diag_capacity is None:
+            snapshot_capacity, diag_capacity = prep.capacities
+        else:
+            snapshot_capacity, diag_capacity = capacities(config, self.ctrl,
+                                                          snapshot_capacity, diag_capacity)
         self._shapes = (snapshot_capacity, n1, diag_capacity, event_capacity)
         (self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
          self.bounces) = self._buffers()
@@ -234,9 +213,10 @@ class Run:
         self.run_time = 0.0
         self._warm = False
         self._advance = None        # the compiled entry of ``advance`` (``warm_up``)
-        self._key = aot.key(self._args())
+        self.x = prep.x             # reference positions x_i = i/N (shared: read only)
+        self._key = prep.key
         # the loop compiled at install for the default run's types, or None: the JIT
-        self._aot = aot.loop_for(self._args(), self._key)
+        self._aot = aot.loop_for(prep.args, self._key)
 
     def _buffers(self) -> tuple[np.ndarray, ...]:
         """A set of empty output buffers, in the order of ``_BUFFERS``."""
@@ -304,9 +284,7 @@ class Run:
         self._set_tolerance()
 
     def _set_tolerance(self):
-        spans = [x for x in (self.clock[L.SNAP_DT], self.clock[L.DIAG_DT],
-                             self.clock[L.T_END] - self.clock[L.T]) if x > 0]
-        self.clock[L.TOL] = control.output_tolerance(spans)
+        self.clock[L.TOL] = tolerance(self.clock)
 
     # ---- stepping ----------------------------------------------------------------------
     def _args(self):
@@ -414,8 +392,7 @@ class Run:
         """The rows in the buffers as a Block (``code``: that of the call that filled them);
         the loop starts the next block empty, in the spare buffers if there are any."""
         block = Block(self, code)
-        c = self.count
-        c[L.N_SNAP] = c[L.N_DIAG] = c[L.N_EP] = c[L.N_BOUNCE] = 0
+        self.count[_ROWS] = 0
         if self._spare is not None:
             current = tuple(getattr(self, name) for name in _BUFFERS)
             for name, array in zip(_BUFFERS, self._spare):

@@ -20,7 +20,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config import ModelWarning
-from ..driver.run import Run, snapshot_rows
+from ..driver.prepared import snapshot_bound
+from ..driver.run import Run
 from ..config.checks import RUN_CHECKS
 from ..model.system import check_admissible, initial_state, law_params, rod_system
 from ..records.physics import flight_time
@@ -154,7 +155,7 @@ def _start(config, b: _Batch) -> Start:
 def _control(config, scheme):
     """``parameters``' control tuple for a scheme already made."""
     return control.build(config.time, scheme, config.output.interpolate,
-                         snapshot_rows=snapshot_rows(config.rod.N + 1))
+                         snapshot_rows=snapshot_bound(config.rod.N + 1))
 
 
 def _state(config) -> np.ndarray:

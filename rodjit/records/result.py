@@ -182,26 +182,54 @@ def _joined(parts, empty_shape):
 
 
 class MemorySink(Sink):
-    """Collects drained blocks in lists; ``result`` concatenates them once at the end."""
+    """Collects drained blocks in lists; ``result`` concatenates them once at the end.
 
-    def __init__(self):
-        self._t, self._step, self._u, self._v = [], [], [], []
-        self._diag, self._ep, self._b = [], [], []
+    With ``views=True`` the sink keeps the views it is given, uncopied, until ``settle``
+    copies them: its owner calls ``settle`` before the run refills its buffers (before each
+    compiled call after the first drain), so a run whose rows all come in one block (every
+    run whose buffers hold its output: ``driver.run.capacities``) is never copied
+    here, and the Result takes its columns from the buffers with one copy or none
+    (``simulate``, which owns the run and drops it after)."""
+
+    def __init__(self, views: bool = False) -> None:
+        self._t: list[np.ndarray] = []
+        self._step: list[np.ndarray] = []
+        self._u: list[np.ndarray] = []
+        self._v: list[np.ndarray] = []
+        self._diag: list[np.ndarray] = []
+        self._ep: list[np.ndarray] = []
+        self._b: list[np.ndarray] = []
+        self._views = views
+        self._unsettled: list[tuple[list, int]] = []   # (list, index) of kept views
+
+    def _keep(self, parts: list, rows) -> None:
+        if self._views:
+            self._unsettled.append((parts, len(parts)))
+            parts.append(rows)
+        else:
+            parts.append(rows.copy())
+
+    def settle(self) -> None:
+        """Copy the views kept since the last call (``views=True``): the run's buffers may
+        be refilled after this."""
+        for parts, i in self._unsettled:
+            parts[i] = parts[i].copy()
+        self._unsettled.clear()
 
     def snapshots(self, t, step, u, v):
-        self._t.append(t.copy())
-        self._step.append(step.copy())
-        self._u.append(u.copy())
-        self._v.append(v.copy())
+        self._keep(self._t, t)
+        self._keep(self._step, step)
+        self._keep(self._u, u)
+        self._keep(self._v, v)
 
     def diagnostics(self, rows):
-        self._diag.append(rows.copy())
+        self._keep(self._diag, rows)
 
     def episodes(self, rows):
-        self._ep.append(rows.copy())
+        self._keep(self._ep, rows)
 
     def bounces(self, rows):
-        self._b.append(rows.copy())
+        self._keep(self._b, rows)
 
     def result(self, run, status="completed", message="") -> Result:
         n1 = run.system.n + 1
@@ -209,7 +237,7 @@ class MemorySink(Sink):
         ep = _joined(self._ep, (0, len(EPISODE_COLUMNS)))
         return Result(
             config=run.config,
-            x=np.arange(n1) / run.system.n,
+            x=run.x.copy(),
             t=_joined(self._t, (0,)),
             u=_joined(self._u, (0, n1)),
             v=_joined(self._v, (0, n1)),

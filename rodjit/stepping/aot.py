@@ -89,9 +89,21 @@ def key(args) -> tuple:
     types = (*map(type, args), *map(type, chain.from_iterable(args)))
     k = _KEYS.get(types)
     if k is None:
-        k = _KEYS[types] = tuple((f"{type(p).__module__}.{type(p).__qualname__}",
-                                  tuple(type(x).__name__ for x in p)) for p in args)
+        k = _KEYS[types] = _Key((f"{type(p).__module__}.{type(p).__qualname__}",
+                                 tuple(type(x).__name__ for x in p)) for p in args)
     return k
+
+
+class _Key(tuple):
+    """A ``key``: a tuple that computes its hash once.  The driver looks its compiled
+    entries up by key at every run, and a key's two dozen strings made that hash a
+    measurable part of a short run's set-up; equal to (and hashing as) the plain tuple."""
+
+    def __init__(self, items):
+        self._hash = tuple.__hash__(self)
+
+    def __hash__(self):
+        return self._hash
 
 
 # ``key`` of each combination of types seen: the names once per process, since every
