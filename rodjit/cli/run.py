@@ -63,7 +63,7 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
         except OutputExists as exc:
             raise UsageError(output_exists(exc)) from None
         except ValueError as exc:
-            raise UsageError(str(exc)) from None
+            raise UsageError(exc) from None
         click.echo(plan.report())
         for text in plan.config.warnings():   # as the run would say them
             say_warning(text)
@@ -120,9 +120,9 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
         failed_summary = getattr(exc, "summary", None)
         if not quiet and failed_summary is not None:
             click.echo(failed_summary.report())   # (as above)
-        raise RunFailed(str(exc)) from None
+        raise RunFailed(exc) from None
     except ValueError as exc:       # configuration, path and file errors: nothing written
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     except OSError as exc:          # the disk failed us during the run (full, removed, ...)
         close(bar)
         disk_failed(exc)

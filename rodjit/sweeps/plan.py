@@ -1,5 +1,5 @@
 """What a sweep will run and write, checked before anything starts: the grid's size, every
-point's configuration and fixed step, the sweep file and (``--save-runs``) the run files
+point's configuration and fixed step, the sweep file and (``save_runs``) the run files
 against the size limit and the free space of their disks.
 
 Everything here takes time that grows with the grid's values, not with its points: the
@@ -17,6 +17,7 @@ from ..config import Config
 from ..output.estimate import (ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, Estimate, estimate_values,
                                fixed_step_error, format_size, free_space, too_large)
 from ..output.h5files import check_output
+from .errors import RunsDirUnusable, SweepFileTooLarge
 from .grid import MAX_POINTS, Grid
 
 __all__ = ["SweepPlan", "plan_sweep", "check_runs_dir", "SWEEP_OVERHEAD", "POINT_BYTES"]
@@ -132,8 +133,7 @@ def plan_sweep(config=None, grid=None, *, output=None, save_runs=None, overwrite
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     if grid is None:
-        raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]} or --grid "
-                         "rod.mu=0,1,10")
+        raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]}")
     base = config if config is not None else Config()
     grid = Grid.from_spec(grid, max_points=max_points)
     grid.validate(base)
@@ -145,10 +145,7 @@ def plan_sweep(config=None, grid=None, *, output=None, save_runs=None, overwrite
         output = check_output(output, overwrite, "sweep")
         replaces = output.exists()
         if sweep_bytes > max_output:
-            raise ValueError(f"the sweep file would hold {len(grid):,} points, about "
-                             f"{format_size(sweep_bytes)}: more than the limit of "
-                             f"{format_size(max_output)} (raise it with --max-output / "
-                             f"max_output=, or sweep fewer points)")
+            raise SweepFileTooLarge(len(grid), sweep_bytes, max_output)
     if runs_dir is not None:
         error = too_large(f"the run file of grid point {worst_index} "
                           f"({grid.describe(worst_index)})", worst, max_output)
@@ -209,20 +206,20 @@ def _check_free(output, sweep_bytes: float, runs_dir, runs_bytes: float) -> None
 
 
 def check_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
-    """Check the --save-runs directory (created later, once everything else is valid)."""
+    """Check the directory of the points' run files (``save_runs``; created later, once
+    everything else is valid); RunsDirUnusable if it cannot take them."""
     if save_runs is None:
         return None
     d = Path(save_runs).resolve()
     if d.exists() and not d.is_dir():
-        raise ValueError(f"--save-runs {str(save_runs)!r} is not a directory")
+        raise RunsDirUnusable(save_runs, "not_a_directory")
     existing = d.parent
     while not existing.exists():
         existing = existing.parent
     if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
-        raise ValueError(f"--save-runs directory {str(save_runs)!r} cannot be created here")
+        raise RunsDirUnusable(save_runs, "not_creatable")
     if d.is_dir() and not (overwrite or resume) and next(d.iterdir(), None) is not None:
         clash = next((grid.run_name(i) for i in todo if (d / grid.run_name(i)).exists()), None)
         if clash:
-            raise ValueError(f"--save-runs {str(save_runs)!r} already holds {clash!r}; use "
-                             f"--overwrite to replace its run files, or --resume")
+            raise RunsDirUnusable(save_runs, "holds", clash)
     return d
