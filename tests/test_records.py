@@ -125,3 +125,32 @@ def test_a_one_row_table_owns_its_arrays_too():
     block[:] = -1.0
     assert t["t_impact"][0] == 0.0
     assert not any(np.shares_memory(t[c], block) for c in BOUNCE_ROW_COLUMNS)
+
+
+# the public names of records.observables before it was split by job, and their homes now
+OBSERVABLES_NAMES = {
+    "physics": ["Physics", "physics_of", "physics_for", "wave_speed", "flight_time",
+                "lift_energy"],
+    "contacts": ["energy_vibration", "merge_episodes", "flight_groups", "macroscopic_contacts",
+                 "FirstImpact", "first_impact", "STATUSES"],
+    "impact_track": ["TRACK_COLUMNS", "ImpactTrack", "IMPACT_COLUMNS", "impact_values",
+                     "impact_line"],
+    "observables": ["observables", "OBSERVABLES"],
+}
+
+
+def test_records_observables_still_exports_every_name_from_its_job_module():
+    """``from rodjit.records.observables import X`` keeps working for every name it had,
+    and gives the object of the module that now holds it (one definition, no copy)."""
+    import importlib
+
+    import rodjit.records.observables as obs
+
+    for home, names in OBSERVABLES_NAMES.items():
+        mod = importlib.import_module(f"rodjit.records.{home}")
+        for name in names:
+            assert name in obs.__all__, name
+            assert getattr(obs, name) is getattr(mod, name), name
+            if home != "observables":
+                assert name in mod.__all__, name
+    assert rodjit.observables is obs.observables

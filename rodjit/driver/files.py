@@ -118,18 +118,20 @@ def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
     """
     plan = plan_run(config, path, overwrite=overwrite, t_end=t_end, max_output=max_output,
                     max_steps=max_steps, flush_interval=flush_interval)
-    config, path = plan.config, plan.path
+    config, out = plan.config, plan.path
+    if out is None:        # plan_run returns the path it was given, checked
+        raise ValueError("run_to_file needs an output path")
     if command is None:
-        command = f"rodjit.run_to_file(config, {str(path)!r})"
+        command = f"rodjit.run_to_file(config, {str(out)!r})"
     run = Run(config)
     warn_config(config)
     first = run.checkpoint()     # the file's first checkpoint: the run before it starts
     # the writer lock, held from the last check until the file is closed: no second
     # writer can create, replace or resume the file meanwhile
-    with WriterLock(path), StopFlag(handle_signals) as stop:
-        check_output(path, overwrite, "run", held=True)   # again, now that no one else can write it
-        return _drive(run, lambda: run_writer.create_run_file(path, config, first, command=command),
-                      path, progress, flush_interval, stop, overlap)
+    with WriterLock(out), StopFlag(handle_signals) as stop:
+        check_output(out, overwrite, "run", held=True)   # again, now that no one else can write it
+        return _drive(run, lambda: run_writer.create_run_file(out, config, first, command=command),
+                      out, progress, flush_interval, stop, overlap)
 
 
 @dataclass
@@ -418,8 +420,9 @@ def _drive_writer(run: Run, open_writer, path: Path, progress, flush_interval: f
             calls.close()
             close_progress(progress, run)
     except SimulationError as exc:
-        open_once().close(run, "failed", str(exc))
-        exc.summary = closed_summary(writer)
+        failed = open_once()
+        failed.close(run, "failed", str(exc))
+        exc.summary = closed_summary(failed)
         raise
     except BaseException as exc:
         if disk_cause(exc) is not None:
@@ -434,12 +437,14 @@ def _drive_writer(run: Run, open_writer, path: Path, progress, flush_interval: f
             writer.abandon(kind, f"{type(exc).__name__}: {exc}; the last checkpoint is kept")
         raise
     message = ""
+    assert writer is not None        # opened above, on every path that gets here
+    signum = stop.signum if stop.signum is not None else signal.SIGINT
     if status == "interrupted":
-        name = signal.Signals(stop.signum).name
+        name = signal.Signals(signum).name
         message = (f"interrupted by {name} at t = {run.t:.9g}; continue with: "
                    f"rodjit run --resume {path}")
     writer.close(run, status, message)
     summary = closed_summary(writer)
     if status == "interrupted":
-        raise RunInterrupted(message, stop.signum, summary)
+        raise RunInterrupted(message, signum, summary)
     return summary

@@ -39,7 +39,7 @@ def root_attrs(title: str) -> dict:
 def column_attrs(table: str, column: str, dtype=None) -> dict:
     """``long_name``, ``units`` (and for a boolean column its flags) of one table column."""
     m = meaning(table, column)
-    out = {"long_name": m.long_name, "units": m.units}
+    out: dict[str, object] = {"long_name": m.long_name, "units": m.units}
     if column in FLAG_MEANINGS or not m.units:
         out.pop("units")                # CF: flags and text have no units
     if column in FLAG_MEANINGS:

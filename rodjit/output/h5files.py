@@ -291,7 +291,7 @@ class WriteFailed(OSError):
         self.cause = cause
 
 
-def disk_cause(exc: BaseException) -> str | None:
+def disk_cause(exc: BaseException | None) -> str | None:
     """What the disk said, if ``exc`` (or its cause) is a refused write: ENOSPC, EFBIG,
     EDQUOT or EIO, as raised by Python or reported inside an HDF5 message."""
     seen = 0

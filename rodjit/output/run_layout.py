@@ -84,7 +84,7 @@ def current_checkpoint(ck: dict, config) -> dict:
     ev = np.asarray(ck["ev"])
     if ev.shape != (_EV_SIZE_FORMAT2,):
         return ck
-    from ..records.observables import flight_time
+    from ..records.physics import flight_time
 
     new = np.zeros(L.EV_SIZE)
     new[:_EV_SIZE_FORMAT2] = ev
@@ -260,8 +260,10 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
         ds.dims[0].attach_scale(t)
         ds.dims[1].attach_scale(sx)
         columns["snapshots"].append(ds)
-    shapes = {"snapshots": ((rows, [(), (), (n1,), (n1,)],
-                             [np.float64, np.int64, np.float64, np.float64]))}
+    # each table's chunk rows, row shapes and dtypes
+    shapes: dict[str, tuple[int, list[tuple[int, ...]], list[type[np.generic]]]] = {
+        "snapshots": (rows, [(), (), (n1,), (n1,)],
+                      [np.float64, np.int64, np.float64, np.float64])}
 
     for group, chunk in (("diagnostics", COLUMN_CHUNK_ROWS), ("episodes", EVENT_CHUNK_ROWS),
                          ("bounces", EVENT_CHUNK_ROWS)):
@@ -270,8 +272,9 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
         scale = column(g, names[0], (), chunk)
         scale.make_scale(names[0])
         columns[group] = [scale]
-        dtypes = [np.int64 if name in INT_COLUMNS else cf.BOOL_DTYPE if name in BOOL_COLUMNS
-                  else np.float64 for name in names]
+        dtypes: list[type[np.generic]] = [
+            np.int64 if name in INT_COLUMNS else cf.BOOL_DTYPE if name in BOOL_COLUMNS
+            else np.float64 for name in names]
         for name, dtype in zip(names[1:], dtypes[1:]):
             ds = column(g, name, (), chunk, dtype, like=scale if dtype is np.float64 else None)
             ds.dims[0].attach_scale(scale)
@@ -293,7 +296,7 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
     for name, names in _CK_DIMS.items():
         for dim, size in zip(names, np.shape(first[name])):
             dims[dim] = cf.pure_dimension(ckg, dim, size)
-    slots = []
+    slots: list[dict[str, h5py.Dataset]] = []
     for slot in (0, 1):                       # slot 1: zeros (its fill value), unwritten
         g = ckg.create_group(f"slot{slot}")
         slots.append({})

@@ -67,13 +67,12 @@ def read_checkpoint(f: h5py.File) -> dict:
     rows it matches, ``{"snapshots": n, ...}``) and cumulative ``compile_time``."""
     with damaged(f.filename):
         tries = 3 if f.swmr_mode else 1      # a live writer may commit while it is read
-        for attempt in range(tries):
+        for _ in range(tries - 1):
             try:
                 return _read_checkpoint(f)
             except NotARunFile:
-                if attempt == tries - 1:
-                    raise
                 time.sleep(0.05)
+        return _read_checkpoint(f)          # the last try: its refusal is the answer
 
 
 def _read_checkpoint(f: h5py.File) -> dict:

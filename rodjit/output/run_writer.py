@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -17,7 +18,7 @@ import numpy as np
 from ..records.bounces import bounce_table
 from ..records.columns import BOOL_COLUMNS
 from ..records.extremes import Extremes
-from ..records.observables import ImpactTrack
+from ..records.impact_track import ImpactTrack
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .cf import LIBVER
@@ -72,7 +73,8 @@ class RunWriter(Sink):
             self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
             self.track.read(f, self.tables["diagnostics"].length,
                             self.tables["episodes"].length)
-        self.final = None        # what closing leaves in the file (status, bounces, ...)
+        # what closing leaves in the file (status, bounces, ...)
+        self.final: dict[str, Any] | None = None
 
     # Sink interface: drained blocks of the compiled loop
     def snapshots(self, t, step, u, v):
@@ -219,7 +221,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
     try:
         ck = read_checkpoint(f)
         # whatever reading can refuse, before the first write: a refusal leaves the file
-        history = history_with(f, history)
+        entries = history_with(f, history)
         lengths = ck["lengths"]
         for name, cols in TABLES.items():
             for col in cols:
@@ -229,7 +231,7 @@ def reopen_run_file(path, *, config_toml: str | None, history: str) -> RunWriter
         if config_toml is not None:
             f.attrs["config_toml"] = config_toml
         _sign_current(f)
-        f.attrs["history"] = history
+        f.attrs["history"] = entries
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         stamp_writer(f.attrs)

@@ -9,9 +9,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from ..config import Config
 from ..records.extremes import Extremes
 from ..records.overview import RunFacts, energy_label
-from ..records.observables import ImpactTrack, impact_line, impact_values
+from ..records.impact_track import ImpactTrack, impact_line, impact_values
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive
@@ -29,7 +30,7 @@ class RunSummary:
     path: str
     status: str
     message: str
-    config: object
+    config: Config
     t: float
     t_end: float
     counts: dict
@@ -47,7 +48,7 @@ class RunSummary:
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
     impact: dict = field(default_factory=dict)   # the first macroscopic contact
-                                                 # (records.observables.IMPACT_COLUMNS)
+                                                 # (records.impact_track.IMPACT_COLUMNS)
     writer_alive: bool | None = None
 
     @property
@@ -108,6 +109,8 @@ def closed_summary(writer: RunWriter) -> RunSummary:
     """The summary of the file ``writer`` has just closed, from what it wrote: equal to
     ``summarize(writer.path)``."""
     fin = writer.final
+    if fin is None:
+        raise ValueError(f"{writer.path!r} is not closed yet: no summary to take")
     return _summary(writer.path, fin["status"], fin["message"], writer.config,
                     writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
                     writer.track, fin["attrs"], None)

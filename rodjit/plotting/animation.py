@@ -153,6 +153,7 @@ def animate(source, output, *, fps: int = 20, duration: float = 5.0,
     from matplotlib.collections import LineCollection
     from matplotlib.colors import Normalize
 
+    writer: animation.AbstractMovieWriter
     if output.suffix.lower() == ".mp4":
         if not animation.writers.is_available("ffmpeg"):
             raise MissingWriter("MP4 needs ffmpeg, which is not installed; write a .gif "

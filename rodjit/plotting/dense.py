@@ -168,7 +168,7 @@ def sparse_spans(src, lo: float, hi: float, *, per_contact: int = MIN_SAMPLES,
     last snapshot is re-simulated (a run that failed there does not go on in a figure)."""
     times = src.snapshot_times()
     interval = src.config.output.snapshot_interval
-    found = []
+    found: list[tuple] = []
     if times.size == 0:
         return found
     lo, hi = max(lo, float(times[0])), min(hi, float(times[-1]))

@@ -12,7 +12,7 @@ from .bounces import bounce_table
 from .columns import DIAG_COLUMNS, EPISODE_COLUMNS, columns_of
 from .datasets import run_dataset, strain_of
 from .extremes import Extremes
-from .observables import ImpactTrack, impact_values
+from .impact_track import ImpactTrack, impact_values
 from .overview import RunFacts
 from .sink import Sink
 
@@ -117,7 +117,7 @@ class Result:
             warnings=self.config.warnings(), impact=self.impact())
 
     def impact(self) -> dict:
-        """The first macroscopic contact (``records.observables.IMPACT_COLUMNS``), as a run
+        """The first macroscopic contact (``records.impact_track.IMPACT_COLUMNS``), as a run
         file's summary and a sweep row report it."""
         track = ImpactTrack()
         d = self.diagnostics

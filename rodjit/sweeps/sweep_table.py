@@ -8,7 +8,7 @@ import numpy as np
 
 from .._display import html_table, number, text
 from .._extras import need
-from ..config import field_spec
+from ..config import Config, field_spec
 from ..output import cf
 from ..records.bounces import empty_bounces
 from . import sweep_file
@@ -78,7 +78,7 @@ class SweepTable:
     """
 
     grid: Grid
-    base: object                       # the base rodjit.Config
+    base: Config                       # the base rodjit.Config
     columns: dict[str, np.ndarray]
     path: str | None = None
     status: str = "completed"
