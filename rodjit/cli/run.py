@@ -11,7 +11,7 @@ from . import options
 from .exits import EXIT_SIGNAL, RunFailed, UsageError, disk_failed
 from .options import close, command_line, overrides, progress, run_bar
 from .say import say_warning
-from .wording import output_exists
+from .wording import output_exists, word
 
 __all__ = ["run_command", "say_run"]
 
@@ -113,7 +113,7 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
         close(bar)
         if not quiet:           # its warnings in the report: stderr is the one line below
             click.echo(exc.summary.report())
-        click.echo(str(exc), err=True)
+        click.echo(word(exc), err=True)
         sys.exit(EXIT_SIGNAL + exc.signum)
     except SimulationError as exc:
         close(bar)

@@ -75,6 +75,53 @@ def _sweep_interrupted(exc: Any) -> str:
     return f"{exc.stem}; continue with: rodjit sweep --resume -o {exc.output}"
 
 
+def _too_many_steps(exc: Any) -> str:
+    return f"{exc.stem()} (raise it with --max-steps / max_steps=)"
+
+
+def _file_too_large(exc: Any) -> str:
+    return str(exc.worded("--max-output / max_output="))
+
+
+def _output_not_regular(exc: Any) -> str:
+    return f"{exc.stem()} (with or without --overwrite)"
+
+
+def _output_other_kind(exc: Any) -> str:
+    return str(exc.worded("--overwrite"))
+
+
+def _file_cut_short(exc: Any) -> str:
+    return (f"{exc.stem()}: continue it with 'rodjit run --resume {exc.path}' (or 'rodjit "
+            f"sweep --resume -o {exc.path}') once there is space")
+
+
+def _run_write_failed(exc: Any) -> str:
+    return f"{exc.stem()}; free space, then continue with: rodjit run --resume {exc.path}"
+
+
+def _run_interrupted(exc: Any) -> str:
+    if exc.path is None:
+        return str(exc.stem)
+    return f"{exc.stem}; continue with: rodjit run --resume {exc.path}"
+
+
+def _not_on_device(exc: Any) -> str:
+    return str(exc.worded(f" (--{exc.option.replace('_', '-')})"))
+
+
+def _dask_missing(exc: Any) -> str:
+    return str(exc.worded(f"--scheduler {exc.scheduler}"))
+
+
+def _format_not_continued(exc: Any) -> str:
+    return str(exc.worded("--resume"))
+
+
+def _bad_plot_option(exc: Any) -> str:
+    return str(exc.worded(lambda keyword: f"--{keyword}"))
+
+
 # the wording of each typed error, by the module and name of its class
 WORDINGS: dict[str, Callable[[Any], str]] = {
     "rodjit.output.h5files.OutputExists": output_exists,
@@ -85,6 +132,17 @@ WORDINGS: dict[str, Callable[[Any], str]] = {
     "rodjit.sweeps.errors.ResumeMismatch": _resume_mismatch,
     "rodjit.sweeps.errors.SweepWriteFailed": _sweep_write_failed,
     "rodjit.sweeps.outcome.SweepInterrupted": _sweep_interrupted,
+    "rodjit.sweeps.errors.DaskMissing": _dask_missing,
+    "rodjit.sweeps.errors.FormatNotContinued": _format_not_continued,
+    "rodjit.output.errors.TooManySteps": _too_many_steps,
+    "rodjit.output.errors.FileTooLarge": _file_too_large,
+    "rodjit.output.errors.OutputNotRegular": _output_not_regular,
+    "rodjit.output.errors.OutputOtherKind": _output_other_kind,
+    "rodjit.output.h5files.FileCutShort": _file_cut_short,
+    "rodjit.driver.errors.RunWriteFailed": _run_write_failed,
+    "rodjit.driver.files.RunInterrupted": _run_interrupted,
+    "rodjit.gpu.executor.NotOnDevice": _not_on_device,
+    "rodjit.plotting.sweep_options.BadPlotOption": _bad_plot_option,
 }
 
 

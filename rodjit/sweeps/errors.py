@@ -17,7 +17,8 @@ from ..output.estimate import format_size
 from ..output.h5files import WriteFailed
 
 __all__ = ["TooManyPoints", "BadGridItem", "SweepFileTooLarge", "RunsDirUnusable",
-           "ResumeMismatch", "SweepWriteFailed", "resume_note"]
+           "ResumeMismatch", "SweepWriteFailed", "DaskMissing", "FormatNotContinued",
+           "resume_note"]
 
 
 def resume_note(message: str, output) -> str:
@@ -196,3 +197,51 @@ class SweepWriteFailed(WriteFailed):
 
     def __reduce__(self):
         return type(self), (self.stem, self.cause, self.output, self.kept, self.total)
+
+
+class DaskMissing(ValueError):
+    """A Dask scheduler was asked for without Dask distributed installed.
+
+    Parameters
+    ----------
+    scheduler : str
+        The scheduler asked for (``scheduler``): ``"local"`` or an address.
+    """
+
+    def __init__(self, scheduler: str) -> None:
+        self.scheduler = scheduler
+        super().__init__(self.worded(f"scheduler = {scheduler!r}"))
+
+    def worded(self, asked: str) -> str:
+        """The message, naming what was asked for as ``asked``."""
+        return f"{asked} needs Dask distributed; install it with: pip install 'rodjit[dask]'"
+
+    def __reduce__(self):
+        return type(self), (self.scheduler,)
+
+
+class FormatNotContinued(ValueError):
+    """``resume=True`` on a sweep file of a format this version does not continue.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The sweep file (``path``, a str).
+    version : int
+        Its format (``version``).
+    current : int
+        The format this version writes and continues (``current``).
+    """
+
+    def __init__(self, path, version, current: int) -> None:
+        self.path, self.version, self.current = str(path), version, current
+        super().__init__(self.worded("resume=True"))
+
+    def worded(self, resume: str) -> str:
+        """The message, naming resuming as ``resume``."""
+        return (f"{self.path!r} is a sweep file of format {self.version}, whose bounces and "
+                f"summary columns have older meanings; {resume} continues format "
+                f"{self.current} only: start a new sweep")
+
+    def __reduce__(self):
+        return type(self), (self.path, self.version, self.current)

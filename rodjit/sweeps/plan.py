@@ -14,8 +14,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..config import Config
+from ..output.errors import TooManySteps
 from ..output.estimate import (ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, Estimate, estimate_values,
-                               fixed_step_error, format_size, free_space, too_large)
+                               format_size, free_space, size_refusal, step_refusal)
 from ..output.h5files import check_output
 from .errors import RunsDirUnusable, SweepFileTooLarge
 from .grid import MAX_POINTS, Grid
@@ -147,10 +148,10 @@ def plan_sweep(config=None, grid=None, *, output=None, save_runs=None, overwrite
         if sweep_bytes > max_output:
             raise SweepFileTooLarge(len(grid), sweep_bytes, max_output)
     if runs_dir is not None:
-        error = too_large(f"the run file of grid point {worst_index} "
-                          f"({grid.describe(worst_index)})", worst, max_output)
-        if error:
-            raise ValueError(error)
+        error = size_refusal(f"the run file of grid point {worst_index} "
+                             f"({grid.describe(worst_index)})", worst, max_output)
+        if error is not None:
+            raise error
     _check_free(output, sweep_bytes if output is not None else 0.0, runs_dir,
                 runs_bytes if runs_dir is not None else 0.0)
     return SweepPlan(base, grid, output, replaces, sweep_bytes, runs_dir,
@@ -166,8 +167,10 @@ def _points(base: Config, grid: Grid, max_steps: float) -> tuple[int, Estimate, 
     worst_index, worst, total = 0, None, 0.0
     for index, over in grid.combinations(ESTIMATE_KEYS):
         values = {k: over.get(k, flat[k]) for k in ESTIMATE_KEYS}
-        error = fixed_step_error(values, max_steps)
-        if error:
+        error = step_refusal(values, max_steps)
+        if isinstance(error, TooManySteps):
+            raise error.at(f"grid point {index} ({grid.describe(index)})")
+        if error is not None:
             raise ValueError(f"grid point {index} ({grid.describe(index)}): {error}")
         e = estimate_values(values)
         total += e.file_bytes * share
