@@ -61,7 +61,8 @@ class RunInterrupted(RuntimeError):
         ends with how to resume.
     """
 
-    def __init__(self, message: str, signum: int, summary: RunSummary, path=None):
+    def __init__(self, message: str, signum: int, summary: RunSummary,
+                 path: str | os.PathLike[str] | None = None):
         self.stem = message
         self.path = None if path is None else str(path)
         super().__init__(message if path is None else

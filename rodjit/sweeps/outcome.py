@@ -4,6 +4,7 @@ sweep, the progress record passed as points finish, and the statistics of the ca
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 from .sweep_table import SweepTable
@@ -32,7 +33,7 @@ class SweepInterrupted(RuntimeError):
     """
 
     def __init__(self, message: str, signum: int | None, table: SweepTable,
-                 output=None):
+                 output: str | os.PathLike[str] | None = None):
         self.stem = message
         self.output = None if output is None else str(output)
         super().__init__(message if output is None else
@@ -104,4 +105,3 @@ def sweep_stats(wall: float, ran: int, failed: int, executor, teardown: float = 
             "tasks": getattr(executor, "tasks", ran),
             "backend": executor.name if executor is not None else "none",
             "jobs": executor.jobs if executor is not None else 0}
-
