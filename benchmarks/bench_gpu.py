@@ -9,8 +9,11 @@ Problem: the paper's rod, N = 5, T = 5 s, μ ∈ [0, 100] (linspace, n/2 values)
 Measured, each in this one run:
 - GPU engine (``rodjit.gpu.engine.run_batch``): the kernel's trajectories/s (launch and
   copy of the results back: ``kernel_time``), end to end with the host set-up of the
-  points (``setup_time``: one ``driver.run.Run`` per point), and the compile time apart
+  points (``setup_time``), and the compile time apart
   (first launch of the kernel in the process).
+- The host's set-up of the points alone (no GPU needed), 10^4 points: points/s of the
+  batch set-up the engine uses (``rodjit.gpu.starts.starts``) against one ``Run`` per point
+  (``start_of``, the set-up it replaced), the points' ``Config`` made beforehand.
 - CPU path: ``rodjit.sweep`` on every core (the process pool), 2^10 points.
 - diffrax 0.7 (if importable): Tsit5 with a PID controller, ``jax.jit(jax.vmap(...))`` over
   (μ, κ_b), on the semi-discrete system of MODEL.md §2 written in JAX here (γ = 0), compile
@@ -204,6 +207,29 @@ def diffrax_runs(t_end, exps, ref, target_err):
     return {"rtol": chosen, "final_state_error": err, "rows": rows}
 
 
+def host_setup(n: int = 10_000) -> dict:
+    """Points/s of the host's set-up of ``n`` points of the paper grid: the engine's batch
+    set-up and one ``Run`` per point, in this run (each the best of 3)."""
+    from rodjit.gpu.starts import start_of, starts
+
+    grid = grid_of(n)
+    cfg = base("energy", 5.0)
+    configs = [grid.config(cfg, i) for i in range(len(grid))]
+
+    def best(fn):
+        times = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t0)
+        return len(configs) / min(times)
+
+    batch = best(lambda: starts(configs))
+    per_point = best(lambda: [start_of(c) for c in configs])
+    return {"points": len(configs), "batch_points_per_s": batch,
+            "run_per_point_points_per_s": per_point}
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--min-exp", type=int, default=10)
@@ -237,6 +263,10 @@ def main() -> int:
     _util.header("GPU engine, paper grid (N = 5, mu in [0, 100] x kappa_b in {1000, 3000})")
     out = {"t_end": args.t_end, "grid": "rod.mu linspace(0, 100, n/2) x floor.kappa_b "
                                         "{1000, 3000}", "gpu": {}}
+    out["host_setup"] = h = host_setup()
+    print(f"  host set-up of {h['points']} points: {h['batch_points_per_s']:.3g} points/s "
+          f"(batch, gpu.starts) against {h['run_per_point_points_per_s']:.3g} points/s (one "
+          f"Run per point)")
     for integ in args.integrators.split(","):
         rows, compile_s, last = gpu_runs(integ, args.t_end, exps)
         out["gpu"][integ] = {"compile_s": compile_s, "rows": rows,

@@ -29,6 +29,11 @@ the overhead per point.
    2000-point one scaled by the points).  First, in this process and in turns (so that the
    load of a shared machine hits both alike): 80 points as one batch against the same
    points through the per-point path and their loops' own ``run_time``.
+   With ``--baseline CHECKOUT`` also the 2000-point sweep by this tree's and that tree's
+   ``rodjit sweep`` (child processes, in turns, ``--repeat`` pairs): the speed-up, the two
+   sweeps' total steps, and the speed-up per step (the target's allowance for points that
+   now take more steps).  With ``--memory`` the 20000-point sweep once more through the
+   command line, its process tree's resident memory summed every 20 ms: the peak.
 
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
 start-up (the workers importing rodjit and loading the kernels, until all report ready; a
@@ -38,7 +43,7 @@ end-to-end ratios are printed too.  Each configuration is timed --repeat times i
 (best kept), so the machine's load hits every one alike.
 
     python benchmarks/bench_sweep.py [--repeat 3] [--quick] [--baseline CHECKOUT]
-    python benchmarks/bench_sweep.py --engine [--full]
+    python benchmarks/bench_sweep.py --engine [--full] [--baseline CHECKOUT] [--memory]
 """
 from __future__ import annotations
 
@@ -85,6 +90,76 @@ def cli_sweep(tree: str, grid: dict, out: Path, jobs: int) -> float:
     t0 = time.perf_counter()
     subprocess.run(args, env=env, check=True, cwd=out.parent, stdout=subprocess.DEVNULL)
     return time.perf_counter() - t0
+
+
+def tree_rss(pid: int) -> int:
+    """Resident bytes of process ``pid`` and all its descendants (Linux ``/proc``)."""
+    children: dict[int, list[int]] = {}
+    rss: dict[int, int] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        # after the command: state, ppid, ..., rss (pages) is field 24 of stat (index 21 here)
+        children.setdefault(int(fields[1]), []).append(int(entry))
+        rss[int(entry)] = int(fields[21]) * os.sysconf("SC_PAGE_SIZE")
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        total += rss.get(p, 0)
+        todo += children.get(p, [])
+    return total
+
+
+def peak_memory(tree: str, grid: dict, out: Path, jobs: int) -> dict:
+    """The peak resident memory of ``rodjit sweep`` over ``grid`` (its process and its
+    workers together, sampled every 20 ms) and its wall time."""
+    args = [sys.executable, "-m", "rodjit", "sweep", "paper-mu100", "-o", str(out),
+            "--overwrite", "--jobs", str(jobs), "-q"]
+    for key, values in grid.items():
+        text = values if isinstance(values, str) else ",".join(repr(v) for v in values)
+        args += ["--grid", f"{key}={text}"]
+    env = dict(os.environ, PYTHONPATH=str(Path(tree).resolve()))
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(args, env=env, cwd=out.parent, stdout=subprocess.DEVNULL)
+    peak = 0
+    while proc.poll() is None:
+        peak = max(peak, tree_rss(proc.pid))
+        time.sleep(0.02)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise SystemExit(f"the sweep for the memory peak exited {proc.returncode}")
+    return {"peak_bytes": peak, "wall": wall, "points": len(rodjit.load_sweep(out))}
+
+
+def total_steps(path: Path) -> int:
+    table = rodjit.load_sweep(path)
+    return int(np.sum(table["steps"]))
+
+
+def baseline_part(tree: str, baseline: str, tmp, repeat: int) -> dict:
+    """The 2000-point sweep by this tree's and ``baseline``'s command line, in turns."""
+    grid = big_grid(200)
+    here_walls, base_walls = [], []
+    cli_sweep(baseline, {"rod.mu": [0.0]}, Path(tmp) / "warm.h5", 1)   # its kernels cached
+    for _ in range(repeat):
+        here_walls.append(cli_sweep(tree, grid, Path(tmp) / "cli_here.h5", 2))
+        base_walls.append(cli_sweep(baseline, grid, Path(tmp) / "cli_base.h5", 2))
+    steps_here = total_steps(Path(tmp) / "cli_here.h5")
+    steps_base = total_steps(Path(tmp) / "cli_base.h5")
+    ratio = float(np.median(np.array(base_walls) / np.array(here_walls)))
+    per_step = ratio * steps_here / steps_base
+    print(f"   2000 points by {baseline}: {min(base_walls):.2f} s, by this tree "
+          f"{min(here_walls):.2f} s (CLI end to end, best of {repeat}): {ratio:.2f}x faster "
+          f"(median of pairs); steps {steps_base} there, {steps_here} here "
+          f"({steps_here / steps_base:.2f}x): {per_step:.2f}x faster per step (target >= 4x)")
+    return {"baseline": baseline, "baseline_wall": min(base_walls), "wall": min(here_walls),
+            "speedup": ratio, "steps_baseline": steps_base, "steps": steps_here,
+            "speedup_per_step": per_step}
 
 
 def objects(path) -> int:
@@ -184,11 +259,48 @@ def in_process(base, repeat: int = 3) -> dict:
     return {"points": int(idx.size), "batch": batch, "per_point": per_point, "loops": loops}
 
 
+def threads_part(base, repeat: int = 3) -> dict:
+    """Threads over batches against processes: 160 points of the grid as two batches of
+    80, run one after the other in this process, then at once by two threads (the batch
+    call releases the GIL), then at once by two worker processes, in turns.  A speed-up
+    near 2 for the threads would let one process per machine serve a sweep; the processes
+    are what the pool and Dask use."""
+    from concurrent.futures import ProcessPoolExecutor, ThreadPoolExecutor
+
+    from rodjit.sweeps.ensemble import BatchTask, run_batch
+    from rodjit.sweeps.grid import Grid
+
+    grid = Grid.from_spec(big_grid(16))
+    idx = np.arange(len(grid))
+    tasks = [BatchTask(idx[:80], base, grid, ()), BatchTask(idx[80:], base, grid, ())]
+    run_batch(BatchTask(idx[:2], base, grid, ()))
+    rows = []
+    with ProcessPoolExecutor(2) as procs:
+        list(procs.map(run_batch, [BatchTask(idx[:2], base, grid, ())] * 2))   # warm
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            for t in tasks:
+                run_batch(t)
+            t1 = time.perf_counter()
+            with ThreadPoolExecutor(2) as pool:
+                list(pool.map(run_batch, tasks))
+            t2 = time.perf_counter()
+            list(procs.map(run_batch, tasks))
+            t3 = time.perf_counter()
+            rows.append((t1 - t0, t2 - t1, t3 - t2))
+    one, threads, processes = (min(r[j] for r in rows) for j in range(3))
+    print(f"   160 points as 2 batches (best of {repeat}): one after the other {one:.3f} s, "
+          f"2 threads {threads:.3f} s ({one / threads:.2f}x), 2 processes {processes:.3f} s "
+          f"({one / processes:.2f}x)")
+    return {"points": int(idx.size), "sequential": one, "threads": threads,
+            "processes": processes}
+
+
 def engine_part(base, tmp, full: bool) -> dict:
     """Part 5 (module docstring)."""
     from rodjit.sweeps import run_sweep
 
-    out = {"in_process": in_process(base)}
+    out = {"in_process": in_process(base), "threads": threads_part(base)}
     for mu_values in (200, 2000):
         grid = big_grid(mu_values)
         eng = timed_sweep(base, grid, tmp, jobs=2)
@@ -220,7 +332,7 @@ def engine_part(base, tmp, full: bool) -> dict:
              r.get("per_point_points_per_second", float("nan")),
              r["stepping_points_per_second"], r["engine_over_stepping"],
              r["engine_wall_over_compiled"]]
-            for k, r in out.items() if k != "in_process"]
+            for k, r in out.items() if isinstance(k, int)]
     print(_util.table(rows, ["grid points (2 jobs)", "engine wall [s]", "start-up [s]",
                              "engine points/s", "per-point points/s",
                              "stepping-only points/s", "engine wall / stepping",
@@ -240,14 +352,36 @@ def main(argv=None):
                     help="only part 5: the ensemble engine against the per-point path")
     ap.add_argument("--full", action="store_true",
                     help="part 5: also the per-point path of the 20000 points")
+    ap.add_argument("--threads", action="store_true",
+                    help="part 5: only threads over batches against processes")
+    ap.add_argument("--only-extras", action="store_true",
+                    help="part 5: only --baseline and --memory, not the engine's timings")
+    ap.add_argument("--memory", action="store_true",
+                    help="part 5: the peak memory of the 20000-point sweep")
     args = ap.parse_args(argv)
     if args.engine:
         _util.header("parameter sweeps: the ensemble engine")
         base = load_preset("paper-mu100")
         with tempfile.TemporaryDirectory() as tmp:
             rodjit.sweep(base, {"rod.mu": [0.0]}, scheduler="inline")   # kernels cached
-            out = engine_part(base, tmp, args.full)
-        path = _util.save("sweep_engine", {str(k): v for k, v in out.items()})
+            if args.threads:
+                out = {"threads": threads_part(base)}
+            elif args.only_extras:
+                out = {}
+            else:
+                out = engine_part(base, tmp, args.full)
+            here = str(Path(__file__).resolve().parents[1])
+            if args.baseline:
+                out["baseline"] = baseline_part(here, args.baseline, tmp, args.repeat)
+            if args.memory:
+                m = peak_memory(here, big_grid(2000), Path(tmp) / "memory.h5", 2)
+                print(f"   20000 points, 2 jobs, CLI: peak resident memory of the sweep and its "
+                      f"workers {m['peak_bytes'] / 2**20:.0f} MiB (target < 1024 MiB), wall "
+                      f"{m['wall']:.1f} s")
+                out["memory"] = m
+        name = ("sweep_threads" if args.threads else "sweep_extras" if args.only_extras
+                else "sweep_engine")
+        path = _util.save(name, {str(k): v for k, v in out.items()})
         print(f"   -> {path}")
         return out
     if args.grid_points < 10 or args.grid_points % 10:

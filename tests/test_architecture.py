@@ -248,3 +248,89 @@ def test_the_private_name_walk_sees_both_forms(tmp_path):
              "rodjit._c": pkg / "_c.py"}
     assert private_imports(known) == {"rodjit.b imports rodjit.a._x",
                                       "rodjit.b imports rodjit.a._y"}
+
+
+# ---- one meaning per name ---------------------------------------------------------------
+# Module-level UPPER_CASE names that modules on different floors define, each for its own
+# object, read from their own module (or qualified: ``L.F_T``); name -> the modules that
+# define it.  None may be added without its reason.
+PARALLEL_NAMES: dict[str, frozenset[str]] = {
+    # each kind of file has its layout module, with the same words for its own format
+    "FORMAT_VERSION": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file",
+                                 "rodjit.analysis.converge"}),
+    "KIND": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
+    "REQUIRED_ATTRS": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
+    # field indices of a compiled array: each array's module numbers its own fields
+    "F_T": frozenset({"rodjit.stepping.layout", "rodjit.gpu.trajectory"}),
+    **{name: frozenset({"rodjit.stepping.ensemble", "rodjit.gpu.trajectory"})
+       for name in ("F_E0", "F_FAIL", "F_SIZE", "I_BOUNCES", "I_SIZE")},
+    # public names of long standing, renaming them would break users' imports: a file's
+    # statuses (rodjit.output.hdf5.STATUSES) and a first contact's
+    # (rodjit.analysis.observables.STATUSES); the samples a plot draws per curve
+    # (rodjit.plotting.MAX_POINTS) and the points a sweep grid may have
+    "STATUSES": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file",
+                           "rodjit.records.contacts"}),
+    "MAX_POINTS": frozenset({"rodjit.plotting.source", "rodjit.sweeps.grid"}),
+}
+
+
+def definitions(known: dict[str, Path]) -> tuple[dict[str, set[str]], dict[str, dict[str, str]]]:
+    """(class name -> the modules defining a class of that name at module level, public
+    UPPER_CASE constant -> {module: the source of its value})."""
+    classes: dict[str, set[str]] = {}
+    constants: dict[str, dict[str, str]] = {}
+    for name, path in known.items():
+        for node in ast.parse(path.read_text(), str(path)).body:
+            if isinstance(node, ast.ClassDef):
+                classes.setdefault(node.name, set()).add(name)
+            elif isinstance(node, (ast.Assign, ast.AnnAssign)) and node.value is not None:
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                for t in targets:
+                    if (isinstance(t, ast.Name) and t.id.isupper()
+                            and not t.id.startswith("_")):
+                        constants.setdefault(t.id, {})[name] = ast.unparse(node.value)
+    return classes, constants
+
+
+def two_meanings(known: dict[str, Path]) -> dict[str, frozenset[str]]:
+    """Names with more than one meaning: a class name defined in two modules (a second
+    ``Inline``), and a public constant that modules on different floors define with
+    different values (two ``FLUSH_INTERVAL``).  Within a floor, parallel modules keep one
+    vocabulary on purpose (each integrator's ``SAFETY``, each figure module's ``KINDS``)."""
+    classes, constants = definitions(known)
+    out = {f"class {c}": frozenset(mods) for c, mods in classes.items() if len(mods) > 1}
+    for c, values in constants.items():
+        floors = {floor(m) for m in values}
+        if len(floors) > 1 and len(set(values.values())) > 1:
+            out[c] = frozenset(values)
+    return out
+
+
+def test_no_name_has_two_meanings():
+    found = two_meanings(modules())
+    unexpected = {k: sorted(v) for k, v in found.items() if PARALLEL_NAMES.get(k) != v}
+    assert not unexpected, unexpected
+    assert not PARALLEL_NAMES.keys() - found.keys(), (
+        f"defined once now, take off the list: {sorted(PARALLEL_NAMES.keys() - found.keys())}")
+
+
+def test_the_meaning_walk_sees_classes_and_constants(tmp_path):
+    pkg = tmp_path / "rodjit"
+    for sub in ("driver", "sweeps"):
+        (pkg / sub).mkdir(parents=True)
+        (pkg / sub / "__init__.py").write_text("")
+    (pkg / "__init__.py").write_text("")
+    (pkg / "driver" / "files.py").write_text("class Inline:\n    pass\n\n"
+                                             "FLUSH_INTERVAL = 2.0\nSAME = 1\n_OWN = 1\n")
+    (pkg / "sweeps" / "run.py").write_text("class Inline:\n    pass\n\n"
+                                           "FLUSH_INTERVAL = 1.0\nSAME = 1\n_OWN = 2\n")
+    (pkg / "sweeps" / "grid.py").write_text("FLUSH_INTERVAL = 1.0\n")
+    known = {"rodjit": pkg / "__init__.py", "rodjit.driver": pkg / "driver" / "__init__.py",
+             "rodjit.sweeps": pkg / "sweeps" / "__init__.py",
+             "rodjit.driver.files": pkg / "driver" / "files.py",
+             "rodjit.sweeps.run": pkg / "sweeps" / "run.py",
+             "rodjit.sweeps.grid": pkg / "sweeps" / "grid.py"}
+    assert two_meanings(known) == {
+        "class Inline": frozenset({"rodjit.driver.files", "rodjit.sweeps.run"}),
+        "FLUSH_INTERVAL": frozenset({"rodjit.driver.files", "rodjit.sweeps.run",
+                                     "rodjit.sweeps.grid"})}

@@ -76,7 +76,7 @@ def test_result_contents():
     res = rodjit.simulate(rodjit.Config().override({"time.t_end": 1.0}))
     assert res.x.shape == (6,) and res.u.shape == (res.t.size, 6) and res.v.shape == res.u.shape
     assert set(res.diagnostics) == set(L.DIAG_COLUMNS)
-    assert set(res.bounces) == set(L.BOUNCE_COLUMNS) | {"open"}
+    assert set(res.bounces) == set(L.BOUNCE_ROW_COLUMNS) | {"open"}
     assert set(res.episodes) == {"t_start", "t_end"}
     for key in ("steps", "rejected_steps", "wall_time", "compile_time", "run_time",
                 "node_steps_per_second"):

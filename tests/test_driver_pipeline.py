@@ -56,7 +56,7 @@ def _attrs(path):
         return {k: f.attrs[k] for k in ("status", "message", "format_version")}
 
 
-@pytest.mark.parametrize("flush_interval", [1e-9, files.FLUSH_INTERVAL],
+@pytest.mark.parametrize("flush_interval", [1e-9, files.RUN_FLUSH_INTERVAL],
                          ids=["checkpoint-every-call", "default-checkpoints"])
 @pytest.mark.parametrize("case", CASES)
 def test_pipelined_file_equals_serial_bit_for_bit(tmp_path, monkeypatch, many_calls, case,

@@ -17,7 +17,7 @@ import rodjit
 from conftest import one_line, rodjit_cli
 from rodjit.output.summary import summarize
 from rodjit.sweeps import sweep_file
-from rodjit.sweeps.executors import Inline
+from rodjit.sweeps.executors import InlineExecutor
 
 GRID = {"rod.mu": [5.0, 10.0]}
 ARGS = ["--grid", "rod.mu=5,10", "--set", "time.t_end=0.05", "--scheduler", "inline"]
@@ -66,7 +66,7 @@ def _signal_self():
 def test_a_signal_during_the_teardown_leaves_a_complete_file(tmp_path, monkeypatch, where):
     """In-process, the signal sent from inside the teardown step (deterministic)."""
     if where == "closing the executor":
-        monkeypatch.setattr(Inline, "close", lambda self, cancel=False: _signal_self())
+        monkeypatch.setattr(InlineExecutor, "close", lambda self, cancel=False: _signal_self())
     else:
         finish = sweep_file.finish
         monkeypatch.setattr(sweep_file, "finish",

@@ -112,6 +112,38 @@ def test_law_cuda_cannot_compile_is_one_line():
         _ptx({"rod.law": "gpu-bad-test", "time.integrator": "verlet", "rod.N": 5})
     line = reason(info.value)
     assert "\n" not in line
-    # the cause by name; under a deep test runner stack Numba's nested typing may stop at
-    # Python's recursion limit first (still one line, before anything is written)
-    assert "Unknown attribute 'random'" in line or "recursion" in line
+    assert "Unknown attribute 'random'" in line
+
+
+def _at_depth(frames, fn):
+    """``fn()`` called ``frames`` Python frames below here."""
+    if frames <= 0:
+        return fn()
+    return _at_depth(frames - 1, fn)
+
+
+def test_compile_from_a_deep_stack_names_the_cause():
+    """The compile runs on a thread of its own (``kernel.deep_call``): a caller already
+    deep in its stack (a test runner's worker, a user's framework) leaves the compile all
+    its frames, so the refusal still names the cause, not Python's recursion limit."""
+    import sys
+
+    import gpu_bad_law  # noqa: F401  (registers "gpu-bad-test")
+    from rodjit.gpu.engine import reason
+    from rodjit.gpu.kernel import COMPILE_FRAMES
+
+    # nearly all of a raised limit used up already: a compile on the caller's stack would
+    # have some hundred frames left, too few for Numba's nested typing
+    depth = 4900
+    old = sys.getrecursionlimit()
+    sys.setrecursionlimit(depth + 100)
+    try:
+        with pytest.raises(Exception) as info:
+            _at_depth(depth, lambda: _ptx({"rod.law": "gpu-bad-test",
+                                           "time.integrator": "verlet", "rod.N": 5}))
+    finally:
+        sys.setrecursionlimit(old)
+    line = reason(info.value)
+    assert "\n" not in line
+    assert "Unknown attribute 'random'" in line
+    assert sys.getrecursionlimit() == old < COMPILE_FRAMES

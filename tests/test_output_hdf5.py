@@ -68,7 +68,7 @@ def test_layout_attributes_and_datasets(tmp_path):
         assert f["snapshots/step"].dtype == np.int64
         assert f["bounces/n_episodes"].dtype == np.int64 and f["bounces/open"].dtype == np.int8
         assert set(f["diagnostics"]) == set(L.DIAG_COLUMNS)
-        assert set(f["bounces"]) == set(L.BOUNCE_COLUMNS) | {"open"}
+        assert set(f["bounces"]) == set(L.BOUNCE_ROW_COLUMNS) | {"open"}
         assert set(f["episodes"]) == {"t_start", "t_end"}
         # steps land exactly on the output grid t0 + k * interval
         t = f["snapshots/t"][()]

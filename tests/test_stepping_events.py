@@ -16,7 +16,7 @@ class Tracker:
         self.ev[L.FLIGHT_TIME] = flight_time
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
         self.episodes = np.zeros((16, 2))
-        self.bounces = np.zeros((16, len(L.BOUNCE_COLUMNS)))
+        self.bounces = np.zeros((16, len(L.BOUNCE_ROW_COLUMNS)))
         self.prev = (t0, u0, 0.0, w0)
         if u0 < 0:
             open_contact(self.ev, t0, w0, u0, 0.0, 0.0, 0.0)

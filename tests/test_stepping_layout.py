@@ -8,7 +8,7 @@ from rodjit.stepping import layout as L
 
 @pytest.mark.parametrize("prefix, columns", [("D_", L.DIAG_COLUMNS),
                                              ("EC_", L.EPISODE_COLUMNS),
-                                             ("BC_", L.BOUNCE_COLUMNS)])
+                                             ("BC_", L.BOUNCE_ROW_COLUMNS)])
 def test_every_column_has_one_index_at_its_position(prefix, columns):
     idx = L.column_indices(prefix)
     assert sorted(idx.values()) == list(range(len(columns)))

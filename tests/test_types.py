@@ -66,20 +66,6 @@ def test_ci_runs_the_type_check():
     assert any("mypy" in d for d in PYPROJECT["project"]["optional-dependencies"]["test"])
 
 
-# Public callables not yet annotated, in modules being restructured (the sweep engine, the
-# run file's readers, the plots, the convergence study, the observables): this list only
-# shrinks (the test fails on a name that has become annotated, so it is taken off).
-NOT_YET_ANNOTATED = {
-    "rodjit.output.run_reader.load_file", "rodjit.output.run_view.open_run",
-    "rodjit.sweeps.run_sweep.sweep", "rodjit.sweeps.sweep_table.load_sweep",
-    "rodjit.sweeps.sweep_table.SweepTable.config", "rodjit.sweeps.sweep_table.SweepTable.to_pandas",
-    "rodjit.sweeps.sweep_table.SweepTable.to_xarray", "rodjit.sweeps.plan.plan_sweep",
-    "rodjit.plotting.dispatch.plot", "rodjit.plotting.animation.animate",
-    "rodjit.analysis.converge.converge", "rodjit.analysis.converge.Convergence.save",
-    "rodjit.analysis.converge.load_convergence", "rodjit.records.observables.observables",
-}
-
-
 def _unannotated(qualname: str, func) -> list[str]:
     import inspect
 
@@ -115,5 +101,4 @@ def test_every_public_function_is_annotated():
                         else value)
                 if inspect.isfunction(func):
                     found += _unannotated(f"{obj.__module__}.{obj.__qualname__}.{attr}", func)
-    assert set(found) - NOT_YET_ANNOTATED == set(), sorted(set(found) - NOT_YET_ANNOTATED)
-    assert NOT_YET_ANNOTATED - set(found) == set(), "annotated now: take them off the list"
+    assert found == [], sorted(found)

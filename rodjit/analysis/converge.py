@@ -5,7 +5,9 @@ steps (``stepping.registry``), and the predictability time of the heights along 
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping, Sequence
 
 import numpy as np
 
@@ -15,6 +17,10 @@ from .ladders import (TIME_KEYS, cap_key, cap_text, check_ladder, check_time_key
 from .predictability import (PREDICTABILITY_CONVERGENCE, PREDICTABILITY_FRACTION,
                              PREDICTABILITY_NOISE, predictability_time)
 from .richardson import Study, study
+
+if TYPE_CHECKING:
+    from ..config import Config
+    from ..records.result import Result
 
 __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
            "FORMAT_VERSION", "default_time_ladder", "step_keys", "predictability_time",
@@ -79,7 +85,7 @@ class Convergence:
         without one.
     time_levels : list
         The tolerance ladder's values (empty without one).
-    time_at : object
+    time_at : float or None
         The ``key`` value the tolerance ladder ran at (None without one).
     observables : dict
         Observable name -> its study (``ObservableConvergence``).
@@ -97,12 +103,12 @@ class Convergence:
         The accepted steps of each run of the time ladder.
     """
 
-    base: object
+    base: Config
     key: str
     levels: list
     time_key: str | None
     time_levels: list
-    time_at: object
+    time_at: float | None
     observables: dict
     warnings: list
     runs: list
@@ -152,7 +158,7 @@ class Convergence:
                 "predictability_time": self.predictability_time,
                 "time_steps": list(self.time_steps)}
 
-    def save(self, path, overwrite: bool = False) -> None:
+    def save(self, path: str | os.PathLike[str], overwrite: bool = False) -> None:
         """Write an HDF5 file (root attribute ``rodjit_kind = "convergence"``): root
         attributes key, levels, time key/levels, config (TOML), warnings,
         predictability_time and time_steps (format 2); one group per observable with
@@ -172,8 +178,6 @@ class Convergence:
         ValueError
             ``path`` exists and ``overwrite`` is false.
         """
-        import os
-
         from importlib.metadata import PackageNotFoundError, version
 
         import h5py
@@ -217,7 +221,7 @@ class Convergence:
         os.replace(tmp, path)
 
 
-def load_convergence(path) -> dict:
+def load_convergence(path: str | os.PathLike[str]) -> dict[str, Any]:
     """Read a convergence file back as the dictionary of ``Convergence.to_dict`` (config
     as TOML text).
 
@@ -255,9 +259,13 @@ def _values_of(runs, name):
     return [r.get(name, math.nan) for r in runs]
 
 
-def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVABLES,
-             extra=None, time_at=None, jobs=None, scheduler=None,
-             merge_time=None, max_output=None, max_steps=None) -> Convergence:
+def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = None, *,
+             also: Mapping[str, Any] | Literal[False] | None = None,
+             observables: Sequence[str] = DEFAULT_OBSERVABLES,
+             extra: Mapping[str, Callable[[Result], float]] | None = None,
+             time_at: float | None = None, jobs: int | None = None,
+             scheduler: str | None = None, merge_time: float | None = None,
+             max_output: float | None = None, max_steps: float | None = None) -> Convergence:
     """Observables of ``config`` along a resolution ladder: observed orders, the
     Richardson-extrapolated continuum value and an error estimate for each, the time
     error measured on a time ladder, and the predictability time of the heights.
@@ -333,7 +341,9 @@ def converge(config=None, ladder=None, *, also=None, observables=DEFAULT_OBSERVA
         raise ValueError(f"unknown observable {unknown[0]!r}; choose from "
                          f"{', '.join([*OBSERVABLES, *extra])}")
     configs = [base.override({key: v}) for v in values]
-    t_key, t_values, t_configs = None, [], []
+    t_key: str | None = None
+    t_values: list[Any] = []
+    t_configs: list[Config] = []
     if also is None and key not in TIME_KEYS:
         also = default_time_ladder(base)
     if also:

@@ -29,7 +29,7 @@ from ..output.run_reader import check_not_lost, check_run_file, read_checkpoint,
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .errors import RunWriteFailed, resume_command
-from .pipeline import Inline, Pipeline
+from .pipeline import InlineCalls, Pipeline
 from .progress import close as close_progress
 from .progress import run_progress
 from .run import Run, SimulationError, warn_config
@@ -38,7 +38,7 @@ from .signals import StopFlag
 __all__ = ["run_to_file", "plan_run", "RunPlan", "resume_file", "RunInterrupted", "OutputExists",
            "check_output"]
 
-FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints
+RUN_FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints of a run file
 OVERLAP = True         # compute the next block in a worker thread while writing the last
 
 
@@ -74,7 +74,7 @@ class RunInterrupted(RuntimeError):
 def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
                 overwrite: bool = False, command: str | None = None,
                 progress: bool | Callable[[Any], object] | None = None, t_end: float | None = None,
-                flush_interval: float = FLUSH_INTERVAL, handle_signals: bool = True,
+                flush_interval: float = RUN_FLUSH_INTERVAL, handle_signals: bool = True,
                 overlap: bool | None = None, max_output: float = MAX_OUTPUT,
                 max_steps: float = MAX_STEPS) -> RunSummary:
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
@@ -138,8 +138,9 @@ def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
     # writer can create, replace or resume the file meanwhile
     with WriterLock(out), StopFlag(handle_signals) as stop:
         check_output(out, overwrite, "run", held=True)   # again, now that no one else can write it
-        return _drive(run, lambda: run_writer.create_run_file(out, config, first, command=command),
-                      out, progress, flush_interval, stop, overlap)
+        return _write_run(run, lambda: run_writer.create_run_file(out, config, first,
+                                                                  command=command),
+                          out, progress, flush_interval, stop, overlap)
 
 
 @dataclass
@@ -194,7 +195,7 @@ class RunPlan:
 def plan_run(config: Config | None = None, path: str | os.PathLike[str] | None = None, *,
              overwrite: bool = False, t_end: float | None = None,
              max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
-             flush_interval: float = FLUSH_INTERVAL) -> RunPlan:
+             flush_interval: float = RUN_FLUSH_INTERVAL) -> RunPlan:
     """Check everything ``run_to_file`` checks before it writes, and say what it would
     write, without writing anything (no file, no lock, no directory).
 
@@ -243,7 +244,7 @@ def plan_run(config: Config | None = None, path: str | os.PathLike[str] | None =
 
 
 def resume_file(path: str | os.PathLike[str], *, t_end: float | None = None,
-                command: str | None = None, progress: bool | Callable[[Any], object] | None = None, flush_interval: float = FLUSH_INTERVAL,
+                command: str | None = None, progress: bool | Callable[[Any], object] | None = None, flush_interval: float = RUN_FLUSH_INTERVAL,
                 handle_signals: bool = True, overlap: bool | None = None,
                 max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS) -> RunSummary:
     """Continue the run in ``path`` from its checkpoint (to ``t_end`` if given, which also
@@ -329,7 +330,7 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         if finish_only:
             writer.close(run, "completed")
             return closed_summary(writer)
-        return _drive(run, lambda: writer, path, progress, flush_interval, stop, overlap)
+        return _write_run(run, lambda: writer, path, progress, flush_interval, stop, overlap)
 
 
 def _write_failed(path: Path, writer, cause: str) -> WriteFailed:
@@ -351,8 +352,8 @@ def _check_interval(flush_interval) -> None:
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
 
 
-def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
-           stop: StopFlag, overlap: bool | None = None) -> RunSummary:
+def _write_run(run: Run, open_writer, path: Path, progress, flush_interval: float,
+               stop: StopFlag, overlap: bool | None = None) -> RunSummary:
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
     returns (called once the first compiled call is under way); close the file.  A write
     the disk refuses, at any point (layout, rows, checkpoints, closing), raises
@@ -364,7 +365,7 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
         return opened[-1]
 
     try:
-        return _drive_writer(run, open_and_keep, path, progress, flush_interval, stop, overlap)
+        return _write_run_blocks(run, open_and_keep, path, progress, flush_interval, stop, overlap)
     except BaseException as exc:
         if isinstance(exc, WriteFailed) and not opened:
             raise
@@ -375,10 +376,13 @@ def _drive(run: Run, open_writer, path: Path, progress, flush_interval: float,
         raise _write_failed(path, opened[-1] if opened else None, cause) from None
 
 
-def _drive_writer(run: Run, open_writer, path: Path, progress, flush_interval: float,
-                  stop: StopFlag, overlap: bool | None = None) -> RunSummary:
-    """``_drive`` without the translation of disk errors."""
-    calls = (Pipeline if (OVERLAP if overlap is None else overlap) else Inline)(run)
+def _write_run_blocks(run: Run, open_writer, path: Path, progress, flush_interval: float,
+                      stop: StopFlag, overlap: bool | None = None) -> RunSummary:
+    """``_write_run`` without the translation of disk errors: the loop that alternates the
+    run's compiled calls with writing their blocks, and checkpoints every
+    ``flush_interval`` seconds (a sweep's loop, ``sweeps.run_sweep._write_sweep``, collects
+    finished points from an executor instead: it has no blocks, calls nor checkpoints)."""
+    calls = (Pipeline if (OVERLAP if overlap is None else overlap) else InlineCalls)(run)
     progress = run_progress(progress)
     writer = None
     opened = False

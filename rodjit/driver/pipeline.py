@@ -18,7 +18,7 @@ import time
 
 from .run import Block, Run
 
-__all__ = ["Inline", "Pipeline"]
+__all__ = ["InlineCalls", "Pipeline"]
 
 # A handoff to the worker and back costs a few thread wake-ups; overlapping saves at most
 # the shorter of a call and a drain.  Calls shorter than this run inline, so many tiny
@@ -26,7 +26,7 @@ __all__ = ["Inline", "Pipeline"]
 HANDOFF = 5e-4    # seconds
 
 
-class Inline:
+class InlineCalls:
     """The call runs inside ``wait``, in the caller's thread: the same events, serially."""
 
     def __init__(self, run: Run, max_steps: int | None = None):

@@ -36,7 +36,8 @@ from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, make_scheme, work_rows
 
-__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
+__all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities",
+           "snapshot_rows"]
 
 # node-steps per compiled call: long enough that returning to Python costs nothing, short
 # enough that signals, progress and checkpoints are seen promptly
@@ -70,7 +71,9 @@ class SimulationError(RuntimeError):
         self.result = result
 
 
-def _capacity(n1: int) -> int:
+def snapshot_rows(n1: int) -> int:
+    """The most snapshot rows a run's buffer holds for ``n1`` nodes (the control tuple's
+    ``snapshot_rows``, and the default buffer)."""
     return int(min(1024, max(1, 2**21 // n1)))
 
 
@@ -117,7 +120,7 @@ def parameters(config) -> tuple:
     system, rod, floor = build_system(config)
     scheme = make_scheme(config.time)
     ctrl = control.build(config.time, scheme, config.output.interpolate,
-                         snapshot_rows=_capacity(config.rod.N + 1))
+                         snapshot_rows=snapshot_rows(config.rod.N + 1))
     return scheme, ctrl, system, rod, floor
 
 
@@ -128,7 +131,7 @@ def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tupl
     n1 = config.rod.N + 1
     out, t_end = config.output, config.time.t_end
     if snapshot_capacity is None:
-        snapshot_capacity = min(_capacity(n1), _rows_needed(out.snapshot_interval, t_end))
+        snapshot_capacity = min(snapshot_rows(n1), _rows_needed(out.snapshot_interval, t_end))
     if diag_capacity is None:
         diag_capacity = min(4096, _rows_needed(out.diagnostics_interval, t_end))
     if out.snapshot_interval > 0:
@@ -241,7 +244,7 @@ class Run:
         return (np.zeros(cap), np.zeros(cap, dtype=np.int64), np.zeros((cap, n1)),
                 np.zeros((cap, n1)), np.zeros((diag_capacity, len(L.DIAG_COLUMNS))),
                 np.zeros((event_capacity, len(L.EPISODE_COLUMNS))),
-                np.zeros((event_capacity, len(L.BOUNCE_COLUMNS))))
+                np.zeros((event_capacity, len(L.BOUNCE_ROW_COLUMNS))))
 
     def double_buffer(self) -> None:
         """Give the loop a second set of output buffers: ``take`` then switches to the other
@@ -445,7 +448,7 @@ class Run:
         """
         if self.ev[L.B_NEP] <= 0:
             return None
-        row = np.zeros(len(L.BOUNCE_COLUMNS))
+        row = np.zeros(len(L.BOUNCE_ROW_COLUMNS))
         is_open = bool(self.ev[L.IN_CONTACT])
         # copies and one division: the kernel's Python function (``_jit.python_function``)
         _WRITE_BOUNCE(row, self.ev, is_open)

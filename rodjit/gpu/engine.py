@@ -1,19 +1,17 @@
 """The GPU engine's host side: check a batch of points, pack it, launch its kernel, and
 turn what the threads left into a ``sweeps.batch.BatchResult``.
 
-Every point is set up by the driver's own ``Run`` (parameter tuples, initial state, clock,
-flight time), so a thread starts from exactly the arrays ``rodjit run`` would; it runs the
-CPU's loop (``kernel``, ``trajectory``), and its summary row is made here by the same
+Every point starts from exactly the arrays the driver's ``Run`` makes (parameter tuples,
+initial state, clock, flight time), made for the whole batch at once (``starts``), so a
+thread starts where ``rodjit run`` would; it runs the CPU's loop (``kernel``, ``trajectory``), and its summary row is made here by the same
 functions as a CPU point's (``records.extremes.Extremes``, ``records.bounces.bounce_table``,
 ``sweeps.point.bounce_values``, ``Run.failure_message``).
 
-What the GPU does not compute: the impact observables that need the diagnostics rows
-(``records.observables.ImpactTrack``: ``impact_status``, ``restitution_apex``,
-``rebound_speed``, ``w_impact``, ``min_u0_impact``, ``vibration_ratio``) are left
-undefined, with ``impact_reason`` saying so; ``restitution_first`` and
-``contact_time_first`` come from the first bounce record, as for a point without
-diagnostics.  ``compile_time``, ``run_time`` and ``wall_time`` of a point are its equal
-share of its batch's.
+The first-impact columns (``records.impact_track.IMPACT_COLUMNS``) come from the values
+each thread streams from its diagnostics rows (``stepping.impact_stream``, equal to the CPU
+engine's ``impact.first_contact`` on the whole track), turned into columns by the CPU
+engine's own ``sweeps.ensemble.impact_columns``.  ``compile_time``, ``run_time`` and
+``wall_time`` of a point are its equal share of its batch's.
 """
 from __future__ import annotations
 
@@ -23,24 +21,24 @@ import re
 import socket
 import time
 import types
-import warnings
-from typing import NamedTuple
 
 import numpy as np
 
-from ..config import ModelWarning
 from ..driver.run import NODE_STEPS_PER_CALL, Run
 from ..model.laws import get_law
 from .._jit import Kernel
 from ..records.bounces import bounce_table
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.extremes import Extremes
+from ..stepping import impact as I
 from ..stepping import layout as L
 from ..sweeps.batch import BatchResult
-from ..sweeps.point import bounce_values, empty_columns, pass_on
+from ..sweeps.ensemble import impact_columns
+from ..sweeps.point import bounce_values, empty_columns
 from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
-from .kernel import N_MAX, deep_stack, family_of, make_kernel, pack, signature, simulated
+from .kernel import N_MAX, deep_call, family_of, make_kernel, pack, signature, simulated
+from .starts import starts
 
 __all__ = ["run_batch", "check_device", "check_point", "prepare", "resolve_device",
            "GPU_INTEGRATORS",
@@ -52,8 +50,6 @@ BOUNCE_ROWS = 64            # bounce rows kept per point (more are counted and w
 EVENT_ROWS = 16             # local buffer rows of episodes and of bounces between drains
 THREADS = 128               # threads per block
 MEMORY = 2 << 30            # bytes of output buffers per launch (the batch is split)
-UNDEFINED = ("not computed by the GPU engine (it keeps no diagnostics rows); "
-             "restitution_first and contact_time_first are the first bounce record's")
 
 
 class GpuUnsupported(ValueError):
@@ -106,35 +102,6 @@ def check_point(config) -> None:
                                  f"compiled for the GPU; use device = 'cpu'")
 
 
-class _Start(NamedTuple):
-    """What a thread starts from, made by the driver's ``Run`` (which is not kept: a batch
-    holds many thousand points)."""
-
-    config: object
-    scheme: object
-    ctrl: object
-    system: object
-    rod: object
-    floor: object
-    state: np.ndarray          # u, v rows
-    clock: np.ndarray
-    ev: np.ndarray
-
-    def params(self):
-        """The loop's parameter tuples (``driver.run.parameters``)."""
-        return (self.scheme, self.ctrl, self.system, self.rod, self.floor)
-
-
-def _setup(config):
-    """``(_Start, warnings)`` of a point: the driver's initial arrays and parameters."""
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", ModelWarning)
-        run = Run(config, snapshot_capacity=1, diag_capacity=1, event_capacity=1)
-    start = _Start(config, run.scheme, run.ctrl, run.system, run.rod, run.floor,
-                   run.state[:2].copy(), run.clock.copy(), run.ev.copy())
-    return start, pass_on(caught)
-
-
 def _capacities(run) -> tuple[int, int]:
     """Snapshot and diagnostics rows between drains: at least what one dense-output step
     writes (``Control.dense_snapshots``, as the driver's buffers)."""
@@ -148,7 +115,18 @@ def _launch(runs, cuda):
     n1 = fam.n1
     cs, cd = _capacities(runs[0])
     n = len(runs)
-    params = np.array([pack(r.params()) for r in runs], dtype=np.float64).reshape(n, -1)
+    # the points share their parameter tuples where they agree (``starts``): each packed once
+    packed: dict = {}
+    rows = []
+    for r in runs:
+        row = []
+        for t in r.params():
+            got = packed.get(id(t))
+            if got is None:
+                got = packed[id(t)] = pack((t,))
+            row.extend(got)
+        rows.append(row)
+    params = np.array(rows, dtype=np.float64).reshape(n, -1)
     state0 = np.ascontiguousarray(np.stack([r.state for r in runs]))
     clock0 = np.stack([r.clock for r in runs])
     ev0 = np.stack([r.ev for r in runs])
@@ -159,8 +137,8 @@ def _launch(runs, cuda):
            cuda.device_array((n, cs, n1)), cuda.device_array((n, cs, n1)),
            cuda.device_array((n, cd, len(L.DIAG_COLUMNS))),
            cuda.device_array((n, EVENT_ROWS, len(L.EPISODE_COLUMNS))),
-           cuda.device_array((n, EVENT_ROWS, len(L.BOUNCE_COLUMNS))),
-           cuda.device_array((n, BOUNCE_ROWS + 1, len(L.BOUNCE_COLUMNS))),
+           cuda.device_array((n, EVENT_ROWS, len(L.BOUNCE_ROW_COLUMNS))),
+           cuda.device_array((n, BOUNCE_ROWS + 1, len(L.BOUNCE_ROW_COLUMNS))),
            cuda.device_array((n, T.F_SIZE)), cuda.device_array((n, T.I_SIZE), np.int64)]
     threads = min(THREADS, n) if not simulated() else min(32, n)
     max_steps = max(1, NODE_STEPS_PER_CALL // n1)
@@ -179,8 +157,7 @@ def _compile(k, fam, config) -> None:
     if simulated():
         return
     try:
-        with deep_stack():
-            k.compile(signature(fam))
+        deep_call(k.compile, signature(fam))
     except Exception as exc:
         raise GpuUnsupported(f"the GPU cannot compile this model (rod.law = "
                              f"{config.rod.law!r}, floor.law = {config.floor.law!r}, "
@@ -193,9 +170,9 @@ def prepare(config) -> None:
     anything: a model CUDA cannot compile is refused in one line, not after the file is
     made.  A point that cannot start is left to fail as a point."""
     check_point(config)
-    try:
-        start, _ = _setup(config)
-    except Exception:
+    got, _ = starts([config])
+    start = got[0]
+    if isinstance(start, Exception):
         return
     fam = family_of(start.params())
     _compile(make_kernel(fam), fam, config)
@@ -229,7 +206,8 @@ def _message(run, fout, code) -> str:
 
 
 def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
-    """A point's summary values (besides the times) and bounce table; a warning or ''."""
+    """A point's summary values (besides the times, the first-impact columns and those of
+    its bounce table) and bounce table; a warning or ''."""
     nb = int(iout[T.I_BOUNCES])
     pending = None
     if iout[T.I_PENDING]:
@@ -253,9 +231,7 @@ def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
               "min_strain": finite(e.strain_min),
               "energy_error": ext.energy_error(float(fout[T.F_E0])),
               "steps": int(iout[T.I_STEPS]), "rejected_steps": int(iout[T.I_REJECTED]),
-              "t_final": float(fout[T.F_T]), "run_file": "",
-              "impact_status": "undefined", "impact_reason": UNDEFINED}
-    values.update(bounce_values(values, bounces))
+              "t_final": float(fout[T.F_T]), "run_file": ""}
     said = ""
     if iout[T.I_DROPPED]:
         said = (f"the GPU engine keeps {BOUNCE_ROWS} bounce records per point: a point's "
@@ -266,7 +242,7 @@ def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
 def run_batch(configs, index) -> BatchResult:
     """Run the points ``configs`` (grid indices ``index``) on the GPU; a point that cannot
     start (its set-up raises) is failed with the reason, as a CPU point is.  ``worker``
-    holds the device and the batch's seconds: ``setup_time`` (the points' ``Run`` set-up
+    holds the device and the batch's seconds: ``setup_time`` (the points' set-up, ``starts``,
     on the host), ``compile_time`` (the kernels, first batch of a family in a process),
     ``kernel_time`` (the launches and the copies of their results back) and ``wall_time``.
 
@@ -278,20 +254,23 @@ def run_batch(configs, index) -> BatchResult:
     t_start = time.perf_counter()
     n = len(configs)
     cols = empty_columns(n)
-    said: list[str] = []
-    runs: list = [None] * n
-    for j, c in enumerate(configs):
-        try:
-            runs[j], w = _setup(c)
-            said.extend(w)
-        except Exception as exc:     # as run_point: the point fails, the batch goes on
+    runs, warned = starts(configs)
+    said: list[str] = list(warned)
+    for j, r in enumerate(runs):
+        if isinstance(r, Exception):     # as run_point: the point fails, the batch goes on
             cols["status"][j] = "failed"
-            cols["message"][j] = f"{type(exc).__name__}: {exc}"
+            cols["message"][j] = f"{type(r).__name__}: {r}"
+            runs[j] = None
     t_setup = time.perf_counter() - t_start
     groups: dict = {}
+    families: dict = {}
     for j, r in enumerate(runs):
         if r is not None:
-            groups.setdefault(family_of(r.params()), []).append(j)
+            ids = tuple(map(id, r.params()))
+            fam = families.get(ids)
+            if fam is None:
+                fam = families[ids] = family_of(r.params())
+            groups.setdefault(fam, []).append(j)
     tables: list = [None] * n
     compile_s = run_s = 0.0
     for members in groups.values():
@@ -308,6 +287,15 @@ def run_batch(configs, index) -> BatchResult:
                     cols[name][j] = x
                 if w:
                     said.append(w)
+            at = np.asarray(part, dtype=np.int64)
+            impact_columns(cols, at, fout[:, T.F_IMPACT:T.F_IMPACT + I.OUT_SIZE],
+                           iout[:, T.I_IMPACT],
+                           [types.SimpleNamespace(config=runs[j].config,
+                                                  params=runs[j].params()) for j in part])
+            for j in part:
+                got = bounce_values({"impact_status": cols["impact_status"][j]}, tables[j])
+                for name, x in got.items():
+                    cols[name][j] = x
     empty = bounce_table(())
     tables = [t if t is not None else empty for t in tables]
     counts = np.array([t["t_impact"].size for t in tables], dtype=np.int64)
@@ -326,8 +314,8 @@ def _bytes_per_point(run) -> int:
     cs, cd = _capacities(run)
     n1 = run.system.n + 1
     return 8 * (cs * (2 + 2 * n1) + cd * len(L.DIAG_COLUMNS)
-                + EVENT_ROWS * (len(L.EPISODE_COLUMNS) + len(L.BOUNCE_COLUMNS))
-                + (BOUNCE_ROWS + 1) * len(L.BOUNCE_COLUMNS) + 64 + 2 * n1)
+                + EVENT_ROWS * (len(L.EPISODE_COLUMNS) + len(L.BOUNCE_ROW_COLUMNS))
+                + (BOUNCE_ROWS + 1) * len(L.BOUNCE_ROW_COLUMNS) + 64 + 2 * n1)
 
 
 def _worker(cuda) -> dict:

@@ -22,13 +22,14 @@ import sys
 import threading
 from typing import NamedTuple
 
+from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS, work_rows
 from . import trajectory as T
 from ._cuda import import_cuda
 
 __all__ = ["Family", "family_of", "pack", "make_kernel", "compile_ptx", "simulated",
-           "deep_stack", "N_MAX"]
+           "deep_call", "N_MAX"]
 
 # the largest rod (segments N) a thread runs: its state, trial states, integrator scratch
 # and interpolation rows are (8 + work rows) × (N + 1) doubles of local memory (3 kB for the
@@ -99,6 +100,7 @@ def sweep_kernel(params, state0, clock0, ev0, snap_t, snap_step, snap_u, snap_v,
     count = cuda.local.array({L.COUNT_SIZE}, int64)
     ev = cuda.local.array({L.EV_SIZE}, float64)
     fail = cuda.local.array({L.FAIL_SIZE}, float64)
+    imp = cuda.local.array({S.SIZE}, float64)
     for j in range({n1}):
         state[0, j] = state0[i, 0, j]
         state[1, j] = state0[i, 1, j]
@@ -116,7 +118,7 @@ def sweep_kernel(params, state0, clock0, ev0, snap_t, snap_step, snap_u, snap_v,
 {zero}
     run_one(t0, t1, t2, t3, t4, state, trial, work, interp, sstats, clock, count, ev,
             snap_t[i], snap_step[i], snap_u[i], snap_v[i], diag[i], episodes[i], bounces[i],
-            fail, bounce_out[i], fout[i], iout[i], max_steps)
+            fail, imp, bounce_out[i], fout[i], iout[i], max_steps)
 """
 
 
@@ -146,14 +148,18 @@ def make_kernel(family: Family):
     with _LOCK:
         got = _KERNELS.get(family)
         if got is None:
-            if simulated():
-                run_one = _simulated_run_one
-            else:
-                from .retarget import Retarget
-
-                run_one = Retarget(cuda).device(T.run_one)
-            got = _KERNELS[family] = cuda.jit(kernel_function(family, cuda, run_one))
+            got = _KERNELS[family] = deep_call(_new_kernel, family, cuda)
         return got
+
+
+def _new_kernel(family: Family, cuda):
+    if simulated():
+        run_one = _simulated_run_one
+    else:
+        from .retarget import Retarget
+
+        run_one = Retarget(cuda).device(T.run_one)
+    return cuda.jit(kernel_function(family, cuda, run_one))
 
 
 def _simulated_run_one(*args):
@@ -163,22 +169,57 @@ def _simulated_run_one(*args):
     return T.run_one(*(getattr(a, "_ary", a) for a in args))
 
 
-# Python frames a GPU compile may nest: each device function is typed and compiled inside
-# its caller's typing (run_one -> advance -> the step -> the rates -> a law), dozens of
-# Numba's frames a level, and a compile error is re-raised through every level; the
-# default limit of 1000 frames is too shallow for the integrators' deepest chains
-COMPILE_FRAMES = 5000
+# A GPU compile nests deeply: each device function is typed and compiled inside its
+# caller's typing (run_one -> advance -> the step -> the rates -> a law), dozens of Numba's
+# frames a level, and a compile error is re-raised through every level.  The integrators'
+# deepest chains come near 5000 Python frames, past the default limit of 1000 and past any
+# limit left to a caller whose own stack is already deep (a test runner's workers); so the
+# compile runs on a thread of its own, from an empty stack, with room for COMPILE_FRAMES
+# frames and a C stack of COMPILE_STACK bytes for them (about 13 kB a frame, several times
+# what CPython and Numba's C calls take; the 8 MB of a main thread would hold about 1000)
+COMPILE_FRAMES = 20_000
+COMPILE_STACK = 256 << 20
+
+_DEEP_LOCK = threading.Lock()
+_DEEP = threading.local()
 
 
-@contextlib.contextmanager
-def deep_stack():
-    """Python's recursion limit raised to COMPILE_FRAMES while a kernel compiles."""
-    old = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(old, COMPILE_FRAMES))
-    try:
-        yield
-    finally:
-        sys.setrecursionlimit(old)
+def deep_call(fn, *args, **kwargs):
+    """``fn(*args, **kwargs)`` run on a fresh thread with a COMPILE_STACK-byte stack and Python's
+    recursion limit raised to COMPILE_FRAMES (restored after): its result, or its exception
+    raised here.  Calls are serialised (the limit and the stack size are the process's);
+    a call from inside one runs at once on its thread."""
+    if getattr(_DEEP, "inside", False):
+        return fn(*args, **kwargs)
+    box: dict = {}
+
+    def work():
+        _DEEP.inside = True
+        try:
+            box["value"] = fn(*args, **kwargs)
+        except BaseException as exc:    # re-raised in the caller, KeyboardInterrupt too
+            box["error"] = exc
+
+    with _DEEP_LOCK:
+        old_limit = sys.getrecursionlimit()
+        old_size = threading.stack_size()
+        try:
+            threading.stack_size(COMPILE_STACK)
+        except (ValueError, RuntimeError):  # a platform without a settable stack size
+            pass
+        try:
+            worker = threading.Thread(target=work, name="rodjit-gpu-compile", daemon=True)
+            worker.start()
+        finally:
+            threading.stack_size(old_size)
+        sys.setrecursionlimit(max(old_limit, COMPILE_FRAMES))
+        try:
+            worker.join()
+        finally:
+            sys.setrecursionlimit(old_limit)
+    if "error" in box:
+        raise box["error"]
+    return box.get("value")
 
 
 class _Device(NamedTuple):
@@ -217,11 +258,16 @@ def signature(family: Family):
 def compile_ptx(family: Family, cc=(9, 0)) -> str:
     """PTX of a family's kernel for compute capability ``cc``, compiled without a GPU:
     the real compile of everything the kernel runs (what the simulator cannot check)."""
+    with _LOCK:
+        return deep_call(_compile_ptx, family, tuple(cc))
+
+
+def _compile_ptx(family: Family, cc: tuple) -> str:
     from .retarget import Retarget
 
     cuda = import_cuda()
-    with _LOCK, _compute_capability(cc), deep_stack():
+    with _compute_capability(cc):
         run_one = Retarget(cuda).device(T.run_one)
         ptx, _ = cuda.compile_ptx(kernel_function(family, cuda, run_one), signature(family),
-                                  cc=tuple(cc))
+                                  cc=cc)
     return ptx

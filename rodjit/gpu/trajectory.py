@@ -10,13 +10,18 @@ moving t (``NO_PROGRESS``) and a block with a non-finite diagnostic value, and d
 output buffers: snapshots are dropped (they are taken so that the steps land on the same
 output times as a run's), diagnostics rows are folded into the running extremes of
 ``records.extremes.Extremes``, bounce rows are copied out, and the bounce still open at the
-end is written by ``stepping.events.write_bounce``, as ``Run.pending_bounce`` does.
+end is written by ``stepping.events.write_bounce``, as ``Run.pending_bounce`` does.  The
+first-impact observables are streamed from the same blocks (``stepping.impact_stream``:
+a few dozen doubles a thread instead of the diagnostics track the CPU engine keeps) and
+equal the CPU engine's ``impact.first_contact``.
 """
 import math
 
 from ..driver.run import NO_PROGRESS
 from ..kernels.forces import OK
 from ..stepping import layout as L
+from ..stepping import impact as I
+from ..stepping import impact_stream as S
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from .._jit import kernel
@@ -31,7 +36,8 @@ F_STRAIN_MIN = 5   # smallest strain, bottom height; largest floor force (diagno
 F_U0_MIN = 6
 F_FORCE_MAX = 7
 F_FAIL = 8         # the loop's ``fail`` array (layout.FAIL_SIZE values) from here
-F_SIZE = F_FAIL + L.FAIL_SIZE
+F_IMPACT = F_FAIL + L.FAIL_SIZE    # impact_stream.finish's ``out`` (impact.OUT_SIZE values)
+F_SIZE = F_IMPACT + I.OUT_SIZE
 
 # columns of the integer results (``iout``)
 I_CODE = 0         # layout.DONE, layout.FAILED, or BAD_DIAGNOSTICS
@@ -41,7 +47,8 @@ I_SAMPLES = 3      # diagnostics rows folded into the extremes
 I_BOUNCES = 4      # closed bounce rows written to the point's bounce rows
 I_DROPPED = 5      # closed bounce rows that did not fit there
 I_PENDING = 6      # 0: no bounce pending at the end; 1: pending, closed episode; 2: open
-I_SIZE = 7
+I_IMPACT = 7       # impact_stream.finish's code (impact.LIFT_OFF, ...)
+I_SIZE = 8
 
 BAD_DIAGNOSTICS = 101   # a block of diagnostics held a non-finite value (``Run.drain``)
 
@@ -69,11 +76,15 @@ def _fold(diag, n, fout, iout):
 
 
 @kernel
-def _drain(count, diag, bounces, bounce_out, fout, iout):
-    """Empty the output buffers as ``Run.take`` and ``Run.drain`` do; False if the
-    diagnostics were refused (then, as there, the episodes and bounces are not drained)."""
+def _drain(count, diag, episodes, bounces, bounce_out, ev, imp, g, fout, iout):
+    """Empty the output buffers as ``Run.take`` and ``Run.drain`` do, streaming the block
+    into the first-impact state ``imp``; False if the diagnostics were refused (then, as
+    there, the episodes and bounces are not drained)."""
     ok = _fold(diag, count[L.N_DIAG], fout, iout)
     if ok:
+        S.block(imp, diag, count[L.N_DIAG], episodes, count[L.N_EP], bounces,
+                count[L.N_BOUNCE], ev[L.IN_CONTACT] != 0.0, ev[L.EP_START], g,
+                ev[L.FLIGHT_TIME])
         cap = bounce_out.shape[0] - 1       # the last row is kept for the pending bounce
         for j in range(count[L.N_BOUNCE]):
             k = iout[I_BOUNCES]
@@ -92,9 +103,11 @@ def _drain(count, diag, bounces, bounce_out, fout, iout):
 
 def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats, clock,
             count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail,
-            bounce_out, fout, iout, max_steps):
+            imp, bounce_out, fout, iout, max_steps):
     """Run one point from its started arrays (``Run.__init__``'s) to t_end or its failure;
-    results in ``fout``, ``iout`` and ``bounce_out`` (module docstring)."""
+    results in ``fout``, ``iout`` and ``bounce_out`` (module docstring); ``imp`` holds the
+    first-impact state (``impact_stream.SIZE`` doubles)."""
+    S.reset(imp)
     fout[F_BAL_MAX] = -math.inf
     fout[F_BAL_MIN] = math.inf
     fout[F_KIN_MAX] = 0.0
@@ -121,7 +134,8 @@ def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
             fail[L.F_DT] = clock[L.DT]
             fail[L.F_VALUE] = count[L.STEP] - steps
             code = L.FAILED
-        if not _drain(count, diag, bounces, bounce_out, fout, iout):
+        if not _drain(count, diag, episodes, bounces, bounce_out, ev, imp, system.g, fout,
+                      iout):
             code = BAD_DIAGNOSTICS
     iout[I_CODE] = code
     iout[I_STEPS] = count[L.STEP]
@@ -130,7 +144,13 @@ def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
     fout[F_E0] = clock[L.E0]
     for k in range(L.FAIL_SIZE):
         fout[F_FAIL + k] = fail[k]
-    if ev[L.B_NEP] > 0.0:
-        is_open = ev[L.IN_CONTACT] != 0.0
-        write_bounce(bounce_out[iout[I_BOUNCES]], ev, is_open)
+    pending = ev[L.B_NEP] > 0.0
+    is_open = ev[L.IN_CONTACT] != 0.0
+    row = bounce_out[iout[I_BOUNCES]]
+    if pending:
+        write_bounce(row, ev, is_open)
         iout[I_PENDING] = 2 if is_open else 1
+    iout[I_IMPACT] = S.finish(imp, pending, row[L.BC_T_IMPACT], row[L.BC_T_RELEASE],
+                              pending and is_open, row[L.BC_MIN_U0], system.g,
+                              ev[L.FLIGHT_TIME], clock[L.T], state[0, 0] < 0.0,
+                              fout[F_IMPACT:F_IMPACT + I.OUT_SIZE], imp[S.ST:S.ST + 3])

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .laws import AikiKosugiFloor, AikiKosugiRod, deriv, primitive, value
+from .laws import AikiKosugiFloor, AikiKosugiRod, primitive, value
 from .system import masses
 
 __all__ = ["rod_stress", "rod_energy_density", "floor_stress", "floor_energy",

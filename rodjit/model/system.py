@@ -5,9 +5,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .laws import get_law, law_of, lower
+from .laws import get_law, lower
 
-__all__ = ["RodSystem", "build_system", "grid", "masses", "initial_state", "check_admissible"]
+__all__ = ["RodSystem", "build_system", "rod_system", "law_params", "grid", "masses",
+           "initial_state", "check_admissible"]
 
 
 class RodSystem(NamedTuple):
@@ -22,12 +23,20 @@ class RodSystem(NamedTuple):
 
 def build_system(config):
     """``(RodSystem, rod law params, floor law params)`` for a Config."""
-    n = config.rod.N
-    system = RodSystem(int(n), 1.0 / n, float(config.rod.gamma), float(config.rod.mu),
-                       float(config.gravity.g))
-    rod = get_law("rod", config.rod.law).from_config(config.rod)
-    floor = get_law("floor", config.floor.law).from_config(config.floor)
-    return system, rod, floor
+    return (rod_system(config.rod, config.gravity), law_params("rod", config.rod),
+            law_params("floor", config.floor))
+
+
+def rod_system(rod, gravity) -> RodSystem:
+    """The RodSystem of a configuration's ``rod`` and ``gravity`` sections."""
+    n = rod.N
+    return RodSystem(int(n), 1.0 / n, float(rod.gamma), float(rod.mu), float(gravity.g))
+
+
+def law_params(kind: str, section):
+    """The parameters of the ``kind`` ("rod" or "floor") law of a configuration's section of
+    that name."""
+    return get_law(kind, section.law).from_config(section)
 
 
 def grid(n: int) -> np.ndarray:

@@ -9,7 +9,6 @@ write); compressed chunks take HDF5's filter pipeline.
 """
 from __future__ import annotations
 
-import h5py
 import numpy as np
 
 __all__ = ["Table"]

@@ -14,6 +14,7 @@ import os
 import re
 import stat
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -304,9 +305,11 @@ _CAUSES = {errno.ENOSPC: "no space left on the device",
 class WriteFailed(OSError):
     """The disk refused a write (full, a size limit or quota, an I/O error): the file keeps
     its last checkpoint and ``rodjit run --resume`` continues it once there is space.
-    ``cause``: what the disk said, if the message says more."""
+    ``cause``: what the disk said, if the message says more; ``table``, set only where a
+    sweep stopped on the refusal: its ``SweepTable`` (a floor above this one)."""
 
     cause: str | None = None
+    table: Any
 
     def __init__(self, message: str, cause: str | None = None):
         super().__init__(message)

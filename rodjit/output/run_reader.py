@@ -4,6 +4,7 @@ present in every column.  Formats 1 and 2 read alike: the nodes' positions from 
 the format keeps them, boolean columns as bool."""
 from __future__ import annotations
 
+import os
 import time
 
 import h5py
@@ -187,7 +188,7 @@ def read_x(f: h5py.File) -> np.ndarray:
     return f[x_path(f)][()]
 
 
-def load_file(path):
+def load_file(path: str | os.PathLike[str]) -> Result:
     """Read a whole run file into a ``rodjit.Result`` (the same object ``simulate`` returns).
 
     Parameters

@@ -4,12 +4,18 @@ derived from ``u``) stay in the file and are read when indexed or computed, so a
 opens at once; the small tables (diagnostics, episodes, bounces) are read in full."""
 from __future__ import annotations
 
+import os
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from .._extras import need
 from ..records.datasets import run_dataset, strain_of
 from .run_reader import check_run_file, read_config, read_table, read_x
 from .h5files import open_file
+
+if TYPE_CHECKING:
+    import xarray
 
 __all__ = ["open_run"]
 
@@ -49,7 +55,7 @@ def _lazy_arrays(xr):
     return H5Rows, indexing.LazilyIndexedArray
 
 
-def open_run(path):
+def open_run(path: str | os.PathLike[str]) -> xarray.Dataset:
     """The run file ``path`` as a lazily read ``xarray.Dataset`` (``Result.to_xarray``'s
     layout); the file stays open until ``ds.close()`` (or the Dataset is collected).
     ``ds.u.isel(t=-1)`` reads one snapshot; ``ds.load()`` reads them all.

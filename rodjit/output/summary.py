@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from ..config import Config
 from ..records.extremes import Extremes
 from ..records.overview import RunFacts, energy_label
-from ..records.impact_track import ImpactTrack, impact_line, impact_values
+from ..records.impact_track import ImpactTrack, impact_values
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive

@@ -15,8 +15,10 @@ however long the run.  GIF through Pillow, MP4 through ffmpeg (when it is instal
 from __future__ import annotations
 
 import math
+import os
 import warnings
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +26,9 @@ from ..records.datasets import strain_of
 from .dense import SparseSnapshots, contacts, samples
 from .mpl import NothingToDraw, discard, need_matplotlib, new_figure, write_whole
 from .source import RunSource
+
+if TYPE_CHECKING:
+    from ..records.result import Result
 
 __all__ = ["animate", "FORMATS", "MissingWriter", "FRAMES_PER_CONTACT"]
 
@@ -101,7 +106,8 @@ def movie_frames(src, n_frames: int, *, fps: int = 20, dense: bool = True):
     return s, np.unique(k)
 
 
-def animate(source, output, *, fps: int = 20, duration: float = 5.0,
+def animate(source: Result | str | os.PathLike[str], output: str | os.PathLike[str], *,
+            fps: int = 20, duration: float = 5.0,
             quantity: str = "strain", dpi: int = 100, dense: bool = True) -> Path:
     """Write an animation of the run ``source`` to ``output``: ``fps * duration`` frames
     (at most one per snapshot or re-simulated state), ``FRAMES_PER_CONTACT`` of them over

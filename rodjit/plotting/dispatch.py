@@ -2,16 +2,22 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from ..output.h5files import file_kind
 from ..records.result import Result
 from ..sweeps.sweep_table import SweepTable
 from . import run, sweep
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
+
 __all__ = ["plot"]
 
 
-def plot(obj, kind: str | None = None, ax=None, **style):
+def plot(obj: Result | SweepTable | str | Path, kind: str | None = None, ax: Axes | None = None,
+         **style: Any) -> Figure:
     """Draw ``obj`` — a ``Result``, a run file path, a sweep file path or a ``SweepTable``
     — as figure ``kind`` (runs: ``run.KINDS``, default heights; sweeps: ``sweep.KINDS``,
     default restitution) and return the matplotlib Figure (inline in Jupyter).  With

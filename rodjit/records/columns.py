@@ -8,8 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..stepping.layout import BOUNCE_COLUMNS as BOUNCE_ROW_COLUMNS
-from ..stepping.layout import DIAG_COLUMNS, EPISODE_COLUMNS
+from ..stepping.layout import BOUNCE_ROW_COLUMNS, DIAG_COLUMNS, EPISODE_COLUMNS
 
 __all__ = ["DIAG_COLUMNS", "EPISODE_COLUMNS", "BOUNCE_ROW_COLUMNS", "BOUNCE_COLUMNS",
            "INT_COLUMNS", "BOOL_COLUMNS", "columns_of"]

@@ -17,6 +17,7 @@ modules of one job each, and every public name of theirs is importable from here
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from .contacts import (STATUSES, FirstImpact, energy_vibration, first_impact, fl
 from .impact_track import (IMPACT_COLUMNS, TRACK_COLUMNS, ImpactTrack, impact_line,
                            impact_values)
 from .physics import Physics, flight_time, lift_energy, physics_for, physics_of, wave_speed
+
+if TYPE_CHECKING:
+    from .result import Result
 
 __all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values", "flight_time",
            "IMPACT_COLUMNS", "impact_line", "wave_speed", "lift_energy", "energy_vibration",
@@ -50,7 +54,7 @@ OBSERVABLES: dict[str, str] = {
 }
 
 
-def observables(result, merge_time: float | None = None) -> dict:
+def observables(result: Result, merge_time: float | None = None) -> dict[str, Any]:
     """The scalar OBSERVABLES of a Result, with ``status`` and ``reason`` of the first
     macroscopic contact.
 

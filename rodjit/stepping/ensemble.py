@@ -210,7 +210,6 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
     nd = 0
     ne = 0
     bstart = nbo
-    result = L.DONE
     outcome = R_COMPLETED
     code = start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev, snap_t,
                  snap_step, snap_u, snap_v, diag, fail)

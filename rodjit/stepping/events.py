@@ -201,7 +201,7 @@ def track(ev, count, episodes, bounces, t, dt, g, u0a, v0a, u0b, v0b, wa, wb, ff
 
 @kernel
 def write_bounce(row, ev, is_open):
-    """One bounce record (layout.BOUNCE_COLUMNS) from the bookkeeping; an open bounce has
+    """One bounce record (layout.BOUNCE_ROW_COLUMNS) from the bookkeeping; an open bounce has
     no release yet, so its release fields are NaN and its extremes run to now.  It is
     ambiguous if open, if it did not start falling (w_impact >= 0: the run started in
     contact) or if its approach speed is below AMBIGUOUS_SPEED of the vibrational velocity

@@ -19,16 +19,33 @@ sample (``REFINE`` iterations, the bracket shrinks to 0.618^REFINE of its width)
 step's end values always count, so an extreme is never less extreme than at the step
 points; the floor force is the law's ``value`` at the interpolated u_0 (as the diagnostics'
 ``floor_force``), its largest value over the samples and the refined minimum of u_0.
+
+Most steps of an open bounce cannot beat its running extremes (the rod rising after its
+deepest point, a flight): searching them costs about three times the step itself.  For the
+cubic Hermite the search is skipped when it cannot matter (``cannot_beat``): a cubic on
+[0, 1] lies inside the convex hull of its Bernstein coefficients, so the smallest of the
+four coefficients of u_0 and of every segment's length bounds the step's u_0 and strain
+from below; when both bounds lie above the bounce's running minima by more than the
+rounding of the interpolant, the search would only return values that leave those minima
+(and, σ_b growing with the penetration, the largest floor force) unchanged.  The skipped
+step's extremes are its end values, so the bounce's extremes are the same, to the bit.
+A step that runs one way in u_0 and in every segment's length (ordered Bernstein
+coefficients, ``monotone``: a settling rod creeping towards its rest state) has its
+extremes at its ends, which are taken without a search.
 """
 from ..model.laws import value
 from .schemes import dense, has_dense
 from .._jit import step_kernel
 
-__all__ = ["SAMPLES", "REFINE", "state_at", "step_extremes"]
+__all__ = ["SAMPLES", "REFINE", "state_at", "step_extremes", "search_extremes", "monotone",
+           "cannot_beat"]
 
 SAMPLES = 8      # samples per step (θ = k/SAMPLES)
 REFINE = 16      # golden-section iterations per quantity (the bracket to 5e-4 of its width)
 _GOLD = 0.6180339887498949
+# the margin a hull bound must clear, relative to the sizes of the interpolated terms: the
+# interpolant's rounding is a few units in the last place of them (2.2e-16 each)
+_MARGIN = 1e-12
 
 
 @step_kernel
@@ -95,7 +112,22 @@ def _golden_min(scheme, old, new, work, interp, h, dt, lo, hi, which, best):
 def step_extremes(scheme, old, new, work, interp, system, floor, dt, ff_end, emin_end):
     """``(min u_0, max floor force, min strain)`` over the step of length dt from ``old``
     to ``new`` (its end values ``ff_end``, ``emin_end`` included); for a scheme with a dense
-    output its ``dense_setup`` has run for the step.  ``interp`` (2 rows) is scratch."""
+    output its ``dense_setup`` has run for the step.  ``interp`` (2 rows) is scratch.
+    A step that runs one way in every quantity (``monotone``) is not searched."""
+    if monotone(scheme, old, new, dt):
+        # every interpolated quantity runs one way over the step: its extremes are at
+        # the step's ends (the search would find them, up to its rounding)
+        u_best = min(old[0][0], new[0][0])
+        return (u_best, max(ff_end, value(u_best, floor)),
+                min(emin_end, _min_strain(old[0], system.h)))
+    return search_extremes(scheme, old, new, work, interp, system, floor, dt, ff_end,
+                           emin_end)
+
+
+@step_kernel
+def search_extremes(scheme, old, new, work, interp, system, floor, dt, ff_end, emin_end):
+    """``step_extremes`` by sampling and golden-section search (module docstring), for
+    any step."""
     h = system.h
     u_best = min(old[0][0], new[0][0])
     e_best = emin_end
@@ -122,3 +154,55 @@ def step_extremes(scheme, old, new, work, interp, system, floor, dt, ff_end, emi
     hi = min(ke + 1, SAMPLES) / SAMPLES
     e_best = _golden_min(scheme, old, new, work, interp, h, dt, lo, hi, int(1), e_best)
     return u_best, ff, e_best
+
+
+@step_kernel
+def _ordered(b0, b1, b2, b3):
+    """Whether Bernstein coefficients are in order, so their cubic is monotone on [0, 1]."""
+    return (b0 <= b1 <= b2 <= b3) or (b0 >= b1 >= b2 >= b3)
+
+
+@step_kernel
+def monotone(scheme, old, new, dt):
+    """Whether the cubic Hermite of the step runs one way in u_0 and in every segment's
+    length (ordered Bernstein coefficients), so that u_0's and the strain's extremes over
+    the step are at its ends.  False for a scheme with a dense output."""
+    if has_dense(scheme):
+        return False
+    ua, va, ub, vb = old[0], old[1], new[0], new[1]
+    d = dt / 3.0
+    if not _ordered(ua[0], ua[0] + d * va[0], ub[0] - d * vb[0], ub[0]):
+        return False
+    for i in range(ua.size - 1):
+        a0 = ua[i + 1] - ua[i]
+        a3 = ub[i + 1] - ub[i]
+        if not _ordered(a0, a0 + d * (va[i + 1] - va[i]), a3 - d * (vb[i + 1] - vb[i]), a3):
+            return False
+    return True
+
+
+@step_kernel
+def cannot_beat(scheme, old, new, dt, h, min_u0, min_strain):
+    """Whether no point inside the step from ``old`` to ``new`` can have a bottom height
+    below ``min_u0`` or a segment strain below ``min_strain`` (the open bounce's running
+    minima), by the Bernstein hull of the cubic Hermite (module docstring).  Always False
+    for a scheme with a dense output, whose interpolant is not that cubic."""
+    if has_dense(scheme):
+        return False
+    ua, va, ub, vb = old[0], old[1], new[0], new[1]
+    d = dt / 3.0
+    b1 = ua[0] + d * va[0]
+    b2 = ub[0] - d * vb[0]
+    scale = abs(ua[0]) + abs(ub[0]) + abs(d * va[0]) + abs(d * vb[0])
+    if min(ua[0], b1, b2, ub[0]) <= min_u0 + _MARGIN * scale:
+        return False
+    for i in range(ua.size - 1):
+        a0 = ua[i + 1] - ua[i]
+        a1 = a0 + d * (va[i + 1] - va[i])
+        a3 = ub[i + 1] - ub[i]
+        a2 = a3 - d * (vb[i + 1] - vb[i])
+        scale = (abs(ua[i]) + abs(ua[i + 1]) + abs(ub[i]) + abs(ub[i + 1])
+                 + abs(d * va[i]) + abs(d * va[i + 1]) + abs(d * vb[i]) + abs(d * vb[i + 1]))
+        if min(a0, a1, a2, a3) / h - 1.0 <= min_strain + _MARGIN * (1.0 + scale / h):
+            return False
+    return True

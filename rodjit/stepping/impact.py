@@ -7,7 +7,7 @@
 * ``track`` rows: the diagnostics columns TRACK (``T_*`` below; ``ImpactTrack``'s
   TRACK_COLUMNS) of every sample, in time order;
 * ``eps`` rows: the finished contact episodes (t_start, t_end);
-* ``brows`` rows: the bounce table (``layout.BOUNCE_COLUMNS`` and ``open`` last), the
+* ``brows`` rows: the bounce table (``layout.BOUNCE_ROW_COLUMNS`` and ``open`` last), the
   pending bounce included.
 
 Every operation is the reference's, in its order, compiled without fused multiply-adds
@@ -37,7 +37,7 @@ TRACK_SIZE = 9
 TRACK_FROM_DIAG = (L.D_T, L.D_CM_VELOCITY, L.D_CM_HEIGHT, L.D_ENERGY_KINETIC,
                    L.D_ENERGY_STRETCH, L.D_ENERGY_BEND, L.D_U_BOTTOM, L.D_FLOOR_FORCE,
                    L.D_ENERGY_TOTAL)
-BR_OPEN = len(L.BOUNCE_COLUMNS)    # the ``open`` column of a bounce row here
+BR_OPEN = len(L.BOUNCE_ROW_COLUMNS)    # the ``open`` column of a bounce row here
 BROW_SIZE = BR_OPEN + 1
 
 # codes of ``first_contact``
@@ -120,7 +120,7 @@ def _episode(eps, ne, k, open_start, start):
 
 
 @exact_step_kernel
-def _apex(g, w_i, z_i, w_r, z_r):
+def apex(g, w_i, z_i, w_r, z_r):
     """``observables._apex_restitution``."""
     if g > 0 or w_i >= 0:
         return np.nan
@@ -235,6 +235,6 @@ def first_contact(track, nd, eps, ne, brows, nb, g, tau, t_final, in_contact, ou
     if is_open:
         return OPEN_AT_END
     out[O_RESTITUTION] = -w_r / w_i if w_i < 0 else np.nan
-    out[O_APEX] = _apex(g, w_i, z_i, w_r, z_r)
+    out[O_APEX] = apex(g, w_i, z_i, w_r, z_r)
     out[O_CONTACT_TIME] = t_rel - t_imp
     return LIFT_OFF

@@ -80,7 +80,7 @@ DIAG_COLUMNS = (
     "u_bottom", "floor_force", "min_strain", "cm_height", "cm_velocity",
 )
 EPISODE_COLUMNS = ("t_start", "t_end")
-BOUNCE_COLUMNS = (
+BOUNCE_ROW_COLUMNS = (
     "t_impact", "t_release", "n_episodes", "w_impact", "w_release", "restitution",
     "min_u0", "max_floor_force", "min_strain", "energy_vibration_impact",
     "restitution_energy", "ambiguous",
@@ -106,20 +106,20 @@ D_CM_VELOCITY = DIAG_COLUMNS.index("cm_velocity")
 EC_T_START = EPISODE_COLUMNS.index("t_start")
 EC_T_END = EPISODE_COLUMNS.index("t_end")
 
-BC_T_IMPACT = BOUNCE_COLUMNS.index("t_impact")
-BC_T_RELEASE = BOUNCE_COLUMNS.index("t_release")
-BC_N_EPISODES = BOUNCE_COLUMNS.index("n_episodes")
-BC_W_IMPACT = BOUNCE_COLUMNS.index("w_impact")
-BC_W_RELEASE = BOUNCE_COLUMNS.index("w_release")
-BC_RESTITUTION = BOUNCE_COLUMNS.index("restitution")
-BC_MIN_U0 = BOUNCE_COLUMNS.index("min_u0")
-BC_MAX_FLOOR_FORCE = BOUNCE_COLUMNS.index("max_floor_force")
-BC_MIN_STRAIN = BOUNCE_COLUMNS.index("min_strain")
-BC_ENERGY_VIBRATION_IMPACT = BOUNCE_COLUMNS.index("energy_vibration_impact")
-BC_RESTITUTION_ENERGY = BOUNCE_COLUMNS.index("restitution_energy")
-BC_AMBIGUOUS = BOUNCE_COLUMNS.index("ambiguous")
+BC_T_IMPACT = BOUNCE_ROW_COLUMNS.index("t_impact")
+BC_T_RELEASE = BOUNCE_ROW_COLUMNS.index("t_release")
+BC_N_EPISODES = BOUNCE_ROW_COLUMNS.index("n_episodes")
+BC_W_IMPACT = BOUNCE_ROW_COLUMNS.index("w_impact")
+BC_W_RELEASE = BOUNCE_ROW_COLUMNS.index("w_release")
+BC_RESTITUTION = BOUNCE_ROW_COLUMNS.index("restitution")
+BC_MIN_U0 = BOUNCE_ROW_COLUMNS.index("min_u0")
+BC_MAX_FLOOR_FORCE = BOUNCE_ROW_COLUMNS.index("max_floor_force")
+BC_MIN_STRAIN = BOUNCE_ROW_COLUMNS.index("min_strain")
+BC_ENERGY_VIBRATION_IMPACT = BOUNCE_ROW_COLUMNS.index("energy_vibration_impact")
+BC_RESTITUTION_ENERGY = BOUNCE_ROW_COLUMNS.index("restitution_energy")
+BC_AMBIGUOUS = BOUNCE_ROW_COLUMNS.index("ambiguous")
 
-_PREFIXES = {"D_": DIAG_COLUMNS, "EC_": EPISODE_COLUMNS, "BC_": BOUNCE_COLUMNS}
+_PREFIXES = {"D_": DIAG_COLUMNS, "EC_": EPISODE_COLUMNS, "BC_": BOUNCE_ROW_COLUMNS}
 
 
 def column_indices(prefix: str) -> dict[str, int]:

@@ -98,7 +98,7 @@ class DaskCluster:
         seq = count()
         timing = {"sent": 0, "done": 0, "wall": 0.0}
 
-        def batch() -> tuple[PointTask, ...]:
+        def batch() -> tuple[PointTask | BatchTask, ...]:
             # a task costs Dask milliseconds of CPU (scheduler, client, worker): short points
             # go several to a task, of about TASK_SECONDS; none before a point has been
             # timed, and (guided scheduling) at most the remaining points over the tasks in
@@ -116,7 +116,7 @@ class DaskCluster:
                 k = max(1, min(k, MAX_BATCH))
             return (first,) + tuple(islice(tasks, k - 1))
 
-        def submit(points: tuple[PointTask, ...]) -> None:
+        def submit(points: tuple[PointTask | BatchTask, ...]) -> None:
             fut = self.client.submit(run_tasks, points, pure=False,
                                      key=f"rodjit-points-{next(seq)}-{token}")
             self._futures[fut] = points

@@ -41,12 +41,12 @@ from ..stepping import impact as I
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS, work_rows
 from .batch import BatchResult
-from .point import (SUMMARY_COLUMNS, PointTask, died, empty_columns, pass_on, run_point,
-                    worker_info)
+from .point import (SUMMARY_COLUMNS, PointResult, PointTask, died, empty_columns, pass_on,
+                    run_point, worker_info)
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
            "timed", "batches", "check_batch_size", "split_bounces", "as_batch", "EPISODE_ROWS",
-           "BATCH_SECONDS", "MAX_BATCH_SIZE"]
+           "BATCH_SECONDS", "MAX_BATCH_SIZE", "impact_columns"]
 
 EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
 BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
@@ -200,7 +200,7 @@ def run_batch(task: BatchTask) -> BatchResult:
     idx = np.asarray(task.index, dtype=np.int64)
     n = idx.size
     values = empty_columns(n)
-    per_point: dict[int, tuple] = {}          # position -> (values, bounces) of a point
+    per_point: dict[int, PointResult] = {}    # position -> the per-point path's result
     caught: list = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelWarning)
@@ -222,7 +222,7 @@ def run_batch(task: BatchTask) -> BatchResult:
         compiled = sum(piece[3] for piece in pieces)
         loading = sum(piece[4] for piece in pieces)
         # the points that did not fit: the per-point path
-        for k in np.flatnonzero(values["status"] == "overflow"):
+        for k in map(int, np.flatnonzero(values["status"] == "overflow")):
             r = run_point(PointTask(int(idx[k]), task.grid.config(task.base, int(idx[k])),
                                     None, task.laws))
             per_point[int(k)] = r
@@ -257,7 +257,7 @@ def _scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows) -> tuple:
             np.zeros((cap_s, n1)), np.zeros((cap_s, n1)),
             np.zeros((cap_d, len(L.DIAG_COLUMNS))),
             np.zeros((ev_cap, len(L.EPISODE_COLUMNS))),
-            np.zeros((ev_cap, len(L.BOUNCE_COLUMNS))), np.zeros(L.FAIL_SIZE),
+            np.zeros((ev_cap, len(L.BOUNCE_ROW_COLUMNS))), np.zeros(L.FAIL_SIZE),
             np.zeros((track_rows, I.TRACK_SIZE)), np.zeros((EPISODE_ROWS, 2)))
 
 
@@ -313,8 +313,8 @@ def _run_group(members, values):
     values["energy_error"][pos] = fout[:, E.F_ENERGY_ERROR]
     values["t_final"][pos] = fout[:, E.F_T_FINAL]
     values["status"][pos] = np.where(res == E.R_COMPLETED, "completed", "failed")
-    _impact(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + I.OUT_SIZE], iout[:, E.I_IMPACT],
-            [p for _, p in members])
+    impact_columns(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + I.OUT_SIZE],
+                   iout[:, E.I_IMPACT], [p for _, p in members])
     for j, (k, p) in enumerate(members):
         if res[j] == E.R_FAILED:
             values["message"][k] = failure_text(fout[j, E.F_FAIL:E.F_FAIL + L.FAIL_SIZE],
@@ -348,9 +348,11 @@ def _lift_energy(p: _Point) -> float:
         return value
 
 
-def _impact(values, pos, out, code, points) -> None:
-    """The IMPACT_COLUMNS (``records.observables.impact_values``) from the compiled
-    ``first_contact`` values ``out`` and codes."""
+def impact_columns(values, pos, out, code, points) -> None:
+    """The IMPACT_COLUMNS (``records.observables.impact_values``) of the points at rows
+    ``pos`` of ``values`` (their ``t_final`` already there) from the compiled
+    ``first_contact`` values ``out`` and codes; ``points`` have ``config`` and ``params``
+    (for the lift-off energy).  The GPU engine's streamed values go the same way."""
     lift = code == I.LIFT_OFF
     opened = code == I.OPEN_AT_END
     w = out[:, I.O_W_IMPACT]

@@ -15,13 +15,13 @@ from .ensemble import run_task
 from .pool import ProcessPool
 from .workers import HEARTBEAT, WORKER_ENV, default_jobs
 
-__all__ = ["Inline", "ProcessPool", "DaskCluster", "make_executor", "check_scheduler",
-           "WORKER_ENV", "SCHEDULERS", "default_jobs", "HEARTBEAT"]
+__all__ = ["InlineExecutor", "Inline", "ProcessPool", "DaskCluster", "make_executor",
+           "check_scheduler", "WORKER_ENV", "SCHEDULERS", "default_jobs", "HEARTBEAT"]
 
 SCHEDULERS = ("processes", "local", "inline", "tcp://HOST:PORT")
 
 
-class Inline:
+class InlineExecutor:
     """Points run one after another in this process (debugging, NUMBA_DISABLE_JIT)."""
 
     name = "inline"
@@ -33,6 +33,9 @@ class Inline:
 
     def close(self, cancel: bool = False) -> None:
         pass
+
+
+Inline = InlineExecutor     # its former name, still importable
 
 
 def check_scheduler(scheduler) -> None:
@@ -54,5 +57,5 @@ def make_executor(scheduler: str | None, jobs: int, warm=None):
     if scheduler in (None, "processes"):
         return ProcessPool(jobs, warm)
     if scheduler == "inline":
-        return Inline()
+        return InlineExecutor()
     return DaskCluster(scheduler, jobs, warm)

@@ -157,7 +157,7 @@ class Grid:
     values: tuple[tuple[Any, ...], ...]
 
     @classmethod
-    def from_spec(cls, spec: Mapping[str, Any], max_points: float = MAX_POINTS) -> "Grid":
+    def from_spec(cls, spec: Mapping[str, Any] | Grid, max_points: float = MAX_POINTS) -> Grid:
         """A grid from key -> values.
 
         Parameters

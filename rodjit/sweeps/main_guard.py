@@ -12,6 +12,7 @@ import ast
 import multiprocessing
 import os
 import sys
+from types import FrameType, ModuleType
 
 __all__ = ["MissingMainGuard", "check_main"]
 
@@ -25,7 +26,7 @@ class MissingMainGuard(RuntimeError):
     (one read from standard input)."""
 
 
-def _is_main_test(node) -> bool:
+def _is_main_test(node: ast.expr) -> bool:
     """``__name__ == "__main__"`` (either order)."""
     if not (isinstance(node, ast.Compare) and len(node.ops) == 1
             and isinstance(node.ops[0], ast.Eq)):
@@ -55,8 +56,11 @@ def _readable_again(path: str) -> bool:
     """Whether a spawned worker can read the main script ``path`` again: a regular file
     (relative paths from the directory the interpreter started in, as spawn reads them);
     not ``<stdin>``, a pipe such as ``/dev/fd/63`` or a file deleted since."""
-    if not os.path.isabs(path) and multiprocessing.process.ORIGINAL_DIR is not None:
-        path = os.path.join(multiprocessing.process.ORIGINAL_DIR, path)
+    # ORIGINAL_DIR: where spawn's children start; set by multiprocessing.process at import
+    # but absent from its type stubs.
+    original_dir: str | None = getattr(multiprocessing.process, "ORIGINAL_DIR", None)
+    if not os.path.isabs(path) and original_dir is not None:
+        path = os.path.join(original_dir, path)
     return os.path.isfile(path)
 
 
@@ -65,10 +69,10 @@ def check_main() -> None:
     level of the main script outside its ``__main__`` guard, or from a worker's re-import
     of that script."""
     if multiprocessing.parent_process() is not None and "__mp_main__" in sys.modules:
-        main = sys.modules["__mp_main__"]
+        mp_main = sys.modules["__mp_main__"]
         raise MissingMainGuard("rodjit.sweep was started again inside a worker process: "
-                               + ADVICE.format(where=getattr(main, "__file__", "the script")))
-    main = sys.modules.get("__main__")
+                               + ADVICE.format(where=getattr(mp_main, "__file__", "the script")))
+    main: ModuleType | None = sys.modules.get("__main__")
     path = getattr(main, "__file__", None)
     if main is None or path is None:           # interactive, notebook, python -c: spawn
         return                                 # has no script to import again
@@ -82,7 +86,7 @@ def check_main() -> None:
                                f"script read from {where}: worker processes import the main "
                                f"script again and cannot read it; save the script to a file "
                                f"and run python3 FILE, or use jobs=1, scheduler=\"inline\"")
-    frame = sys._getframe(1)
+    frame: FrameType | None = sys._getframe(1)
     while frame is not None:
         if frame.f_globals is main.__dict__ and frame.f_code.co_name == "<module>":
             try:

@@ -12,6 +12,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any, Mapping
 
 from ..config import Config
 from ..output.errors import TooManySteps
@@ -94,7 +95,9 @@ class SweepPlan:
         return "\n".join(lines)
 
 
-def plan_sweep(config=None, grid=None, *, output=None, save_runs=None, overwrite: bool = False,
+def plan_sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | None = None, *,
+               output: str | os.PathLike[str] | None = None,
+               save_runs: str | os.PathLike[str] | None = None, overwrite: bool = False,
                max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
                max_points: float = MAX_POINTS) -> SweepPlan:
     """Check everything ``sweep`` checks before it starts workers or writes, and say what
@@ -176,6 +179,7 @@ def _points(base: Config, grid: Grid, max_steps: float) -> tuple[int, Estimate, 
         total += e.file_bytes * share
         if worst is None or e.file_bytes > worst.file_bytes:
             worst_index, worst = index, e
+    assert worst is not None, "Grid.combinations yields at least one combination"
     return worst_index, worst, total
 
 

@@ -15,7 +15,7 @@ import socket
 import time
 import warnings
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -31,6 +31,7 @@ from ..records.extremes import Extremes
 from ..records.observables import IMPACT_COLUMNS, ImpactTrack, impact_values
 from ..records.sink import Sink
 from ..stepping import layout as L
+from .batch import BatchResult
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
            "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS", "start_worker",
@@ -64,7 +65,8 @@ _FILL = {"str": "", "int": 0, "float": math.nan}
 _NP_DTYPES = {"str": object, "int": np.int64, "float": np.float64}
 
 
-class PointTask(NamedTuple):
+@dataclass(frozen=True)
+class PointTask:
     """What a worker needs for one point (small and picklable)."""
 
     index: int
@@ -235,11 +237,12 @@ def run_point(task: PointTask) -> PointResult:
         values.update(got)
         values.update(bounce_values(values, bounces))
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
-        disk = (disk_cause(exc) or "") if task.save_path is not None else ""
-        if disk:               # the run file: removed (the point runs again on --resume)
-            _remove_run_file(task.save_path)
+        save_path = task.save_path
+        disk = (disk_cause(exc) or "") if save_path is not None else ""
+        if disk and save_path is not None:   # the run file: removed (the point runs again
+            _remove_run_file(save_path)      # on --resume)
             values.update(status="failed", message=f"writing the run file failed: {disk}",
-                          run_file=os.path.basename(task.save_path))
+                          run_file=os.path.basename(save_path))
         else:
             values.update(status="failed", message=f"{type(exc).__name__}: {exc}")
     values["wall_time"] = time.perf_counter() - t0
@@ -259,7 +262,7 @@ def pass_on(caught) -> tuple:
     return tuple(dict.fromkeys(texts))
 
 
-def reissue_warnings(result: PointResult, seen: set) -> None:
+def reissue_warnings(result: PointResult | BatchResult, seen: set[str]) -> None:
     """Issue in this process, as ModelWarning, each warning text of ``result`` not in
     ``seen`` (which gets it): every distinct warning of a sweep once."""
     for text in getattr(result, "warnings", ()):
@@ -300,4 +303,5 @@ def worker_info() -> dict:
     import numba
 
     return {"pid": os.getpid(), "host": socket.gethostname(),
-            "numba_threads": int(numba.config.NUMBA_NUM_THREADS)}
+            # numba.config sets its options at import: not in its (absent) stubs' view
+            "numba_threads": int(getattr(numba.config, "NUMBA_NUM_THREADS"))}

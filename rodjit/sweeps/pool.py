@@ -174,7 +174,7 @@ class ProcessPool:
                     continue
                 seen = set()
                 for obj in ready:
-                    w = by_conn.get(obj) or by_sentinel.get(obj)
+                    w = by_conn.get(obj) or by_sentinel[obj]    # one of the two
                     if id(w) in seen:
                         continue
                     seen.add(id(w))

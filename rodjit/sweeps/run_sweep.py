@@ -8,9 +8,11 @@ point; ``resume=True`` runs only the points that are still pending or failed.
 """
 from __future__ import annotations
 
+import os
 import signal
 import time
 from pathlib import Path
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -36,7 +38,7 @@ from .sweep_table import SweepTable
 
 __all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
 
-FLUSH_INTERVAL = 1.0
+SWEEP_FLUSH_INTERVAL = 1.0   # seconds of wall time between writes of finished points
 BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
 BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
 ENGINE = True          # False: every point alone through ``point.run_point`` (benchmarks)
@@ -75,9 +77,13 @@ def _open_resume(output, config, grid, max_points):
     return base, file_grid, columns, header["attrs"]
 
 
-def sweep(config=None, grid=None, *, output=None, jobs=None, scheduler=None, save_runs=None,
-          resume: bool = False, overwrite: bool = False, progress=None, command=None,
-          handle_signals: bool = True, flush_interval: float = FLUSH_INTERVAL,
+def sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | None = None, *,
+          output: str | os.PathLike[str] | None = None, jobs: int | None = None,
+          scheduler: str | None = None, save_runs: str | os.PathLike[str] | None = None,
+          resume: bool = False, overwrite: bool = False,
+          progress: bool | Callable[[SweepProgress], object] | None = None,
+          command: str | None = None, handle_signals: bool = True,
+          flush_interval: float = SWEEP_FLUSH_INTERVAL,
           max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS,
           max_points: float = MAX_POINTS, device: str | None = None,
           batch_size: int | None = None) -> SweepTable:
@@ -243,7 +249,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                     raise WriteFailed(f"cannot create {str(output)!r}: {exc}; nothing was "
                                       f"written", exc.cause) from None
                 raise
-    return _drive(table, executor, todo, runs_dir, progress, command, handle_signals,
+    return _write_sweep(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start, batch_size)
 
 
@@ -276,21 +282,22 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
         note_failure(output, f"a write failed: {cause}")
     table.status = "failed"
     if output is not None:
-        exc: WriteFailed = SweepWriteFailed(f"writing {what} failed: {cause}", cause, output,
-                                            kept, n)
+        failure: WriteFailed = SweepWriteFailed(f"writing {what} failed: {cause}", cause,
+                                                output, kept, n)
     else:
-        exc = WriteFailed(f"writing {what} failed: {cause}; the sweep stopped after "
-                          f"{int(np.sum(table.columns['status'] != 'pending'))} of {n} points",
-                          cause)
-    table.message = str(exc)
-    exc.table = table
-    raise exc
+        failure = WriteFailed(f"writing {what} failed: {cause}; the sweep stopped after "
+                              f"{int(np.sum(table.columns['status'] != 'pending'))} of {n} "
+                              f"points", cause)
+    table.message = str(failure)
+    failure.table = table
+    raise failure
 
 
-def _drive(table: SweepTable, executor, todo, runs_dir, progress, command, handle_signals,
-           flush_interval, t0: float, batch_size=None) -> SweepTable:
+def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
+                 handle_signals, flush_interval, t0: float, batch_size=None) -> SweepTable:
     """Run ``todo`` on ``executor`` (started at ``t0``: its start-up counts in the wall
-    time) into ``table`` and its file."""
+    time) into ``table`` and its file, writing the finished points every
+    ``flush_interval`` seconds (one run's loop is ``driver.files._write_run_blocks``)."""
     grid, base, cols = table.grid, table.base, table.columns
     output = table.path
     n = len(grid)

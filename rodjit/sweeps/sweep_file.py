@@ -119,8 +119,9 @@ def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
         try:
             return h5py.File(path, mode, libver=cf.LIBVER)
         except OSError as exc:
-            if disk_cause(exc) is not None:
-                raise WriteFailed(disk_cause(exc), disk_cause(exc)) from None
+            cause = disk_cause(exc)
+            if cause is not None:
+                raise WriteFailed(cause, cause) from None
             if "lock" not in str(exc) or time.monotonic() > deadline:
                 if "lock" in str(exc):
                     raise FileBusy(f"{str(path)!r} is held open by another process; "

@@ -1,8 +1,10 @@
 """The summary table of a sweep: what ``rodjit.sweep`` returns and ``load_sweep`` reads."""
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -14,6 +16,10 @@ from ..records.bounces import empty_bounces
 from . import sweep_file
 from .grid import Grid, format_value
 from .point import SUMMARY_COLUMNS
+
+if TYPE_CHECKING:
+    import pandas
+    import xarray
 
 __all__ = ["SweepTable", "load_sweep", "TABLE_COLUMNS", "dimension_names"]
 
@@ -99,7 +105,7 @@ class SweepTable:
         status = self.columns["status"]
         return {s: int(np.sum(status == s)) for s in ("completed", "failed", "pending")}
 
-    def config(self, index: int):
+    def config(self, index: int) -> Config:
         """The configuration point ``index`` ran.
 
         Parameters
@@ -161,7 +167,7 @@ class SweepTable:
         with sweep_file.open_sweep(self.path) as f:
             return sweep_file.read_all_bounces(f)
 
-    def to_pandas(self):
+    def to_pandas(self) -> pandas.DataFrame:
         """A pandas DataFrame, one row per point (index: the point number)."""
         pd = need("pandas", "analysis", "SweepTable.to_pandas")
         df = pd.DataFrame(self.columns)
@@ -173,7 +179,7 @@ class SweepTable:
         -> ``mu``; ``rod_mu`` when two keys share their last part)."""
         return dimension_names(self.grid.keys)
 
-    def to_xarray(self):
+    def to_xarray(self) -> xarray.Dataset:
         """An xarray Dataset over the grid: one dimension per swept key, named by
         ``dimension_names`` (``ds.sel(mu=10)``) with the full key as the ``key``
         attribute; every summary column with its ``description`` (and ``units``)."""
@@ -302,7 +308,7 @@ def _cell(value, column: str) -> str:
     return format_value(value)
 
 
-def load_sweep(path) -> SweepTable:
+def load_sweep(path: str | os.PathLike[str]) -> SweepTable:
     """Read a sweep file's summary table (also while the sweep is still running).
 
     Parameters

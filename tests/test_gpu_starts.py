@@ -1,0 +1,94 @@
+"""The GPU engine's batch set-up (``rodjit.gpu.starts.starts``, each piece once per distinct
+section value) against the driver's ``Run`` made for every point (``start_of``): the same
+parameter tuples (values and field types), the same start arrays to the bit, the same
+warnings, and the same failure for a point that cannot start.  No GPU or numba-cuda needed:
+this is the host's side."""
+from __future__ import annotations
+
+import numpy as np
+
+import rodjit
+from custom_law import deriv, lower, primitive, value
+from rodjit.gpu.starts import starts, start_of
+from rodjit.laws import Law, register
+from rodjit.sweeps.grid import Grid
+from typing import NamedTuple
+
+
+class RaiseRod(NamedTuple):
+    kappa: float
+
+
+def _raising_params(rod):
+    if rod.kappa == 13.0:
+        raise ValueError("this law refuses rod.kappa = 13")
+    return RaiseRod(float(rod.kappa))
+
+
+register(Law(name="gpu-starts-raise", kind="rod", params=RaiseRod,
+             from_config=_raising_params, value=value, deriv=deriv, primitive=primitive,
+             lower=lower))
+
+
+def _bits(a) -> bytes:
+    return np.ascontiguousarray(a, dtype=np.float64).tobytes()
+
+
+def _same_tuple(a, b) -> bool:
+    if type(a) is not type(b) or len(a) != len(b):
+        return False
+    for x, y in zip(a, b):
+        if type(x) is not type(y):
+            return False
+        if isinstance(x, float):
+            if _bits(x) != _bits(y):
+                return False
+        elif x != y:
+            return False
+    return True
+
+
+def _check(*grids):
+    """Compare for the points of the grids ``(base, spec)``, set up in one batch."""
+    configs = []
+    for base, spec in grids:
+        grid = Grid.from_spec(spec)
+        configs += [grid.config(base, i) for i in range(len(grid))]
+    got, said = starts(configs)
+    want_said: list = []
+    for c, g in zip(configs, got):
+        try:
+            want, w = start_of(c)
+        except Exception as exc:
+            assert isinstance(g, Exception), c
+            assert (type(g), str(g)) == (type(exc), str(exc))
+            continue
+        want_said.extend(w)
+        assert not isinstance(g, Exception), (c, g)
+        for a, b in zip(g.params(), want.params()):
+            assert _same_tuple(a, b), (a, b)
+        for name in ("state", "clock", "ev"):
+            x, y = getattr(g, name), getattr(want, name)
+            assert x.shape == y.shape and _bits(x) == _bits(y), name
+        assert g.config is c
+    assert set(said) == set(want_said)
+    return got
+
+
+def test_a_grid_of_many_sections_starts_as_run_makes_it():
+    base = rodjit.Config().override({"time.t_end": 0.3})
+    spec = {"rod.mu": [0.0, 25.0, 100.0], "floor.kappa_b": [1000.0, 3000.0],
+            "initial.velocity": [0.0, -1.5], "time.integrator": ["energy", "dp54"],
+            "rod.N": [5, 8], "output.diagnostics_interval": [1e-3, 0.0]}
+    # a zero of either sign (equal, but a start of -0.0 is not one of 0.0)
+    got = _check((base, spec),
+                 (base.override({"initial.velocity": -0.0}), {"rod.mu": [0.0, 25.0]}))
+    # what the points agree on is one object, made once
+    assert got[0].scheme is got[1].scheme and got[0].ctrl is got[1].ctrl
+
+
+def test_points_that_cannot_start_fail_as_they_would_alone():
+    base = rodjit.Config().override({"time.t_end": 0.3, "rod.law": "gpu-starts-raise"})
+    got = _check((base, {"rod.kappa": [100.0, 13.0, 50.0], "rod.mu": [0.0, 5.0],
+                         "initial.height": [0.5, 1e12]}))
+    assert sum(isinstance(g, Exception) for g in got) == 8
