@@ -114,7 +114,7 @@ def test_a_refused_reservation_keeps_exactly_the_points_written_before(
     monkeypatch.setattr(sweep_file, "reserve_space", refuse)
     out = tmp_path / "s.h5"
     with pytest.raises(WriteFailed, match=rf"keeps the points written \({fail_at - 1} of "
-                                          rf"{N}\).*sweep --resume -o") as caught:
+                                          rf"{N}\).*continue with resume=True") as caught:
         rodjit.sweep(ref.base, {k: list(v) for k, v in zip(ref.grid.keys, ref.grid.values)},
                      output=out, scheduler="inline", flush_interval=1e-9, batch_size=1)
     assert caught.value.table.status == "failed"

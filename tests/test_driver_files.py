@@ -141,7 +141,7 @@ def test_existing_output_needs_overwrite(tmp_path, small_config):
         rodjit.run_to_file(small_config, out)
     assert out.read_bytes() == b"precious"
     # overwrite replaces rodjit run files only, never someone else's file
-    with pytest.raises(ValueError, match="is not a rodjit file; --overwrite replaces only"):
+    with pytest.raises(ValueError, match="is not a rodjit file; overwrite=True replaces only"):
         rodjit.run_to_file(small_config, out, overwrite=True)
     assert out.read_bytes() == b"precious"
     out.unlink()

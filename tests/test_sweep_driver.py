@@ -175,9 +175,14 @@ def test_interrupt_keeps_finished_points_and_resume_runs_the_rest(tmp_path, inli
         rodjit.sweep(BASE, GRID, output=path, scheduler=scheduler, jobs=1,
                      progress=_interrupt_after(2))
     assert info.value.signum == signal.SIGINT
-    assert "after 2 of 4 points; continue with: rodjit sweep --resume -o" in str(info.value)
+    assert str(info.value) == (f"interrupted by SIGINT after 2 of 4 points; continue with "
+                               f"resume=True (output={str(path)!r})")
+    assert info.value.output == str(path)
     cut = rodjit.load_sweep(path)
     assert cut.status == "interrupted"
+    # the file keeps the command that continues it (file contents are a contract)
+    assert cut.message == (f"interrupted by SIGINT after 2 of 4 points; continue with: "
+                           f"rodjit sweep --resume -o {path}")
     assert list(cut["status"]) == ["completed", "completed", "pending", "pending"]
     same_values({k: v[:2] for k, v in cut.columns.items()},
                 {k: v[:2] for k, v in inline_table.columns.items()})
@@ -283,8 +288,8 @@ def test_save_runs_writes_each_points_run_file(tmp_path, inline_table):
         assert_same_files(runs / name, ref)
     with h5py.File(tmp_path / "s.h5", "r") as f:
         assert f.attrs["save_runs"] == str(runs.resolve())
-    with pytest.raises(ValueError, match=r"already holds '0_rod.mu=0_floor.beta=0.01.h5'; use "
-                                         r"--overwrite"):
+    with pytest.raises(ValueError, match=r"already holds '0_rod.mu=0_floor.beta=0.01.h5'; pass "
+                                         r"overwrite=True"):
         rodjit.sweep(BASE, GRID, output=tmp_path / "t.h5", save_runs=runs)
 
 

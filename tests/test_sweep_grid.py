@@ -66,9 +66,9 @@ def test_run_names_are_deterministic_unique_and_sort_in_grid_order():
     (["rod.mu=logspace(0,1,2.5)"], "a whole number n >= 1"),
     (["rod.mu=linspace(0,x,3)"], "takes two numbers"),
     (["time.integrator=verlet,rk4"], "time.integrator = 'rk4' is not allowed"),
-    (["rod.mu"], "--grid expects KEY=VALUES"),
-    (["rod.mu=1", "rod.mu=2"], "--grid rod.mu is given twice"),
-    ([], "a sweep needs at least one --grid"),
+    (["rod.mu"], "a grid item is KEY=VALUES"),
+    (["rod.mu=1", "rod.mu=2"], "grid key rod.mu is given twice"),
+    ([], "a sweep needs at least one KEY=VALUES grid item"),
 ])
 def test_bad_grids_name_the_key_and_the_range(items, message):
     with pytest.raises(ValueError, match=message):
@@ -93,7 +93,7 @@ def test_a_grid_is_sized_before_it_is_made(spec):
     seconds to build); the limit can be raised."""
     with pytest.raises(ValueError, match=r"the grid has 10,000,000 points .* more than the "
                                          r"limit of 1,000,000 points \(raise it with "
-                                         r"--max-points"):
+                                         r"max_points="):
         Grid.from_spec(spec)
     with pytest.raises(ValueError, match="limit of 100 points"):
         Grid.from_spec({"rod.mu": "linspace(0, 1, 101)"}, max_points=100)

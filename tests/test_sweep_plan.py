@@ -73,7 +73,7 @@ def test_the_free_space_counts_sweep_and_run_files_together(tmp_path, monkeypatc
     ({"time.dt": [1e-3, 1e-30]}, r"grid point 1 \(time.dt=1e-30\): .*resolution of t"),
     ({"time.dt": [1e-3, 3e-4]}, r"grid point 1 \(time.dt=0.0003\): .*does not divide"),
     ({"time.t_end": [0.02, 100.0], "time.dt": [1e-3, 1e-9]},
-     r"grid point 3 \(time.t_end=100 time.dt=1e-09\): .*--max-steps"),
+     r"grid point 3 \(time.t_end=100 time.dt=1e-09\): .*max_steps="),
 ])
 def test_every_point_is_checked_before_workers_start(tmp_path, grid, match):
     """The fixed-step checks of a run, at every point, before any worker or file."""

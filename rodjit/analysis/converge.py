@@ -182,12 +182,14 @@ class Convergence:
 
         import h5py
 
+        from ..output.h5files import OutputExists
+
         try:
             rodjit_version = version("rodjit")
         except PackageNotFoundError:
             rodjit_version = "0.0.0+unknown"
         if os.path.exists(path) and not overwrite:
-            raise ValueError(f"{str(path)!r} exists; use --overwrite to replace it")
+            raise OutputExists(path)
         tmp = f"{path}.part"
         with h5py.File(tmp, "w") as f:
             f.attrs.update({"rodjit_kind": "convergence", "format_version": FORMAT_VERSION,

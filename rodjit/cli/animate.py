@@ -36,9 +36,9 @@ def animate_command(file: str, output: str | None, fps: int, duration: float, qu
     try:
         written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
     except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     except (MissingWriter, NothingToDraw, WriteFailed) as exc:
-        raise RunFailed(str(exc)) from None
+        raise RunFailed(exc) from None
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     click.echo(f"wrote {written}")

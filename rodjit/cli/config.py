@@ -30,5 +30,5 @@ def config_command(config: str | None, sets: tuple[str, ...], keys: bool) -> Non
         cfg, _ = options.load_config(config)
         cfg = cfg.override(overrides(sets))
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     click.echo(cfg.commented_toml(), nl=False)

@@ -68,7 +68,7 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
         if output:
             result.save(output, overwrite=True)
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     click.echo(repr(result))
     if output:
         click.echo(f"wrote {output}")

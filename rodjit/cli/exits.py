@@ -45,19 +45,27 @@ def one_line(message: object) -> str:
     return " ".join(str(message).split())
 
 
+def _line(message: object) -> str:
+    """An error as the command line words it (``wording.word``), or a text; on one line."""
+    from .wording import word
+
+    return one_line(word(message) if isinstance(message, BaseException) else message)
+
+
 class UsageError(click.ClickException):
     """One line on stderr, exit code 2; raised before anything is written.
 
     Parameters
     ----------
     message : object
-        The error or text (put on one line).
+        The error (worded for the command line, ``wording.word``) or a text; put on one
+        line.
     """
 
     exit_code = EXIT_USAGE
 
     def __init__(self, message: object) -> None:
-        super().__init__(one_line(message))
+        super().__init__(_line(message))
 
 
 class RunFailed(click.ClickException):
@@ -66,13 +74,14 @@ class RunFailed(click.ClickException):
     Parameters
     ----------
     message : object
-        The error or text (put on one line).
+        The error (worded for the command line, ``wording.word``) or a text; put on one
+        line.
     """
 
     exit_code = EXIT_FAILED
 
     def __init__(self, message: object) -> None:
-        super().__init__(one_line(message))
+        super().__init__(_line(message))
 
 
 def disk_failed(exc: OSError) -> NoReturn:
@@ -86,9 +95,10 @@ def disk_failed(exc: OSError) -> NoReturn:
         What the write raised.
     """
     from ..output.h5files import WriteFailed, disk_cause
+    from .wording import word
 
     cause = disk_cause(exc)
-    text = str(exc) if isinstance(exc, WriteFailed) or cause is None else (
+    text = word(exc) if isinstance(exc, WriteFailed) or cause is None else (
         f"a write failed: {cause} ({exc})")
     click.echo(f"Error: {one_line(text)}", err=True)
     sys.stdout.flush()

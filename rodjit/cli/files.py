@@ -28,7 +28,7 @@ def file_kind(path: str) -> str:
     try:
         return str(readable_kind(path))
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
 
 
 def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
@@ -42,19 +42,19 @@ def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
     try:
         check_output(out, overwrite=True)
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     from ..output.h5files import WriteFailed
 
     try:
         written = plot(path, out, kind, **plot_options)
     except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     except WriteFailed as exc:
-        raise RunFailed(str(exc)) from None
+        raise RunFailed(exc) from None
     except NothingToDraw as exc:
-        raise RunFailed(str(exc)) from None
+        raise RunFailed(exc) from None
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     click.echo(f"wrote {written}")
 
 

@@ -78,9 +78,9 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
                          ladder=key_values("--ladder", ladder) if ladder else None,
                          jobs=jobs, scheduler=scheduler, **limits)
     except FitError as exc:
-        raise RunFailed(str(exc)) from None
+        raise RunFailed(exc) from None
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     click.echo(repr(result))
     for note in getattr(result, "notes", []):
         click.echo(f"note: {note}")

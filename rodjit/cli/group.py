@@ -23,7 +23,7 @@ class Commands(click.Group):
         try:
             return super().invoke(ctx)
         except MissingExtra as exc:
-            raise UsageError(str(exc)) from None
+            raise UsageError(exc) from None
 
 
 @click.group(cls=Commands, context_settings={"help_option_names": ["-h", "--help"]})

@@ -17,5 +17,5 @@ def info_command(file: str) -> None:
     try:
         text = info(file)
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     click.echo(text)

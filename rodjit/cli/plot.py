@@ -86,7 +86,7 @@ def plot_command(file: str, output: str | None, kind: str | None, quantity: str 
     try:
         fixed = overrides(at, "--at")
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     plot_sweep(file, output, kind or "restitution",
                {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed, "panels": panels,
                 **style})

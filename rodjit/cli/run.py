@@ -11,7 +11,7 @@ from . import options
 from .exits import EXIT_SIGNAL, RunFailed, UsageError, disk_failed
 from .options import close, command_line, overrides, progress, run_bar
 from .say import say_warning
-from .wording import output_exists
+from .wording import output_exists, word
 
 __all__ = ["run_command", "say_run"]
 
@@ -63,7 +63,7 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
         except OutputExists as exc:
             raise UsageError(output_exists(exc)) from None
         except ValueError as exc:
-            raise UsageError(str(exc)) from None
+            raise UsageError(exc) from None
         click.echo(plan.report())
         for text in plan.config.warnings():   # as the run would say them
             say_warning(text)
@@ -113,16 +113,16 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
         close(bar)
         if not quiet:           # its warnings in the report: stderr is the one line below
             click.echo(exc.summary.report())
-        click.echo(str(exc), err=True)
+        click.echo(word(exc), err=True)
         sys.exit(EXIT_SIGNAL + exc.signum)
     except SimulationError as exc:
         close(bar)
         failed_summary = getattr(exc, "summary", None)
         if not quiet and failed_summary is not None:
             click.echo(failed_summary.report())   # (as above)
-        raise RunFailed(str(exc)) from None
+        raise RunFailed(exc) from None
     except ValueError as exc:       # configuration, path and file errors: nothing written
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     except OSError as exc:          # the disk failed us during the run (full, removed, ...)
         close(bar)
         disk_failed(exc)

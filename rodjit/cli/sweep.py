@@ -10,7 +10,7 @@ import click
 from . import options
 from .exits import EXIT_FAILED, EXIT_SIGNAL, UsageError, disk_failed, one_line
 from .options import close, command_line, overrides, progress, sweep_bar
-from .wording import output_exists
+from .wording import output_exists, word
 
 __all__ = ["sweep_command", "failed_points"]
 
@@ -143,7 +143,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
             click.echo(exc.table.headline())
             if exc.table.status == "completed":
                 click.echo(exc.table.report(max_rows=40))
-        click.echo(str(exc), err=True)
+        click.echo(word(exc), err=True)
         sys.exit(EXIT_SIGNAL + (exc.signum or 2))
     except SweepFailed as exc:
         close(bar)
@@ -153,7 +153,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_FAILED)
     except ValueError as exc:
-        raise UsageError(str(exc)) from None
+        raise UsageError(exc) from None
     except OSError as exc:          # the disk refused a write (the sweep file, a run file)
         close(bar)
         disk_failed(exc)

@@ -28,6 +28,7 @@ from ..output.lock import WriterLock, note_failure
 from ..output.run_reader import check_not_lost, check_run_file, read_checkpoint, read_config
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
+from .errors import RunWriteFailed, resume_command
 from .pipeline import InlineCalls, Pipeline
 from .progress import close as close_progress
 from .progress import run_progress
@@ -50,15 +51,22 @@ class RunInterrupted(RuntimeError):
     Parameters
     ----------
     message : str
-        Which signal stopped the run, at which simulated time, and how to resume it.
+        Which signal stopped the run, at which simulated time (``stem``).
     signum : int
         The signal number (``signal.SIGINT``, ``signal.SIGTERM``).
     summary : RunSummary
         The summary of the file as checkpointed.
+    path : str or os.PathLike, optional
+        The run file that ``resume_file`` continues (``path``, a str); the message then
+        ends with how to resume.
     """
 
-    def __init__(self, message: str, signum: int, summary: RunSummary):
-        super().__init__(message)
+    def __init__(self, message: str, signum: int, summary: RunSummary,
+                 path: str | os.PathLike[str] | None = None):
+        self.stem = message
+        self.path = None if path is None else str(path)
+        super().__init__(message if path is None else
+                         f"{message}; continue with resume_file({self.path!r})")
         self.signum = signum
         self.summary = summary
 
@@ -335,9 +343,7 @@ def _write_failed(path: Path, writer, cause: str) -> WriteFailed:
     writer.file = None
     t = float(writer.checkpoint["clock"][L.T])
     note_failure(path, f"a write failed: {cause}")
-    return WriteFailed(f"writing {str(path)!r} failed: {cause}; the file keeps its last "
-                       f"checkpoint (t = {t:.9g}); free space, then continue with: rodjit "
-                       f"run --resume {path}", cause)
+    return RunWriteFailed(path, cause, t)
 
 
 def _check_interval(flush_interval) -> None:
@@ -445,10 +451,9 @@ def _write_run_blocks(run: Run, open_writer, path: Path, progress, flush_interva
     signum = stop.signum if stop.signum is not None else signal.SIGINT
     if status == "interrupted":
         name = signal.Signals(signum).name
-        message = (f"interrupted by {name} at t = {run.t:.9g}; continue with: "
-                   f"rodjit run --resume {path}")
-    writer.close(run, status, message)
+        message = f"interrupted by {name} at t = {run.t:.9g}"
+    writer.close(run, status, message and resume_command(message, path))
     summary = closed_summary(writer)
     if status == "interrupted":
-        raise RunInterrupted(message, signum, summary)
+        raise RunInterrupted(message, signum, summary, path)
     return summary

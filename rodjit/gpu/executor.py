@@ -8,7 +8,7 @@ import importlib
 
 from .engine import check_device, check_point, prepare, run_batch
 
-__all__ = ["CudaExecutor", "check_grid", "cuda_executor", "sweep_device"]
+__all__ = ["CudaExecutor", "check_grid", "cuda_executor", "sweep_device", "NotOnDevice"]
 
 # points per batch: enough to fill an H100/H200 many times over (one thread each), few
 # enough that a batch's results reach the sweep file every few seconds
@@ -57,6 +57,34 @@ class CudaExecutor:
         pass
 
 
+class NotOnDevice(ValueError):
+    """A sweep option the GPU engine cannot honour: a scheduler (it runs the points in this
+    process) or run files (it keeps summaries only).
+
+    Parameters
+    ----------
+    option : str
+        ``"scheduler"`` or ``"save_runs"`` (``option``).
+    value : object
+        What was given for it (``value``).
+    """
+
+    def __init__(self, option: str, value) -> None:
+        self.option, self.value = option, value
+        super().__init__(self.worded(""))
+
+    def worded(self, flag: str) -> str:
+        """The message; ``flag`` (``" (--scheduler)"``) follows the option's name."""
+        if self.option == "scheduler":
+            return (f"scheduler = {self.value!r}{flag} cannot be used with device = 'cuda': "
+                    f"the GPU engine runs the points in this process")
+        return (f"save_runs{flag} is not available with device = 'cuda': the GPU engine "
+                f"keeps summaries only; use device = 'cpu' for run files")
+
+    def __reduce__(self):
+        return type(self), (self.option, self.value)
+
+
 def sweep_device(device: str | None, save_runs, scheduler=None) -> str:
     """The device a sweep runs on (``engine.resolve_device``), checked before anything is
     written: ``"cuda"`` needs numba-cuda and a GPU, writes no run files and runs in this
@@ -67,13 +95,9 @@ def sweep_device(device: str | None, save_runs, scheduler=None) -> str:
     if device == "cuda":
         check_device()
         if scheduler not in (None, "inline"):
-            raise ValueError(f"scheduler = {scheduler!r} (--scheduler) cannot be used with "
-                             f"device = 'cuda': the GPU engine runs the points in this "
-                             f"process")
+            raise NotOnDevice("scheduler", scheduler)
         if save_runs is not None:
-            raise ValueError("save_runs (--save-runs) is not available with device = "
-                             "'cuda': the GPU engine keeps summaries only; use device = "
-                             "'cpu' for run files")
+            raise NotOnDevice("save_runs", save_runs)
     return device
 
 

@@ -12,10 +12,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..stepping.control import LAND_FIXED
+from .errors import FileTooLarge, TooManySteps
 from .run_layout import TABLES
 
 __all__ = ["Estimate", "estimate_run", "estimate_values", "check_run", "check_fixed_step",
-           "fixed_step_error", "free_space", "too_large", "parse_size", "format_size",
+           "fixed_step_error", "step_refusal", "free_space", "too_large", "size_refusal",
+           "parse_size", "format_size",
            "ESTIMATE_KEYS", "MAX_OUTPUT", "MAX_STEPS"]
 
 MAX_OUTPUT = 10 * 2**30     # bytes a run file may reach unless the caller raises the limit
@@ -73,7 +75,13 @@ def estimate_values(values) -> Estimate:
 
 
 def fixed_step_error(values, max_steps: float = MAX_STEPS) -> str | None:
-    """Why a fixed time.dt (in ``values``, a mapping of ``ESTIMATE_KEYS``) cannot run as
+    """The message of ``step_refusal``, or None."""
+    error = step_refusal(values, max_steps)
+    return None if error is None else str(error)
+
+
+def step_refusal(values, max_steps: float = MAX_STEPS) -> ValueError | None:
+    """The error (TooManySteps for more than ``max_steps``) saying why a fixed time.dt (in ``values``, a mapping of ``ESTIMATE_KEYS``) cannot run as
     asked, or None: a step below the resolution of t (the run would never advance), more
     than ``max_steps`` steps, or a step that does not divide an output interval (the loop
     would shorten a step before every output time to land on it: not the fixed step asked
@@ -83,22 +91,20 @@ def fixed_step_error(values, max_steps: float = MAX_STEPS) -> str | None:
         return None
     dt = float(dt)
     if t_end + dt == t_end:
-        return (f"time.dt = {dt!r} is below the resolution of t near time.t_end = {t_end!r} "
-                f"(t + dt == t): the run would never advance")
+        return ValueError(f"time.dt = {dt!r} is below the resolution of t near time.t_end = "
+                          f"{t_end!r} (t + dt == t): the run would never advance")
     steps = t_end / dt
     if steps > max_steps:
-        return (f"time.dt = {dt!r} needs {steps:.3g} steps to reach time.t_end = {t_end!r}, "
-                f"more than the limit of {max_steps:.3g} (raise it with --max-steps / "
-                f"max_steps=)")
+        return TooManySteps(dt, t_end, steps, max_steps)
     intervals = [float(values[key]) for key in _INTERVALS if float(values[key]) > 0]
     for key in _INTERVALS:
         interval = float(values[key])
         if interval > 0 and not _divides(dt, interval):
-            return (f"time.dt = {dt!r} does not divide {key} = {interval!r} ({key} / "
-                    f"time.dt = {interval / dt:.6g}): a fixed step must divide every output "
-                    f"interval, so that every step is time.dt (e.g. time.dt = "
-                    f"{_divisor(dt, interval, intervals)}); or unset time.dt for adaptive "
-                    f"steps")
+            return ValueError(f"time.dt = {dt!r} does not divide {key} = {interval!r} ({key} "
+                              f"/ time.dt = {interval / dt:.6g}): a fixed step must divide "
+                              f"every output interval, so that every step is time.dt (e.g. "
+                              f"time.dt = {_divisor(dt, interval, intervals)}); or unset "
+                              f"time.dt for adaptive steps")
     return None
 
 
@@ -125,9 +131,9 @@ def check_fixed_step(config, max_steps: float = MAX_STEPS) -> None:
     (``fixed_step_error``)."""
     if config.time.dt is None:
         return   # adaptive steps: nothing to check
-    error = fixed_step_error(_values(config), max_steps)
-    if error:
-        raise ValueError(error)
+    error = step_refusal(_values(config), max_steps)
+    if error is not None:
+        raise error
 
 
 def free_space(path) -> float | None:
@@ -145,12 +151,17 @@ def free_space(path) -> float | None:
 
 
 def too_large(what: str, e: Estimate, max_output: float) -> str | None:
-    """The refusal of a file of estimate ``e`` above ``max_output`` bytes, or None."""
+    """The message of ``size_refusal``, or None."""
+    error = size_refusal(what, e, max_output)
+    return None if error is None else str(error)
+
+
+def size_refusal(what: str, e: Estimate, max_output: float) -> FileTooLarge | None:
+    """The refusal (FileTooLarge) of a file of estimate ``e`` above ``max_output`` bytes, or
+    None."""
     if e.file_bytes <= max_output:
         return None
-    return (f"{what} would write {e.describe()}: more than the limit of "
-            f"{format_size(max_output)} (raise it with --max-output / max_output=, or write "
-            f"less: output.snapshot_interval, output.diagnostics_interval, time.t_end)")
+    return FileTooLarge(what, e.describe(), max_output, format_size(max_output))
 
 
 def check_run(config, path=None, *, max_output: float = MAX_OUTPUT,
@@ -165,9 +176,9 @@ def check_run(config, path=None, *, max_output: float = MAX_OUTPUT,
     disk (a continued run), which need no new space."""
     values = _values(config)
     e = estimate_values(values)
-    error = fixed_step_error(values, max_steps) or too_large(what, e, max_output)
-    if error:
-        raise ValueError(error)
+    error = step_refusal(values, max_steps) or size_refusal(what, e, max_output)
+    if error is not None:
+        raise error
     if path is not None:
         free = free_space(path)
         if free is not None and e.file_bytes - written > free:

@@ -21,10 +21,12 @@ import numpy as np
 
 from ..config import MissingFile
 from .cf import LIBVER
+from .errors import OutputNotRegular, OutputOtherKind
 from .lock import FileBusy, is_link, is_locked
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
-__all__ = ["NotARunFile", "FileMissing", "FileBusy", "OutputExists", "open_file", "file_kind", "check_kind",
+__all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileBusy", "OutputExists",
+           "OutputNotRegular", "OutputOtherKind", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
            "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
@@ -38,6 +40,33 @@ class NotARunFile(ValueError):
 class FileMissing(NotARunFile, MissingFile):
     """The path does not exist: a ``FileNotFoundError`` (as ``open`` raises) and, like every
     file rodjit cannot read, a NotARunFile (a ValueError: one line, exit code 2)."""
+
+
+class FileCutShort(NotARunFile):
+    """A file shorter than HDF5 recorded (its disk filled, or a size limit was hit, while it
+    was written): its last checkpoint is kept, and resuming continues it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (``path``, a str).
+    size, stored : int
+        Its bytes, and the bytes HDF5 recorded.
+    """
+
+    def __init__(self, path: str | os.PathLike[str], size: int, stored: int) -> None:
+        self.path, self.size, self.stored = str(path), size, stored
+        super().__init__(f"{self.stem()}: continue it with resume_file({self.path!r}) (or "
+                         f"sweep(resume=True, output={self.path!r})) once there is space")
+
+    def stem(self) -> str:
+        """The message without its advice."""
+        return (f"{self.path!r} is cut short ({self.size} of {self.stored} bytes: its disk "
+                f"filled or a size limit was hit while it was written); its last checkpoint "
+                f"is kept")
+
+    def __reduce__(self):
+        return type(self), (self.path, self.size, self.stored)
 
 
 class OutputExists(ValueError):
@@ -113,11 +142,7 @@ def _unopenable(path, exc) -> NotARunFile:
     """The one-line reason a file does not open."""
     m = re.search(r"truncated file: eof = (\d+).*stored_eof = (\d+)", str(exc))
     if m and int(m.group(2)) > int(m.group(1)):
-        return NotARunFile(f"{str(path)!r} is cut short ({m.group(1)} of {m.group(2)} bytes: "
-                           f"its disk filled or a size limit was hit while it was written); "
-                           f"its last checkpoint is kept: continue it with 'rodjit run "
-                           f"--resume {path}' (or 'rodjit sweep --resume -o {path}') once "
-                           f"there is space")
+        return FileCutShort(path, int(m.group(1)), int(m.group(2)))
     return NotARunFile(f"cannot open {str(path)!r}: {' '.join(str(exc).split())}")
 
 
@@ -243,8 +268,7 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
     if mode is not None and stat.S_ISDIR(mode):
         raise ValueError(f"output {str(path)!r} is a directory, not a file")
     if mode is not None and not stat.S_ISREG(mode):
-        raise ValueError(f"output {str(path)!r} is a {_special(mode)}, not a regular file: "
-                         f"rodjit writes only regular files (with or without --overwrite)")
+        raise OutputNotRegular(path, _special(mode))
     if not os.access(parent, os.W_OK | os.X_OK):
         raise ValueError(f"output directory {str(parent)!r} is not writable")
     if mode is not None:
@@ -259,9 +283,7 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
             except (ValueError, OSError):
                 found = None
             if found != kind:
-                what = f"a rodjit {found} file" if found else "not a rodjit file"
-                raise ValueError(f"output file {str(path)!r} is {what}; --overwrite replaces "
-                                 f"only rodjit {kind} files: choose another output path")
+                raise OutputOtherKind(path, found, kind)
     return path
 
 

@@ -14,6 +14,7 @@ from ..sweeps.grid import format_value
 from ..sweeps.point import SUMMARY_COLUMNS
 from ..sweeps.sweep_table import SweepTable, dimension_names, load_sweep
 from .mpl import NothingToDraw, new_figure, save
+from .sweep_options import BadPlotOption
 
 __all__ = ["KINDS", "sweep_figure", "plot_sweep_file"]
 
@@ -62,22 +63,21 @@ def _check_quantity(quantity: str | None) -> str:
     quantity = quantity or DEFAULT_QUANTITY
     numeric = [c for c, (kind, _) in SUMMARY_COLUMNS.items() if kind != "str"]
     if quantity not in numeric:
-        raise ValueError(f"--quantity {quantity!r} is not a numeric summary column (one of "
-                         f"{', '.join(numeric)})")
+        raise BadPlotOption("quantity", "quantity", quantity, ", ".join(numeric))
     return quantity
 
 
-def _check_key(grid, key: str, what: str) -> str:
-    """The swept key ``key`` names: the key itself (``rod.mu``) or its dimension name in
-    ``SweepTable.to_xarray`` (``mu``)."""
+def _check_key(grid, key: str, option: str) -> str:
+    """The swept key ``key`` (given for ``option``) names: the key itself (``rod.mu``) or
+    its dimension name in ``SweepTable.to_xarray`` (``mu``)."""
     if key in grid.keys:
         return key
     by_dimension = {dim: k for k, dim in dimension_names(grid.keys).items()}
     if key in by_dimension:
         return by_dimension[key]
-    raise ValueError(f"{what} {key!r} is not a swept key (swept: "
-                     + ", ".join(f"{k} or {d}" if d != k else k
-                                 for k, d in dimension_names(grid.keys).items()) + ")")
+    raise BadPlotOption("not_swept", option, key,
+                        ", ".join(f"{k} or {d}" if d != k else k
+                                  for k, d in dimension_names(grid.keys).items()))
 
 
 def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
@@ -85,17 +85,17 @@ def _fixed(grid, at: dict, free: tuple[str, ...], default_first: bool) -> dict:
     values), else its first value when ``default_first``; keys left over vary."""
     out = {}
     for key, text in (at or {}).items():
-        key = _check_key(grid, key, "--at")
+        key = _check_key(grid, key, "at")
         if key in free:
-            raise ValueError(f"--at {key} fixes the key the figure runs along")
+            raise BadPlotOption("fixes_free", "at", key)
         values = grid.values[grid.keys.index(key)]
         value = parse_value(key, text) if isinstance(text, str) else text
         match = [v for v in values if v == value or (isinstance(v, float) and
                                                       isinstance(value, (int, float)) and
                                                       np.isclose(v, value, rtol=1e-12))]
         if not match:
-            raise ValueError(f"--at {key}={text} is not on the grid ({key} = "
-                             f"{', '.join(format_value(v) for v in values)})")
+            raise BadPlotOption("off_grid", "at", f"{key}={text}",
+                                f"{key} = {', '.join(format_value(v) for v in values)}")
         out[key] = match[0]
     if default_first:
         for key, values in zip(grid.keys, grid.values):
@@ -138,17 +138,18 @@ def _check_values(table, quantity, mask) -> None:
 
 def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     grid = table.grid
-    x = _check_key(grid, x, "--x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
+    x = _check_key(grid, x, "x") if x else ("rod.mu" if "rod.mu" in grid.keys else grid.keys[0])
     if panels is not None:             # one panel per value of that key, side by side
-        panels = _check_key(grid, panels, "--panels")
+        panels = _check_key(grid, panels, "panels")
         if panels == x or panels in (at or {}):
-            raise ValueError(f"--panels {panels} is already the x axis or fixed by --at")
+            raise BadPlotOption("panels_taken", "panels", panels)
         if ax is not None:
             raise ValueError("panels need a figure of their own (drop ax)")
         values = grid.values[grid.keys.index(panels)]
         if len(values) > MAX_PANELS:
-            raise ValueError(f"--panels {panels}: {len(values)} values are too many panels "
-                             f"(at most {MAX_PANELS})")
+            raise BadPlotOption("too_many_panels", "panels", panels,
+                                f"{len(values)} values are too many panels (at most "
+                                f"{MAX_PANELS})")
         axes = fig.subplots(1, len(values), sharey=True, squeeze=False)[0]
         for a, value in zip(axes, values):
             _restitution(fig, table, quantity, x, {**(at or {}), panels: value}, a)
@@ -157,8 +158,8 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     others = [k for k in grid.keys if k != x and k not in fixed]
     combos = list(itertools.product(*(grid.values[grid.keys.index(k)] for k in others)))
     if len(combos) > MAX_LINES:
-        raise ValueError(f"{len(combos)} lines (one per value of {', '.join(others)}) are too "
-                         f"many to draw; fix some keys with --at KEY=VALUE")
+        raise BadPlotOption("too_many_lines", "",
+                            f"{len(combos)} lines (one per value of {', '.join(others)})")
     ax = ax or fig.add_subplot()
     xs = np.asarray(grid.values[grid.keys.index(x)])
     base = _select(table, fixed)
@@ -191,13 +192,12 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
     prefer = [k for k in ("floor.kappa_b", "floor.beta") if k in varied]
     rest = [k for k in varied if k not in prefer]
     pick = prefer + rest
-    x = _check_key(grid, x, "--x") if x else None
-    y = _check_key(grid, y, "--y") if y else None
+    x = _check_key(grid, x, "x") if x else None
+    y = _check_key(grid, y, "y") if y else None
     x = x or next((k for k in pick if k != y), None)
     y = y or next((k for k in pick if k != x), None)
     if x is None or y is None or x == y:
-        raise ValueError(f"a heatmap needs two swept keys with several values that --at does "
-                         f"not fix (swept: {', '.join(grid.keys)})")
+        raise BadPlotOption("no_heatmap_keys", "", "", ", ".join(grid.keys))
     fixed = _fixed(grid, at, (x, y), default_first=True)
     xs = list(grid.values[grid.keys.index(x)])
     ys = list(grid.values[grid.keys.index(y)])
@@ -242,16 +242,16 @@ def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=
         raise ValueError(f"kind = {kind!r} is not allowed (one of {', '.join(KINDS)})")
     table = source if isinstance(source, SweepTable) else load_sweep(source)
     quantity = _check_quantity(quantity)
-    at = {_check_key(table.grid, k, "--at"): v for k, v in (at or {}).items()}
+    at = {_check_key(table.grid, k, "at"): v for k, v in (at or {}).items()}
     fig = ax.figure if ax is not None else new_figure(figsize=figsize or (7.5, 4.8),
                                                       layout="constrained")
     if kind == "restitution":
         if y:
-            raise ValueError("--y is for heatmaps")
+            raise BadPlotOption("heatmap_only", "y")
         _restitution(fig, table, quantity, x, at, ax, panels)
     else:
         if panels:
-            raise ValueError("--panels is for the restitution kind")
+            raise BadPlotOption("restitution_only", "panels")
         _heatmap(fig, table, quantity, x, y, at, ax)
     if ax is None:
         fig.suptitle(f"sweep of {len(table)} points, N = {table.base.rod.N}", fontsize=10)

@@ -10,6 +10,7 @@ from collections import deque
 from itertools import count, islice
 
 from .dask_logging import route_dask_logs
+from .errors import DaskMissing
 from .ensemble import (BatchTask, lost_batch, run_tasks, timed, task_key as _key,
                        lost as _lost)
 from .point import PointTask, died, start_worker
@@ -52,8 +53,7 @@ class DaskCluster:
         try:
             import distributed
         except ImportError:
-            raise ValueError(f"--scheduler {scheduler} needs Dask distributed; install it with: "
-                             f"pip install 'rodjit[dask]'") from None
+            raise DaskMissing(scheduler) from None
         self.distributed = distributed
         route_dask_logs()        # its log lines as rodjit's warnings (sweeps/dask_logging.py)
         self.cluster = None

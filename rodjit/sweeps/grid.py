@@ -18,6 +18,7 @@ import numpy as np
 
 from ..config import (CROSS_CHECKS, RUN_CHECKS, Config, field_spec, number_with_unit,
                       parse_value)
+from .errors import BadGridItem, TooManyPoints
 
 __all__ = ["Grid", "parse_grid_option", "format_value", "MAX_POINTS"]
 
@@ -62,13 +63,9 @@ def _count(key: str, vals) -> int:
 
 
 def _check_size(counts: dict[str, int], max_points: float) -> None:
-    """ValueError naming the count if the grid of these axis lengths is too large."""
-    n = math.prod(counts.values())
-    if n > max_points:
-        axes = " x ".join(f"{c:,} ({k})" for k, c in counts.items())
-        raise ValueError(f"the grid has {n:,} points ({axes}), more than the limit of "
-                         f"{max_points:,.0f} points (raise it with --max-points / "
-                         f"max_points=, or sweep fewer values)")
+    """TooManyPoints naming the count if the grid of these axis lengths is too large."""
+    if math.prod(counts.values()) > max_points:
+        raise TooManyPoints(counts, max_points)
 
 
 def _values_from_text(key: str, text: str) -> list[Any]:
@@ -400,17 +397,17 @@ class Grid:
 
 
 def parse_grid_option(items) -> dict[str, str]:
-    """``("rod.mu=0,1,10", "floor.beta=linspace(0.01,0.05,3)")`` -> ordered spec dict."""
+    """``("rod.mu=0,1,10", "floor.beta=linspace(0.01,0.05,3)")`` -> ordered spec dict;
+    BadGridItem (a ValueError) for an item without ``KEY=``, a key given twice, or none."""
     spec: dict[str, str] = {}
     for item in items:
         key, sep, text = item.partition("=")
         key = key.strip()
         if not sep or not key:
-            raise ValueError(f"--grid expects KEY=VALUES (e.g. --grid rod.mu=0,1,10 or "
-                             f"--grid floor.beta=linspace(0.01,0.05,3)), got {item!r}")
+            raise BadGridItem("form", item=item)
         if key in spec:
-            raise ValueError(f"--grid {key} is given twice; list all its values in one --grid")
+            raise BadGridItem("twice", key=key)
         spec[key] = text
     if not spec:
-        raise ValueError("a sweep needs at least one --grid KEY=VALUES")
+        raise BadGridItem("none")
     return spec

@@ -4,6 +4,7 @@ sweep, the progress record passed as points finish, and the statistics of the ca
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 
 from .sweep_table import SweepTable
@@ -19,16 +20,24 @@ class SweepInterrupted(RuntimeError):
     Parameters
     ----------
     message : str
-        Which signal stopped the sweep, how many points finished, and how to resume.
+        Which signal stopped the sweep and how many points finished (``stem``).
     signum : int or None
         The signal number; None when a second interrupt arrived while stopping.
     table : SweepTable
         The table at the stop: finished points ``"completed"`` or ``"failed"``, the rest
         ``"pending"``.
+    output : str or os.PathLike, optional
+        The sweep file that ``resume=True`` continues (``output``, a str); None when there
+        is nothing to continue (no file, or every point finished).  The message then ends
+        with how to resume.
     """
 
-    def __init__(self, message: str, signum: int | None, table: SweepTable):
-        super().__init__(message)
+    def __init__(self, message: str, signum: int | None, table: SweepTable,
+                 output: str | os.PathLike[str] | None = None):
+        self.stem = message
+        self.output = None if output is None else str(output)
+        super().__init__(message if output is None else
+                         f"{message}; continue with resume=True (output={self.output!r})")
         self.signum = signum
         self.table = table
 

@@ -1,5 +1,5 @@
 """What a sweep will run and write, checked before anything starts: the grid's size, every
-point's configuration and fixed step, the sweep file and (``--save-runs``) the run files
+point's configuration and fixed step, the sweep file and (``save_runs``) the run files
 against the size limit and the free space of their disks.
 
 Everything here takes time that grows with the grid's values, not with its points: the
@@ -15,9 +15,11 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..config import Config
+from ..output.errors import TooManySteps
 from ..output.estimate import (ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, Estimate, estimate_values,
-                               fixed_step_error, format_size, free_space, too_large)
+                               format_size, free_space, size_refusal, step_refusal)
 from ..output.h5files import check_output
+from .errors import RunsDirUnusable, SweepFileTooLarge
 from .grid import MAX_POINTS, Grid
 
 __all__ = ["SweepPlan", "plan_sweep", "check_runs_dir", "SWEEP_OVERHEAD", "POINT_BYTES"]
@@ -135,8 +137,7 @@ def plan_sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | No
     if config is not None and not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     if grid is None:
-        raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]} or --grid "
-                         "rod.mu=0,1,10")
+        raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]}")
     base = config if config is not None else Config()
     grid = Grid.from_spec(grid, max_points=max_points)
     grid.validate(base)
@@ -148,15 +149,12 @@ def plan_sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | No
         output = check_output(output, overwrite, "sweep")
         replaces = output.exists()
         if sweep_bytes > max_output:
-            raise ValueError(f"the sweep file would hold {len(grid):,} points, about "
-                             f"{format_size(sweep_bytes)}: more than the limit of "
-                             f"{format_size(max_output)} (raise it with --max-output / "
-                             f"max_output=, or sweep fewer points)")
+            raise SweepFileTooLarge(len(grid), sweep_bytes, max_output)
     if runs_dir is not None:
-        error = too_large(f"the run file of grid point {worst_index} "
-                          f"({grid.describe(worst_index)})", worst, max_output)
-        if error:
-            raise ValueError(error)
+        error = size_refusal(f"the run file of grid point {worst_index} "
+                             f"({grid.describe(worst_index)})", worst, max_output)
+        if error is not None:
+            raise error
     _check_free(output, sweep_bytes if output is not None else 0.0, runs_dir,
                 runs_bytes if runs_dir is not None else 0.0)
     return SweepPlan(base, grid, output, replaces, sweep_bytes, runs_dir,
@@ -172,8 +170,10 @@ def _points(base: Config, grid: Grid, max_steps: float) -> tuple[int, Estimate, 
     worst_index, worst, total = 0, None, 0.0
     for index, over in grid.combinations(ESTIMATE_KEYS):
         values = {k: over.get(k, flat[k]) for k in ESTIMATE_KEYS}
-        error = fixed_step_error(values, max_steps)
-        if error:
+        error = step_refusal(values, max_steps)
+        if isinstance(error, TooManySteps):
+            raise error.at(f"grid point {index} ({grid.describe(index)})")
+        if error is not None:
             raise ValueError(f"grid point {index} ({grid.describe(index)}): {error}")
         e = estimate_values(values)
         total += e.file_bytes * share
@@ -213,20 +213,20 @@ def _check_free(output, sweep_bytes: float, runs_dir, runs_bytes: float) -> None
 
 
 def check_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
-    """Check the --save-runs directory (created later, once everything else is valid)."""
+    """Check the directory of the points' run files (``save_runs``; created later, once
+    everything else is valid); RunsDirUnusable if it cannot take them."""
     if save_runs is None:
         return None
     d = Path(save_runs).resolve()
     if d.exists() and not d.is_dir():
-        raise ValueError(f"--save-runs {str(save_runs)!r} is not a directory")
+        raise RunsDirUnusable(save_runs, "not_a_directory")
     existing = d.parent
     while not existing.exists():
         existing = existing.parent
     if not existing.is_dir() or not os.access(existing, os.W_OK | os.X_OK):
-        raise ValueError(f"--save-runs directory {str(save_runs)!r} cannot be created here")
+        raise RunsDirUnusable(save_runs, "not_creatable")
     if d.is_dir() and not (overwrite or resume) and next(d.iterdir(), None) is not None:
         clash = next((grid.run_name(i) for i in todo if (d / grid.run_name(i)).exists()), None)
         if clash:
-            raise ValueError(f"--save-runs {str(save_runs)!r} already holds {clash!r}; use "
-                             f"--overwrite to replace its run files, or --resume")
+            raise RunsDirUnusable(save_runs, "holds", clash)
     return d

@@ -59,7 +59,7 @@ SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
     "compile_time": ("float", "of which compiling or loading kernels from the disk cache"),
     "run_time": ("float", "of which stepping in compiled code"),
     "t_final": ("float", "simulated time reached"),
-    "run_file": ("str", "the point's run file (--save-runs), '' if none"),
+    "run_file": ("str", "the point's run file if run files are saved, '' if not"),
 }
 _FILL = {"str": "", "int": 0, "float": math.nan}
 _NP_DTYPES = {"str": object, "int": np.int64, "float": np.float64}

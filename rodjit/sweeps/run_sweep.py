@@ -32,6 +32,7 @@ from .plan import check_runs_dir, plan_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
+from .errors import ResumeMismatch, SweepWriteFailed, resume_note
 from .outcome import SweepFailed, SweepInterrupted, SweepProgress, sweep_stats
 from .sweep_table import SweepTable
 
@@ -70,13 +71,9 @@ def _open_resume(output, config, grid, max_points):
     base, file_grid = header["base"], header["grid"]
     if config is not None and config != base:
         differ = sorted(k for k, v in config.flat().items() if base.flat()[k] != v)
-        raise ValueError(f"the configuration differs from the one in {str(output)!r} "
-                         f"({', '.join(differ)}); --resume continues the file's sweep: drop "
-                         f"the changes or start a new sweep")
+        raise ResumeMismatch(output, "configuration", ", ".join(differ))
     if grid is not None and Grid.from_spec(grid, max_points=max_points) != file_grid:
-        raise ValueError(f"the grid differs from the one in {str(output)!r} "
-                         f"({file_grid.to_json()}); --resume continues the file's sweep: "
-                         f"drop --grid or start a new sweep")
+        raise ResumeMismatch(output, "grid", file_grid.to_json())
     return base, file_grid, columns, header["attrs"]
 
 
@@ -165,8 +162,7 @@ def sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | None = 
     if not (isinstance(flush_interval, (int, float)) and flush_interval > 0):
         raise ValueError(f"flush_interval = {flush_interval!r} is out of range (seconds > 0)")
     if resume and output is None:
-        raise ValueError("resume needs the sweep file to continue (output=PATH, or "
-                         "rodjit sweep --resume -o PATH)")
+        raise ValueError("resume needs the sweep file to continue (output=PATH)")
     # a new sweep: every check (grid, points, paths, sizes) before the lock is taken
     plan = None if resume else plan_sweep(config, grid, output=output, save_runs=save_runs,
                                           overwrite=overwrite, max_output=max_output,
@@ -271,8 +267,8 @@ def _remove_unreported(runs_dir: Path, grid: Grid, todo, cols) -> None:
 def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
     """Stop a sweep whose disk refused a write (``disk``: what was being written, the
     cause, whether it was the sweep file): record what still can be, raise WriteFailed.
-    The sweep file keeps every point written before (``kept``); ``--resume`` runs the
-    others once there is space."""
+    The sweep file keeps every point written before (``kept``); ``resume=True`` runs the
+    others once there is space (SweepWriteFailed says so)."""
     what, cause, own = disk
     n = len(table.grid)
     if output is not None and not own:      # a run file failed: the sweep file may not
@@ -285,13 +281,14 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
     if output is not None and own:
         note_failure(output, f"a write failed: {cause}")
     table.status = "failed"
-    table.message = (f"writing {what} failed: {cause}; the sweep stopped"
-                     + (f": {str(output)!r} keeps the points written ({kept} of {n}); free "
-                        f"space, then continue with: rodjit sweep --resume -o {output}"
-                        if output is not None
-                        else f" after {int(np.sum(table.columns['status'] != 'pending'))} of "
-                             f"{n} points"))
-    failure = WriteFailed(table.message, cause)
+    if output is not None:
+        failure: WriteFailed = SweepWriteFailed(f"writing {what} failed: {cause}", cause,
+                                                output, kept, n)
+    else:
+        failure = WriteFailed(f"writing {what} failed: {cause}; the sweep stopped after "
+                              f"{int(np.sum(table.columns['status'] != 'pending'))} of {n} "
+                              f"points", cause)
+    table.message = str(failure)
     failure.table = table
     raise failure
 
@@ -411,9 +408,7 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
         table.stats = sweep_stats(now - t0, ran, failed, executor, teardown=now - t_last)
         if status == "interrupted":
             name = signal.Signals(signum).name if signum else "KeyboardInterrupt"
-            message = (f"interrupted by {name} after {done0 + ran} of {n} points"
-                       + (f"; continue with: rodjit sweep --resume -o {output}" if output
-                          else ""))
+            message = f"interrupted by {name} after {done0 + ran} of {n} points"
         if status == "completed" and n and bool(np.all(cols["status"] == "failed")):
             status = "failed"       # nothing to show for it: the file says so, with why
             message = (f"every point of the sweep failed ({n}); the first: "
@@ -424,12 +419,13 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
                 sweep_file.write_results(output, batch)
                 written += len(batch)
                 batch = []
-                sweep_file.finish(output, status, message)
+                sweep_file.finish(output, status, message if status != "interrupted" else
+                                  resume_note(message, output))
             except WriteFailed as exc:
                 _disk_failed(table, output, batch, written + done0,
                              (repr(str(output)), str(exc), True))
     if status == "interrupted":
-        raise SweepInterrupted(message, signum, table)
+        raise SweepInterrupted(message, signum, table, output)
     if stop.signum is not None:     # after the last point: the sweep is complete
         name = signal.Signals(stop.signum).name
         raise SweepInterrupted(f"interrupted by {name} after the last point"

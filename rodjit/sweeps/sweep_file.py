@@ -54,6 +54,7 @@ from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS
 from ..version import __version__
 from .grid import Grid
 from .ensemble import as_batch
+from .errors import FormatNotContinued
 from .point import SUMMARY_COLUMNS, empty_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
@@ -247,9 +248,7 @@ def check_continuable(f: h5py.File, path=None) -> None:
     """ValueError unless this version continues the sweep file's format (``CONTINUES``)."""
     version = _format(f)
     if version not in CONTINUES:
-        raise ValueError(f"{str(path or f.filename)!r} is a sweep file of format {version}, "
-                         f"whose bounces and summary columns have older meanings; --resume "
-                         f"continues format {FORMAT_VERSION} only: start a new sweep")
+        raise FormatNotContinued(path or f.filename, version, FORMAT_VERSION)
 
 
 def reopen(path, *, history: str) -> None:
