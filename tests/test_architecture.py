@@ -263,7 +263,8 @@ PARALLEL_NAMES: dict[str, frozenset[str]] = {
     # field indices of a compiled array: each array's module numbers its own fields
     "F_T": frozenset({"rodjit.stepping.layout", "rodjit.gpu.trajectory"}),
     **{name: frozenset({"rodjit.stepping.ensemble", "rodjit.gpu.trajectory"})
-       for name in ("F_E0", "F_FAIL", "F_SIZE", "I_BOUNCES", "I_SIZE")},
+       for name in ("F_E0", "F_FAIL", "F_SIZE", "I_BOUNCES", "I_IMPACT",
+                    "I_SIZE")},
     # public names of long standing, renaming them would break users' imports: a file's
     # statuses (rodjit.output.hdf5.STATUSES) and a first contact's
     # (rodjit.analysis.observables.STATUSES); the samples a plot draws per curve

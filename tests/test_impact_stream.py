@@ -52,7 +52,7 @@ def _run(name):
         eps = np.stack([np.asarray(res.episodes["t_start"], float),
                         np.asarray(res.episodes["t_end"], float)], axis=1).reshape(-1, 2)
         b = res.bounces
-        brows = np.stack([np.asarray(b[c], float) for c in L.BOUNCE_COLUMNS]
+        brows = np.stack([np.asarray(b[c], float) for c in L.BOUNCE_ROW_COLUMNS]
                          + [np.asarray(b["open"], float)], axis=1).reshape(-1, I.BROW_SIZE)
         _CACHE[name] = (res, physics_of(res), diag, track, eps, brows)
     return _CACHE[name]
@@ -101,11 +101,11 @@ def _streamed(name, cuts, last_pending):
         ends.append(math.inf)
     s = np.zeros(S.SIZE)
     S.reset(s)
-    bcols = np.zeros((max(nb, 1), len(L.BOUNCE_COLUMNS)))
+    bcols = np.zeros((max(nb, 1), len(L.BOUNCE_ROW_COLUMNS)))
     for k, (a, b) in enumerate(blocks):
         e_rows = np.ascontiguousarray(eps[[e for e in range(ne) if ep_block[e] == k]])
         rows = [j for j in range(closed) if b_block[j] == k]
-        bcols[:len(rows)] = brows[rows, :len(L.BOUNCE_COLUMNS)]
+        bcols[:len(rows)] = brows[rows, :len(L.BOUNCE_ROW_COLUMNS)]
         t_end = t[b - 1]
         open_now = [x for x, y in zip(starts, ends) if x <= t_end < y]
         S.block(s, np.ascontiguousarray(diag[a:b]), b - a, e_rows.reshape(-1, 2),
