@@ -56,15 +56,20 @@ def state_at(scheme, old, new, work, interp, dt, theta):
         dense(scheme, old[0], old[1], old[2], new[0], new[1], new[2], work, dt, theta,
               interp[0], interp[1])
     else:
-        s = theta
-        h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s)
-        h10 = s * (1.0 - s) * (1.0 - s) * dt
-        h01 = s * s * (3.0 - 2.0 * s)
-        h11 = s * s * (s - 1.0) * dt
-        ua, va, ub, vb = old[0], old[1], new[0], new[1]
         uo = interp[0]
-        for i in range(ua.size):
-            uo[i] = h00 * ua[i] + h10 * va[i] + h01 * ub[i] + h11 * vb[i]
+        for i in range(uo.size):
+            uo[i] = _hermite(old, new, dt, theta, i)
+
+
+@step_kernel
+def _hermite(old, new, dt, theta, i):
+    """Node i's height at t + θ dt on the cubic Hermite of the step's ends."""
+    s = theta
+    h00 = (1.0 + 2.0 * s) * (1.0 - s) * (1.0 - s)
+    h10 = s * (1.0 - s) * (1.0 - s) * dt
+    h01 = s * s * (3.0 - 2.0 * s)
+    h11 = s * s * (s - 1.0) * dt
+    return h00 * old[0][i] + h10 * old[1][i] + h01 * new[0][i] + h11 * new[1][i]
 
 
 @step_kernel
@@ -78,6 +83,8 @@ def _min_strain(u, h):
 @step_kernel
 def _quantity(scheme, old, new, work, interp, h, dt, theta, which):
     """u_0 (``which`` 0) or the smallest strain (1) inside the step at θ."""
+    if which == 0 and not has_dense(scheme):
+        return _hermite(old, new, dt, theta, 0)     # the bottom node alone
     state_at(scheme, old, new, work, interp, dt, theta)
     if which == 0:
         return interp[0][0]
