@@ -16,8 +16,11 @@ point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the
 A point the batch could not hold (more diagnostics samples, episodes or bounce rows than
 its arrays, ``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
 
-Threads: one per worker process (``prange`` over points is not used): the sweep's
-workers are the parallelism, as for the per-point path.
+Threads: one per worker process (no ``prange`` over points): the sweep's workers are the
+parallelism, as for the per-point path.  Batches on threads of one process (the compiled
+call releases the GIL) were measured to scale no better than the same batches in worker
+processes (``benchmarks/bench_sweep.py --engine --threads``), and a process confines a
+point that crashes it to its own batch.
 """
 from __future__ import annotations
 
