@@ -38,7 +38,7 @@ def test_the_estimate_bounds_a_real_file(tmp_path):
 
 @pytest.mark.parametrize("over,match", [
     ({"time.dt": 1e-30}, "resolution of t"),
-    ({"time.dt": 1e-9, "time.t_end": 100.0}, "max-steps"),
+    ({"time.dt": 1e-9, "time.t_end": 100.0}, "max_steps="),
     ({"output.snapshot_interval": 1e-12}, "more than the limit"),
     ({"time.t_end": 1e300}, "more than the limit"),
 ])
