@@ -203,17 +203,20 @@ def deep_call(fn, *args, **kwargs):
     with _DEEP_LOCK:
         old_limit = sys.getrecursionlimit()
         old_size = threading.stack_size()
-        try:
-            threading.stack_size(COMPILE_STACK)
-        except (ValueError, RuntimeError):  # a platform without a settable stack size
-            pass
-        try:
-            worker = threading.Thread(target=work, name="rodjit-gpu-compile", daemon=True)
-            worker.start()
-        finally:
-            threading.stack_size(old_size)
+        # raised before the thread starts: a thread checks the process's limit when it
+        # reaches its own, so a limit raised after the start races with a busy machine
         sys.setrecursionlimit(max(old_limit, COMPILE_FRAMES))
         try:
+            try:
+                threading.stack_size(COMPILE_STACK)
+            except (ValueError, RuntimeError):  # a platform without a settable stack size
+                pass
+            try:
+                worker = threading.Thread(target=work, name="rodjit-gpu-compile",
+                                          daemon=True)
+                worker.start()
+            finally:
+                threading.stack_size(old_size)
             worker.join()
         finally:
             sys.setrecursionlimit(old_limit)
