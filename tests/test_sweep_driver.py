@@ -467,7 +467,9 @@ def test_a_signal_while_the_sweep_file_layout_is_written_waits_for_the_layout(
     written = []
 
     def signalled(*args, **kwargs):
-        os.kill(os.getpid(), signal.SIGINT)          # lands while h5py writes attributes
+        # to this (the main) thread, at once: os.kill may hand it to another thread of the
+        # process (an earlier test's), which a loaded machine can run only after the layout
+        signal.raise_signal(signal.SIGINT)           # lands while h5py writes attributes
         written.append(original(*args, **kwargs))
         return written[-1]
 
