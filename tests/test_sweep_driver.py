@@ -452,12 +452,27 @@ def test_a_reader_holding_the_file_delays_writes_but_loses_nothing(tmp_path, mon
 
 @pytest.mark.parametrize("resume", [False, True])
 def test_a_signal_while_the_sweep_file_layout_is_written_waits_for_the_layout(
-        tmp_path, monkeypatch, resume):
+        tmp_path, resume):
     """SIGINT in the middle of writing the sweep file's layout (or its reopening) is held
     until the layout is whole, then acts: KeyboardInterrupt, not an h5py TypeError from a
     handler raising inside its callbacks; a new file is removed, a reopened one stays
-    resumable."""
-    path = tmp_path / "s.h5"
+    resumable.  Run in a fresh interpreter: in a test worker that had run many files first,
+    the signal was not seen (the whole suite only, in whichever worker drew this file)."""
+    code = ("import sys; sys.path[:0] = [sys.argv[1]]\n"
+            "import test_sweep_driver as t\n"
+            "t._signal_during_layout(sys.argv[2], sys.argv[3] == 'True')\nprint('ok')\n")
+    here = os.path.dirname(os.path.abspath(__file__))
+    p = subprocess.run([sys.executable, "-c", code, here, str(tmp_path), str(resume)],
+                       capture_output=True, text=True, timeout=600,
+                       cwd=os.path.dirname(here))
+    assert p.returncode == 0 and p.stdout.strip().endswith("ok"), p.stderr
+
+
+def _signal_during_layout(tmp: str, resume: bool) -> None:
+    """The body of the test above, in its own process."""
+    from pathlib import Path
+
+    path = Path(tmp) / "s.h5"
     if resume:                                        # a sweep cut before its first point
         sweep_file.create(path, BASE, Grid.from_spec({"rod.mu": [0.0]}), command="test",
                           attrs={"save_runs": "", "scheduler": "inline", "jobs": 1})
@@ -467,18 +482,19 @@ def test_a_signal_while_the_sweep_file_layout_is_written_waits_for_the_layout(
     written = []
 
     def signalled(*args, **kwargs):
-        # to this (the main) thread, at once: os.kill may hand it to another thread of the
-        # process (an earlier test's), which a loaded machine can run only after the layout
-        signal.raise_signal(signal.SIGINT)           # lands while h5py writes attributes
+        os.kill(os.getpid(), signal.SIGINT)          # lands while h5py writes attributes
         written.append(original(*args, **kwargs))
         return written[-1]
 
-    monkeypatch.setattr(sweep_file, name, signalled)
-    with pytest.raises(KeyboardInterrupt):
-        rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=resume, scheduler="inline")
+    setattr(sweep_file, name, signalled)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=resume,
+                         scheduler="inline")
+    finally:
+        setattr(sweep_file, name, original)
     assert len(written) == 1                          # the layout was written to its end
     if resume:
-        monkeypatch.setattr(sweep_file, name, original)
         table = rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=True,
                              scheduler="inline")
         assert table.status == "completed" and table.counts["completed"] == 1
