@@ -35,7 +35,7 @@ from ..stepping import aot, control, registry
 from ..stepping import layout as L
 from ..stepping.schemes import make_scheme
 
-__all__ = ["Body", "Prepared", "prepare", "model_warnings", "parameters", "snapshot_bound", "rows_needed",
+__all__ = ["Body", "Prepared", "prepare", "model_warnings", "parameters", "snapshot_bound", "rows_needed", "clock_row",
            "tolerance"]
 
 CACHE_SIZE = 8    # Config objects kept: a sweep's points are new objects, a repeat is one
@@ -54,6 +54,18 @@ def rows_needed(interval: float, span: float) -> int:
     a run extended later (``set_t_end``) fills its buffers and drains them, as any long run
     does, with the same steps."""
     return int(min(2**31, span / interval)) + 2 if interval > 0 else 1
+
+
+def clock_row(config) -> np.ndarray:
+    """A run's clock row at its start (``Run.__init__``): t_end, the output intervals and
+    the time below which two output times coincide."""
+    out = config.output
+    clock = np.zeros(L.CLOCK_SIZE)
+    clock[L.T_END] = config.time.t_end
+    clock[L.SNAP_DT] = out.snapshot_interval
+    clock[L.DIAG_DT] = out.diagnostics_interval
+    clock[L.TOL] = tolerance(clock)
+    return clock
 
 
 def tolerance(clock: np.ndarray) -> float:
@@ -144,12 +156,7 @@ class Prepared:
         if out.diagnostics_interval > 0:
             diag = max(diag, ctrl.dense_diagnostics)
         self.capacities = (snap, diag)
-        clock = np.zeros(L.CLOCK_SIZE)
-        clock[L.T_END] = t_end
-        clock[L.SNAP_DT] = out.snapshot_interval
-        clock[L.DIAG_DT] = out.diagnostics_interval
-        clock[L.TOL] = tolerance(clock)
-        self.clock = clock
+        self.clock = clock_row(config)
         ev = np.zeros(L.EV_SIZE)
         ev[L.FLIGHT_TIME] = body.flight_time
         self.ev = ev

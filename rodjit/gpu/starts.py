@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..config import ModelWarning
-from ..driver.prepared import snapshot_bound
+from ..driver.prepared import clock_row, snapshot_bound
 from ..driver.run import Run
 from ..config.checks import RUN_CHECKS
 from ..model.system import check_admissible, initial_state, law_params, rod_system
@@ -168,13 +168,5 @@ def _state(config) -> np.ndarray:
 
 def _clock(config) -> np.ndarray:
     """``Run.__init__``'s clock row."""
-    clock = np.zeros(L.CLOCK_SIZE)
-    out = config.output
-    clock[L.T_END] = config.time.t_end
-    clock[L.SNAP_DT] = out.snapshot_interval
-    clock[L.DIAG_DT] = out.diagnostics_interval
-    spans = [x for x in (clock[L.SNAP_DT], clock[L.DIAG_DT], clock[L.T_END] - clock[L.T])
-             if x > 0]
-    clock[L.TOL] = control.output_tolerance(spans)
-    return clock
+    return clock_row(config)
 

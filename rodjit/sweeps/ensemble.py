@@ -34,11 +34,11 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..config import ModelWarning
+from ..driver.prepared import clock_row
 from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text, parameters
 from ..model.system import check_admissible, initial_state
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.observables import flight_time, lift_energy
-from ..stepping import control
 from ..stepping import ensemble as E
 from ..stepping import impact as I
 from ..stepping import layout as L
@@ -185,14 +185,7 @@ def _prepare(config) -> _Point:
     params = parameters(config)
     u, v = initial_state(config)
     check_admissible(u, params[3], params[4], "initial state")
-    clock = np.zeros(L.CLOCK_SIZE)
-    out = config.output
-    clock[L.T_END] = config.time.t_end
-    clock[L.SNAP_DT] = out.snapshot_interval
-    clock[L.DIAG_DT] = out.diagnostics_interval
-    spans = [x for x in (clock[L.SNAP_DT], clock[L.DIAG_DT], clock[L.T_END] - clock[L.T])
-             if x > 0]
-    clock[L.TOL] = control.output_tolerance(spans)
+    clock = clock_row(config)
     return _Point(config, params, E.pack(params), u, v, clock, _flight_time(config))
 
 
