@@ -110,6 +110,7 @@ def _in_fresh_process(name: str) -> str:
     import sys
     from pathlib import Path
 
+    _nvvm_or_skip()     # here: a skip inside the fresh interpreter would be its crash
     here = Path(__file__).resolve().parent
     code = (f"import sys; sys.path[:0] = [{str(here)!r}, {str(here.parent)!r}]\n"
             f"import test_gpu_ptx as t\nprint(t.{name}())\n")
