@@ -4,6 +4,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import tracemalloc
 
 import h5py
@@ -481,7 +482,14 @@ def _signal_during_layout(tmp: str, resume: bool) -> None:
     original = getattr(sweep_file, name)
     written = []
 
+    seen = {}
+
     def signalled(*args, **kwargs):
+        # what the signal meets, said if it is not seen (the handler, the blocked signals,
+        # the threads that could take it)
+        seen.update(handler=signal.getsignal(signal.SIGINT),
+                    blocked=signal.pthread_sigmask(signal.SIG_BLOCK, []),
+                    threads=[t.name for t in threading.enumerate()])
         os.kill(os.getpid(), signal.SIGINT)          # lands while h5py writes attributes
         written.append(original(*args, **kwargs))
         return written[-1]
@@ -491,6 +499,8 @@ def _signal_during_layout(tmp: str, resume: bool) -> None:
         with pytest.raises(KeyboardInterrupt):
             rodjit.sweep(BASE, {"rod.mu": [0.0]}, output=path, resume=resume,
                          scheduler="inline")
+            raise AssertionError(f"the signal was not seen: {seen}, "
+                                 f"SIGINT then {signal.getsignal(signal.SIGINT)}")
     finally:
         setattr(sweep_file, name, original)
     assert len(written) == 1                          # the layout was written to its end
