@@ -269,3 +269,64 @@ def test_a_run_on_the_ahead_of_time_loop_gets_no_compiling_notice(built, use):
     # any other run: the disk cache decides, as without a configuration
     assert kernels_cold(rodjit.Config().override({"time.integrator": "dp54"})) == \
         kernels_cold()
+
+
+# ---- the sweeps' batch kernel ------------------------------------------------------------
+
+_GRID = {"rod.mu": [0.0, 40.0, 100.0], "floor.beta": [0.03, 0.1]}
+
+
+def test_the_ahead_of_time_batch_kernel_gives_the_jits_table(built, use, monkeypatch):
+    """A sweep's batches on the extension (paper-mu100 is the default's family) and on the
+    JIT: the same table to the bit, timings apart; the batches took the extension's entry."""
+    from test_sweep_driver import same_values
+
+    cfg = rodjit.load_preset("paper-mu100").override(SHORT)
+    use(built)
+    assert aot.batch_for(run_module.parameters(cfg)) is not None
+    taken = []
+    real = aot.batch_for
+    monkeypatch.setattr(aot, "batch_for", lambda args: taken.append(real(args)) or taken[-1])
+    a = rodjit.sweep(cfg, _GRID, scheduler="inline")
+    monkeypatch.setattr(aot, "batch_for", real)
+    assert taken and all(t is not None for t in taken)
+    use(None)
+    assert aot.batch_for(run_module.parameters(cfg)) is None
+    b = rodjit.sweep(cfg, _GRID, scheduler="inline")
+    assert a.status == b.status == "completed"
+    same_values(a, b)
+    for k in range(len(a)):
+        ta, tb = a.bounces(k), b.bounces(k)
+        assert sorted(ta) == sorted(tb)
+        for col in tb:
+            assert np.array_equal(ta[col], tb[col], equal_nan=True), (k, col)
+
+
+def test_a_sweep_on_the_extension_never_imports_numba(built, tmp_path):
+    """A sweep of the default's family, batches and file included, on the extension: Numba
+    and llvmlite are never imported (a worker that loaded them would spend half a second on
+    it before its first point)."""
+    module, key, directory = built
+    code = (
+        "import importlib.abc, importlib.util, sys\n"
+        "class Refuse(importlib.abc.MetaPathFinder):\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name.partition('.')[0] in ('numba', 'llvmlite'):\n"
+        "            raise SystemExit(f'{name} was imported')\n"
+        "sys.meta_path.insert(0, Refuse())\n"
+        "from rodjit.stepping import aot\n"
+        f"spec = importlib.util.spec_from_file_location(aot.EXTENSION, {str(module.__file__)!r})\n"
+        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
+        f"aot._EXT[:] = [(m, {key!r})]\n"
+        "import rodjit\n"
+        "from rodjit.sweeps.workers import start_worker\n"
+        "cfg = rodjit.load_preset('paper-mu100').override({'time.t_end': 1.5})\n"
+        "info = start_worker(cfg, batched=True)\n"
+        "t = rodjit.sweep(cfg, {'rod.mu': [0.0, 50.0]}, scheduler='inline', output='s.h5')\n"
+        "print(t.status, t.counts['completed'], info['numba_threads'])\n")
+    done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path,
+                          env={**os.environ, "RODJIT_AOT": "1", "NUMBA_NUM_THREADS": "3"},
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    # the worker's thread count told from the environment, as Numba would read it
+    assert done.stdout.split() == ["completed", "2", "3"]

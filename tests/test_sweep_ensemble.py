@@ -153,3 +153,22 @@ def test_a_batch_size_out_of_range_is_refused(bad):
     with pytest.raises(ValueError, match=r"batch_size = .* is out of range \(a whole number "
                                          r"from 1 to 100000\)"):
         rodjit.sweep(BASE, {"rod.mu": [0.0]}, batch_size=bad)
+
+
+def test_a_batched_workers_start_loads_the_batch_kernel(monkeypatch):
+    """``start_worker(cfg, batched=True)`` loads the batch kernel of cfg's family (the JIT's
+    here), not a run's loop: the worker's first batch then loads nothing."""
+    from rodjit.driver.run import Run
+    from rodjit.sweeps.workers import start_worker
+
+    monkeypatch.setattr(ensemble, "_LOADED", set())
+    runs = []
+    monkeypatch.setattr("rodjit.sweeps.workers.Run", lambda cfg: runs.append(cfg) or Run(cfg))
+    cfg = load_preset("paper-mu100").override({"time.t_end": 0.5})
+    info = start_worker(cfg, batched=True)
+    assert info["pid"] > 0 and not runs
+    assert len(ensemble._LOADED) == 1
+    first = run_batch(BatchTask(np.array([0]), cfg, Grid.from_spec({"rod.mu": [10.0]}), ()))
+    assert first.values["compile_time"][0] == 0.0 and first.values["status"][0] == "completed"
+    start_worker(cfg)                     # the per-point path: a run's loop
+    assert len(runs) == 1

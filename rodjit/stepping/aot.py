@@ -1,10 +1,13 @@
-"""The compiled loop of the built-in default run, compiled ahead of time at install.
+"""The compiled loop of the built-in default run, and the sweeps' batch kernel for the
+same types, compiled ahead of time at install.
 
 Numba compiles ``loop.start`` and ``loop.advance`` the first time a process calls them:
 about half a minute for the default integrator on a fresh install, and a later process,
 which loads them from Numba's disk cache, still pays Numba's own start-up (its import,
 typing and target machinery, about a second here) before its first step.  So ``pip install``
 builds, where it can, an extension module ``rodjit.stepping._aot_loop``: the two functions
+and the batch kernel of the sweeps' ensemble engine (``stepping.ensemble.run_batch``, which
+steps many points in one call: ``batch_for``; a sweep worker on it starts without Numba)
 compiled by Numba's ahead-of-time compiler (``numba.pycc``) for the argument types of the
 built-in default run (the ``energy`` integrator, the Aiki–Kosugi laws; ``build`` takes
 them from the default Config).  A run whose parameters have those types (``key``: their classes and
@@ -43,18 +46,20 @@ from pathlib import Path
 import numpy as np
 
 from .._jit import SOURCES_DIGEST
+from .ensemble import run_batch
 from .loop import advance, start
 
 __all__ = ["EXTENSION", "AotLoop", "key", "pack", "wrapper_source", "build", "loop_for",
-           "extension_record"]
+           "batch_for", "extension_record"]
 
 EXTENSION = "_aot_loop"                  # the module rodjit.stepping._aot_loop
 RECORD = EXTENSION + ".json"
 _OFF = ("0", "false", "no", "off")
 
-# the two entry points: name, the loop function, the arguments after the parameter tuples
-# (as the driver passes them: ``driver.run.Run``) with their types, and the result type
-_F2, _F1, _I1 = "f8[:,::1]", "f8[::1]", "i8[::1]"
+# the entry points: name, the loop function, the arguments after the parameter tuples
+# (as the driver passes them: ``driver.run.Run``; the sweeps' batches: ``sweeps.ensemble``)
+# with their types; each returns an int64
+_F3, _F2, _F1, _I2, _I1 = "f8[:,:,::1]", "f8[:,::1]", "f8[::1]", "i8[:,::1]", "i8[::1]"
 ENTRIES = {
     "start": (start, (("state", _F2), ("work", _F2), ("clock", _F1), ("count", _I1),
                       ("ev", _F1), ("snap_t", _F1), ("snap_step", _I1), ("snap_u", _F2),
@@ -64,6 +69,15 @@ ENTRIES = {
                           ("snap_t", _F1), ("snap_step", _I1), ("snap_u", _F2),
                           ("snap_v", _F2), ("diag", _F2), ("episodes", _F2),
                           ("bounces", _F2), ("fail", _F1), ("max_steps", "i8"))),
+    "run_batch": (run_batch, (("params", _F2), ("init", _F3), ("clock0", _F2),
+                              ("flight", _F1), ("state", _F2), ("trial", _F2), ("work", _F2),
+                              ("interp", _F2), ("sstats", _I1), ("clock", _F1),
+                              ("count", _I1), ("ev", _F1), ("snap_t", _F1),
+                              ("snap_step", _I1), ("snap_u", _F2), ("snap_v", _F2),
+                              ("diag", _F2), ("episodes", _F2), ("bounces", _F2),
+                              ("fail", _F1), ("track", _F2), ("eps", _F2), ("bout", _F2),
+                              ("st", _F1), ("fout", _F2), ("iout", _I2),
+                              ("max_steps", "i8"))),
 }
 
 
@@ -275,3 +289,21 @@ def loop_for(args, args_key: tuple | None = None) -> AotLoop | None:
     if module is None or (key(args) if args_key is None else args_key) != k:
         return None
     return AotLoop(module, args)
+
+
+def batch_for(args, args_key: tuple | None = None):
+    """The ahead-of-time batch kernel (``stepping.ensemble.run_batch``) for points whose
+    parameter tuples have the types of ``args`` (the batch's first point), as a function
+    of the kernel's arguments after the tuples; or None (the JIT's turn), as ``loop_for``.
+    A sweep's worker on it loads no JIT code: the half second of Numba's import and of
+    loading the batch kernel from the JIT's cache, at each worker's start."""
+    module, k = _extension()
+    if module is None or (key(args) if args_key is None else args_key) != k:
+        return None
+    p, ip = pack(args)
+    entry = module.run_batch
+
+    def call(*arrays_and_max_steps):
+        return entry(p, ip, *arrays_and_max_steps)
+
+    return call

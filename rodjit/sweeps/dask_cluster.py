@@ -13,8 +13,8 @@ from .dask_logging import route_dask_logs
 from .errors import DaskMissing
 from .ensemble import (BatchTask, lost_batch, run_tasks, timed, task_key as _key,
                        lost as _lost)
-from .point import PointTask, died, start_worker
-from .workers import HEARTBEAT, WORKER_ENV
+from .point import PointTask, died
+from .workers import HEARTBEAT, WORKER_ENV, start_worker
 
 __all__ = ["DaskCluster", "TASK_SECONDS", "MAX_BATCH", "CONNECT_TIMEOUT", "DASK_WORKER_CONFIG"]
 
@@ -49,7 +49,7 @@ class DaskCluster:
     name = "dask"
     depth = 2            # tasks in flight per worker thread
 
-    def __init__(self, scheduler: str, jobs: int, warm=None):
+    def __init__(self, scheduler: str, jobs: int, warm=None, batched: bool = False):
         try:
             import distributed
         except ImportError:
@@ -78,7 +78,7 @@ class DaskCluster:
             self.name = f"dask {scheduler}"
         self.jobs = max(1, sum(self.client.nthreads().values()))
         try:     # every worker imports rodjit now (and says so if it cannot)
-            self.client.run(start_worker, warm)
+            self.client.run(start_worker, warm, batched)
         except ImportError as exc:
             self.close()
             raise ValueError(f"the Dask workers cannot import rodjit ({exc}); install rodjit "

@@ -24,6 +24,7 @@ point that crashes it to its own batch.
 """
 from __future__ import annotations
 
+import functools
 import importlib
 import pickle
 import math
@@ -39,6 +40,7 @@ from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text, paramete
 from ..model.system import check_admissible, initial_state
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.observables import flight_time, lift_energy
+from ..stepping import aot
 from ..stepping import ensemble as E
 from ..stepping import impact as I
 from ..stepping import layout as L
@@ -49,7 +51,7 @@ from .point import (SUMMARY_COLUMNS, PointResult, PointTask, died, empty_columns
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
            "timed", "batches", "check_batch_size", "split_bounces", "as_batch", "EPISODE_ROWS",
-           "BATCH_SECONDS", "MAX_BATCH_SIZE", "impact_columns"]
+           "BATCH_SECONDS", "MAX_BATCH_SIZE", "impact_columns", "load_batch_kernel"]
 
 EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
 BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
@@ -257,6 +259,46 @@ def _scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows) -> tuple:
             np.zeros((track_rows, I.TRACK_SIZE)), np.zeros((EPISODE_ROWS, 2)))
 
 
+EV_CAP = 1024    # event rows of a point's scratch
+
+
+def _batch_kernel(p: _Point):
+    """The batch kernel for points of ``p``'s family, as a function of its arguments after
+    the parameter tuples: the one compiled ahead of time where it was built for these
+    types (``stepping.aot``), else the JIT's."""
+    ahead = aot.batch_for(p.params)
+    if ahead is not None:
+        return ahead
+    return functools.partial(E.run_batch, *p.params)
+
+
+def _load_kernel(p: _Point) -> float:
+    """Load (or compile) the batch kernel of ``p``'s family if this process has not: a
+    call with no point, so that loading is timed apart, as a Run's compile_time.  The
+    seconds it took (0 when the kernel was loaded before)."""
+    key = E.family(p.params)
+    if key in _LOADED:
+        return 0.0
+    cfg = p.config
+    scheme, ctrl = p.params[0], p.params[1]
+    n1 = cfg.rod.N + 1
+    cap_s, cap_d = capacities(cfg, ctrl)
+    t0 = time.perf_counter()
+    _batch_kernel(p)(np.zeros((0, len(p.row))), np.zeros((0, 2, n1)),
+                np.zeros((0, L.CLOCK_SIZE)), np.zeros(0),
+                *_scratch(n1, scheme, cap_s, cap_d, EV_CAP, 1),
+                np.zeros((BOUNCE_ROWS, I.BROW_SIZE)), np.zeros(3), np.zeros((0, E.F_SIZE)),
+                np.zeros((0, E.I_SIZE), dtype=np.int64), 1)
+    _LOADED.add(key)
+    return time.perf_counter() - t0
+
+
+def load_batch_kernel(config) -> float:
+    """Load the batch kernel a sweep's points of ``config``'s family run with (a worker's
+    start, ``workers.start_worker``); the seconds it took."""
+    return _load_kernel(_prepare(config))
+
+
 def _run_group(members, values):
     """One compiled call for points of one family; their columns into ``values``.
     Returns ``(positions, bout, iout)`` for the bounce rows, the seconds of the compiled
@@ -282,20 +324,10 @@ def _run_group(members, values):
     fout = np.zeros((m, E.F_SIZE))
     iout = np.zeros((m, E.I_SIZE), dtype=np.int64)
     bout = np.zeros((BOUNCE_ROWS * m, I.BROW_SIZE))
-    ev_cap = 1024
-    compile_time = 0.0
-    key = E.family(p0.params)
-    if key not in _LOADED:
-        # the first call of these types in this process: with no point, so that loading
-        # (or compiling) the batch kernel is timed apart, as a Run's compile_time
-        t0 = time.perf_counter()
-        E.run_batch(*p0.params, params[:0], init[:0], clock0[:0], flight[:0],
-                    *_scratch(n1, scheme, cap_s, cap_d, ev_cap, 1), bout, np.zeros(3),
-                    fout[:0], iout[:0], 1)
-        compile_time = time.perf_counter() - t0
-        _LOADED.add(key)
+    ev_cap = EV_CAP
+    compile_time = _load_kernel(p0)
     t0 = time.perf_counter()
-    E.run_batch(*p0.params, params, init, clock0, flight,
+    _batch_kernel(p0)(params, init, clock0, flight,
                 *_scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows), bout, np.zeros(3),
                 fout, iout, int(max(1, NODE_STEPS_PER_CALL // n1)))
     elapsed = time.perf_counter() - t0

@@ -48,14 +48,14 @@ def check_scheduler(scheduler) -> None:
                      f"tcp://HOST:PORT (an existing Dask scheduler))")
 
 
-def make_executor(scheduler: str | None, jobs: int, warm=None):
+def make_executor(scheduler: str | None, jobs: int, warm=None, batched: bool = False):
     """The executor for ``--scheduler`` (see ``check_scheduler``): None/"processes" (the
     local pool), "inline", "local" (Dask LocalCluster) or "tcp://HOST:PORT" (an existing
     Dask cluster); workers load the kernels of the Config ``warm`` before their first
-    point."""
+    point (``batched``: the ensemble engine's batch kernel, not a run's loop)."""
     check_scheduler(scheduler)
     if scheduler in (None, "processes"):
-        return ProcessPool(jobs, warm)
+        return ProcessPool(jobs, warm, batched)
     if scheduler == "inline":
         return InlineExecutor()
-    return DaskCluster(scheduler, jobs, warm)
+    return DaskCluster(scheduler, jobs, warm, batched)

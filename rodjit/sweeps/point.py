@@ -12,6 +12,7 @@ import math
 import os
 import pickle
 import socket
+import sys
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -34,7 +35,7 @@ from ..stepping import layout as L
 from .batch import BatchResult
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
-           "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS", "start_worker",
+           "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS",
            "worker_info", "reissue_warnings", "bounce_values", "pass_on"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
@@ -287,21 +288,19 @@ def run_points(points: tuple[PointTask, ...]) -> bytes:
     return pickle.dumps([run_point(task) for task in points], protocol=pickle.HIGHEST_PROTOCOL)
 
 
-def start_worker(warm=None) -> dict:
-    """A worker's start: load (or compile) the kernels the Config ``warm`` runs with, if
-    given, so its first point does not pay for it (a configuration that cannot start is
-    left to its point to report); then who the worker is (``worker_info``)."""
-    if warm is not None:
-        try:
-            Run(warm).start(Sink())
-        except Exception:
-            pass
-    return worker_info()
-
-
 def worker_info() -> dict:
-    import numba
-
-    return {"pid": os.getpid(), "host": socket.gethostname(),
-            # numba.config sets its options at import: not in its (absent) stubs' view
-            "numba_threads": int(getattr(numba.config, "NUMBA_NUM_THREADS"))}
+    """Who this worker is: its process, host and the threads Numba runs there (read from
+    the environment where Numba is not loaded, as it would read it: a worker on the
+    ahead-of-time kernels never imports Numba, whose import alone takes a tenth of a
+    second)."""
+    numba = sys.modules.get("numba")
+    if numba is not None:
+        # numba.config sets its options at import: not in its (absent) stubs' view
+        threads = int(getattr(numba.config, "NUMBA_NUM_THREADS"))
+    else:
+        try:
+            threads = int(os.environ.get("NUMBA_NUM_THREADS", ""))
+        except ValueError:
+            threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+                else (os.cpu_count() or 1)
+    return {"pid": os.getpid(), "host": socket.gethostname(), "numba_threads": threads}

@@ -12,8 +12,8 @@ from multiprocessing.connection import wait
 from ..output.h5files import abandoned, quiet_disk_errors
 from .ensemble import lost as _lost
 from .ensemble import run_task
-from .point import PointTask, start_worker
-from .workers import HEARTBEAT, worker_environment
+from .point import PointTask
+from .workers import HEARTBEAT, start_worker, worker_environment
 
 __all__ = ["ProcessPool"]
 
@@ -42,8 +42,9 @@ def _die_with_parent() -> None:
         pass
 
 
-def _worker_main(conn, warm) -> None:
-    """A pool worker: load the kernels of ``warm`` (a Config), then run the tasks the parent
+def _worker_main(conn, warm, batched: bool = False) -> None:
+    """A pool worker: load the kernels of ``warm`` (a Config; ``batched``: the ensemble
+    engine's, ``workers.start_worker``), then run the tasks the parent
     sends until it sends None or goes away."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)    # Ctrl-C is the parent's to handle
     # the parent ends a worker by SIGTERM when the sweep stops: it exits without a word
@@ -52,7 +53,7 @@ def _worker_main(conn, warm) -> None:
     _die_with_parent()
     quiet_disk_errors()       # a run file the disk refuses: the parent reports it
     try:
-        conn.send(("ready", start_worker(warm)))
+        conn.send(("ready", start_worker(warm, batched)))
         while True:
             try:
                 task = conn.recv()
@@ -72,9 +73,9 @@ def _worker_main(conn, warm) -> None:
 class _Worker:
     """One pool process and the points sent to it, in the order it runs them."""
 
-    def __init__(self, ctx, warm):
+    def __init__(self, ctx, warm, batched: bool = False):
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker_main, args=(child, warm), daemon=True,
+        self.process = ctx.Process(target=_worker_main, args=(child, warm, batched), daemon=True,
                                    name="rodjit-sweep-worker")
         with worker_environment():
             self.process.start()
@@ -121,9 +122,10 @@ class ProcessPool:
     name = "processes"
     DEPTH = 2
 
-    def __init__(self, jobs: int, warm=None):
+    def __init__(self, jobs: int, warm=None, batched: bool = False):
         self.jobs = jobs
         self.warm = warm
+        self.batched = batched
         self.ctx = mp.get_context("spawn")
         self.workers: list[_Worker] = []
         self.started = time.perf_counter()
@@ -131,7 +133,7 @@ class ProcessPool:
         self.deaths = 0
 
     def _spawn(self) -> _Worker:
-        w = _Worker(self.ctx, self.warm)
+        w = _Worker(self.ctx, self.warm, self.batched)
         self.workers.append(w)
         return w
 

@@ -222,7 +222,8 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
         from ..gpu.executor import cuda_executor
         executor = cuda_executor(base, grid, todo[0])
     else:                  # last check: a cluster may be unreachable
-        executor = make_executor(scheduler, jobs, warm)
+        # (the points go in batches to the ensemble engine unless each writes a run file)
+        executor = make_executor(scheduler, jobs, warm, batched=runs_dir is None and ENGINE)
     if runs_dir is not None:
         runs_dir.mkdir(parents=True, exist_ok=True)
     if output is not None:
