@@ -172,3 +172,25 @@ def test_a_batched_workers_start_loads_the_batch_kernel(monkeypatch):
     assert first.values["compile_time"][0] == 0.0 and first.values["status"][0] == "completed"
     start_worker(cfg)                     # the per-point path: a run's loop
     assert len(runs) == 1
+
+
+def test_batches_start_small_then_carry_the_measured_cost_and_shrink_at_the_end():
+    base = load_preset("paper-mu100")
+    grid = Grid.from_spec({"rod.mu": "linspace(0, 100, 1000)"})
+    timing = {"points": 0, "wall": 0.0}
+    gen = ensemble.batches(np.arange(1000), base, grid, (), None, timing, 2)
+    sizes = [len(next(gen).index) for _ in range(4)]
+    assert sizes == [ensemble.FIRST_BATCH] * 4 and ensemble.FIRST_BATCH <= 2
+    timing.update(points=100, wall=1.0)              # 10 ms a point
+    k = int(ensemble.BATCH_SECONDS / 0.01)
+    assert len(next(gen).index) == k
+    rest = [t.index for t in gen]
+    seen = np.concatenate([np.arange(4 * ensemble.FIRST_BATCH + k), *rest])
+    assert np.array_equal(seen, np.arange(1000))     # every point once, in order
+    left = 1000 - 4 * ensemble.FIRST_BATCH - k
+    for idx in rest:                                 # never more than a quarter of what
+        assert len(idx) <= max(1, -(-left // 4))     # is left: the workers end together
+        left -= len(idx)
+    assert len(rest[-1]) == 1
+    fixed = ensemble.batches(np.arange(10), base, grid, (), 4, timing, 2)
+    assert [len(t.index) for t in fixed] == [4, 4, 2]

@@ -60,7 +60,10 @@ NO_SAMPLES = ("the macroscopic-contact observables need diagnostics samples "
 
 
 BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
-FIRST_BATCH = 8        # points of the batches sent before any has been timed
+# points of the batches sent before any has been timed: small, since each worker takes two
+# at once (one running, one waiting), and a costly region at the grid's start dealt out
+# in a few large batches would keep one worker busy while the others wait
+FIRST_BATCH = 2
 MAX_BATCH_SIZE = 100_000
 
 
