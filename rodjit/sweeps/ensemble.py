@@ -288,10 +288,10 @@ def _load_kernel(p: _Point) -> float:
     cap_s, cap_d = capacities(cfg, ctrl)
     t0 = time.perf_counter()
     _batch_kernel(p)(np.zeros((0, len(p.row))), np.zeros((0, 2, n1)),
-                np.zeros((0, L.CLOCK_SIZE)), np.zeros(0),
-                *_scratch(n1, scheme, cap_s, cap_d, EV_CAP, 1),
-                np.zeros((BOUNCE_ROWS, I.BROW_SIZE)), np.zeros(3), np.zeros((0, E.F_SIZE)),
-                np.zeros((0, E.I_SIZE), dtype=np.int64), 1)
+                     np.zeros((0, L.CLOCK_SIZE)), np.zeros(0),
+                     *_scratch(n1, scheme, cap_s, cap_d, EV_CAP, 1),
+                     np.zeros((BOUNCE_ROWS, I.BROW_SIZE)), np.zeros(3),
+                     np.zeros((0, E.F_SIZE)), np.zeros((0, E.I_SIZE), dtype=np.int64), 1)
     _LOADED.add(key)
     return time.perf_counter() - t0
 
@@ -327,12 +327,11 @@ def _run_group(members, values):
     fout = np.zeros((m, E.F_SIZE))
     iout = np.zeros((m, E.I_SIZE), dtype=np.int64)
     bout = np.zeros((BOUNCE_ROWS * m, I.BROW_SIZE))
-    ev_cap = EV_CAP
     compile_time = _load_kernel(p0)
     t0 = time.perf_counter()
     _batch_kernel(p0)(params, init, clock0, flight,
-                *_scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows), bout, np.zeros(3),
-                fout, iout, int(max(1, NODE_STEPS_PER_CALL // n1)))
+                      *_scratch(n1, scheme, cap_s, cap_d, EV_CAP, track_rows), bout,
+                      np.zeros(3), fout, iout, int(max(1, NODE_STEPS_PER_CALL // n1)))
     elapsed = time.perf_counter() - t0
     pos = np.array([k for k, _ in members], dtype=np.int64)
     res = iout[:, E.I_RESULT]
