@@ -32,7 +32,8 @@ the overhead per point.
    With ``--baseline CHECKOUT`` also the 2000-point sweep by this tree's and that tree's
    ``rodjit sweep`` (child processes, in turns, ``--repeat`` pairs): the speed-up, the two
    sweeps' total steps, and the speed-up per step (the target's allowance for points that
-   now take more steps).  With ``--memory`` the 20000-point sweep once more through the
+   now take more steps).  A CHECKOUT without a usable ahead-of-time extension gets it
+   compiled first (``ahead_of_time``), as its install would.  With ``--memory`` the 20000-point sweep once more through the
    command line, its process tree's resident memory summed every 20 ms: the peak.
    The diffrax row (when jax and diffrax import; ``--diffrax`` runs only it): diffrax Tsit5
    ``jax.jit(jax.vmap(...))`` on the CPU over (μ, κ_b, β) of the 2000-point grid
@@ -90,15 +91,48 @@ def big_grid(mu_values: int) -> dict:
             "floor.beta": [0.03, 0.05, 0.08, 0.1, 0.12]}
 
 
-def cli_sweep(tree: str, grid: dict, out: Path, jobs: int) -> float:
-    """Wall time of ``rodjit sweep paper-mu100`` over ``grid`` run by the rodjit of the
-    checkout ``tree`` in a child process."""
+def _sweep_command(tree: str, grid: dict, out: Path, jobs: int) -> tuple[list, dict]:
+    """``rodjit sweep paper-mu100`` over ``grid`` by the rodjit of the checkout ``tree``:
+    its arguments and environment."""
     args = [sys.executable, "-m", "rodjit", "sweep", "paper-mu100", "-o", str(out),
             "--overwrite", "--jobs", str(jobs), "-q"]
     for key, values in grid.items():
         text = values if isinstance(values, str) else ",".join(repr(v) for v in values)
         args += ["--grid", f"{key}={text}"]
+    return args, dict(os.environ, PYTHONPATH=str(Path(tree).resolve()))
+
+
+_AHEAD = """
+import sys
+from rodjit.stepping import aot
+if aot._extension()[0] is None and hasattr(aot, "build"):
+    from rodjit.config import Config
+    from rodjit.driver.run import Run
+    from pathlib import Path
+    aot.build(Path(aot.__file__).parent, Run(Config())._args())
+    print("built")
+"""
+
+
+def ahead_of_time(tree: str) -> None:
+    """Compile the checkout ``tree``'s ahead-of-time extension where it lacks a usable one,
+    as its install would (a baseline on the JIT would pay Numba's start-up in every worker,
+    which its users do not)."""
     env = dict(os.environ, PYTHONPATH=str(Path(tree).resolve()))
+    # run in the checkout: ``python -c`` looks in the working directory first
+    done = subprocess.run([sys.executable, "-c", _AHEAD], env=env, cwd=tree,
+                          capture_output=True, text=True)
+    if done.returncode != 0:
+        print(f"   {tree}: no ahead-of-time extension ({done.stderr.strip().splitlines()[-1]})"
+              f"; it runs on the JIT")
+    elif "built" in done.stdout:
+        print(f"   {tree}: its ahead-of-time extension compiled, as its install would")
+
+
+def cli_sweep(tree: str, grid: dict, out: Path, jobs: int) -> float:
+    """Wall time of ``rodjit sweep paper-mu100`` over ``grid`` run by the rodjit of the
+    checkout ``tree`` in a child process."""
+    args, env = _sweep_command(tree, grid, out, jobs)
     t0 = time.perf_counter()
     subprocess.run(args, env=env, check=True, cwd=out.parent, stdout=subprocess.DEVNULL)
     return time.perf_counter() - t0
@@ -130,12 +164,7 @@ def tree_rss(pid: int) -> int:
 def peak_memory(tree: str, grid: dict, out: Path, jobs: int) -> dict:
     """The peak resident memory of ``rodjit sweep`` over ``grid`` (its process and its
     workers together, sampled every 20 ms) and its wall time."""
-    args = [sys.executable, "-m", "rodjit", "sweep", "paper-mu100", "-o", str(out),
-            "--overwrite", "--jobs", str(jobs), "-q"]
-    for key, values in grid.items():
-        text = values if isinstance(values, str) else ",".join(repr(v) for v in values)
-        args += ["--grid", f"{key}={text}"]
-    env = dict(os.environ, PYTHONPATH=str(Path(tree).resolve()))
+    args, env = _sweep_command(tree, grid, out, jobs)
     t0 = time.perf_counter()
     proc = subprocess.Popen(args, env=env, cwd=out.parent, stdout=subprocess.DEVNULL)
     peak = 0
@@ -157,6 +186,7 @@ def baseline_part(tree: str, baseline: str, tmp, repeat: int) -> dict:
     """The 2000-point sweep by this tree's and ``baseline``'s command line, in turns."""
     grid = big_grid(200)
     here_walls, base_walls = [], []
+    ahead_of_time(baseline)
     cli_sweep(baseline, {"rod.mu": [0.0]}, Path(tmp) / "warm.h5", 1)   # its kernels cached
     for _ in range(repeat):
         here_walls.append(cli_sweep(tree, grid, Path(tmp) / "cli_here.h5", 2))
@@ -186,6 +216,8 @@ def stepping_bound(base, grid: dict, tmp, repeat: int, baseline: str | None) -> 
     jobs = 2
     here = str(Path(__file__).resolve().parents[1])
     runs, ratios, base_walls = [], [], []
+    if baseline is not None:
+        ahead_of_time(baseline)
     for _ in range(repeat):
         r = timed_sweep(base, grid, tmp, jobs=jobs)
         table = rodjit.load_sweep(Path(tmp) / "bench_sweep.h5")
