@@ -230,22 +230,29 @@ def test_the_loop_releases_the_gil_while_it_computes(built, use, monkeypatch):
     assert wakes > 0.2 * took / 0.01, (wakes, took)
 
 
+def _without_numba(module, key) -> str:
+    """Python that makes an import of Numba or llvmlite end the process with that message,
+    then points the loader at the built extension ``module`` (of ``key``): the start of a
+    child process that must run on the extension alone."""
+    return ("import importlib.abc, importlib.util, sys\n"
+            "class Refuse(importlib.abc.MetaPathFinder):\n"
+            "    def find_spec(self, name, path=None, target=None):\n"
+            "        if name.partition('.')[0] in ('numba', 'llvmlite'):\n"
+            "            raise SystemExit(f'{name} was imported')\n"
+            "sys.meta_path.insert(0, Refuse())\n"
+            "from rodjit.stepping import aot\n"
+            "spec = importlib.util.spec_from_file_location(aot.EXTENSION, "
+            f"{str(module.__file__)!r})\n"
+            "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
+            f"aot._EXT[:] = [(m, {key!r})]\n")
+
+
 def test_the_default_command_never_imports_numba(built, tmp_path):
     """``rodjit run`` of the default on the extension: Numba and llvmlite are never
     imported (nothing is compiled or loaded from the JIT's cache), and the file is the
     JIT's, bit for bit."""
     module, key, directory = built
-    code = (
-        "import importlib.abc, importlib.util, sys\n"
-        "class Refuse(importlib.abc.MetaPathFinder):\n"
-        "    def find_spec(self, name, path=None, target=None):\n"
-        "        if name.partition('.')[0] in ('numba', 'llvmlite'):\n"
-        "            raise SystemExit(f'{name} was imported')\n"
-        "sys.meta_path.insert(0, Refuse())\n"
-        "from rodjit.stepping import aot\n"
-        f"spec = importlib.util.spec_from_file_location(aot.EXTENSION, {str(module.__file__)!r})\n"
-        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
-        f"aot._EXT[:] = [(m, {key!r})]\n"
+    code = _without_numba(module, key) + (
         "sys.argv = ['rodjit', 'run', '--t-end', '1.5', '-o', 'aot.h5']\n"
         "from rodjit.entry import main\n"
         "main()\n")
@@ -307,17 +314,7 @@ def test_a_sweep_on_the_extension_never_imports_numba(built, tmp_path):
     and llvmlite are never imported (a worker that loaded them would spend half a second on
     it before its first point)."""
     module, key, directory = built
-    code = (
-        "import importlib.abc, importlib.util, sys\n"
-        "class Refuse(importlib.abc.MetaPathFinder):\n"
-        "    def find_spec(self, name, path=None, target=None):\n"
-        "        if name.partition('.')[0] in ('numba', 'llvmlite'):\n"
-        "            raise SystemExit(f'{name} was imported')\n"
-        "sys.meta_path.insert(0, Refuse())\n"
-        "from rodjit.stepping import aot\n"
-        f"spec = importlib.util.spec_from_file_location(aot.EXTENSION, {str(module.__file__)!r})\n"
-        "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
-        f"aot._EXT[:] = [(m, {key!r})]\n"
+    code = _without_numba(module, key) + (
         "import rodjit\n"
         "from rodjit.sweeps.workers import start_worker\n"
         "cfg = rodjit.load_preset('paper-mu100').override({'time.t_end': 1.5})\n"
