@@ -33,7 +33,10 @@ the overhead per point.
    ``rodjit sweep`` (child processes, in turns, ``--repeat`` pairs): the speed-up, the two
    sweeps' total steps, and the speed-up per step (the target's allowance for points that
    now take more steps).  A CHECKOUT without a usable ahead-of-time extension gets it
-   compiled first (``ahead_of_time``), as its install would.  With ``--memory`` the 20000-point sweep once more through the
+   compiled first (``ahead_of_time``), as its install would.  Then the compiled loop's cost
+   per step in both trees on 16 of the grid's points, the two at once on the two cores
+   (``loop_pairs``), which says how much of the per-step speed-up the loop itself holds
+   or gives back.  With ``--memory`` the 20000-point sweep once more through the
    command line, its process tree's resident memory summed every 20 ms: the peak.
    The diffrax row (when jax and diffrax import; ``--diffrax`` runs only it): diffrax Tsit5
    ``jax.jit(jax.vmap(...))`` on the CPU over (μ, κ_b, β) of the 2000-point grid
@@ -58,6 +61,7 @@ end-to-end ratios are printed too.  Each configuration is timed --repeat times i
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import subprocess
 import sys
@@ -202,6 +206,87 @@ def baseline_part(tree: str, baseline: str, tmp, repeat: int) -> dict:
     return {"baseline": baseline, "baseline_wall": min(base_walls), "wall": min(here_walls),
             "speedup": ratio, "steps_baseline": steps_base, "steps": steps_here,
             "speedup_per_step": per_step}
+
+
+# the grid points whose loops ``loop_pairs`` times: μ × κ_b × β of part 4's grid without
+# μ = 0 (its chattering points take twenty times the steps and are 1 in 200 of the grid)
+LOOP_POINTS = tuple((mu, kb, beta) for mu in (10.0, 40.0, 70.0, 100.0)
+                    for kb in (1000.0, 3000.0) for beta in (0.05, 0.1))
+
+# a child of ``loop_pairs``: pinned to one core, the compiled loop's best ``run_time`` per
+# point over ``reps`` calls (after a warm-up call each), per step taken
+_LOOP = """
+import json, os, sys, warnings
+warnings.simplefilter("ignore")
+cpu, reps, t_end, points = json.loads(sys.argv[1])
+if cpu is not None:
+    os.sched_setaffinity(0, {cpu})
+import rodjit
+from rodjit.presets import load_preset
+base = load_preset("paper-mu100")
+if t_end is not None:
+    base = base.override({"time.t_end": t_end})
+configs = [base.override({"rod.mu": m, "floor.kappa_b": k, "floor.beta": b})
+           for m, k, b in points]
+for c in configs:
+    rodjit.simulate(c)
+best = [float("inf")] * len(configs)
+steps = [0] * len(configs)
+for _ in range(reps):
+    for j, c in enumerate(configs):
+        r = rodjit.simulate(c)
+        best[j] = min(best[j], r.stats["run_time"])
+        steps[j] = int(r.stats["steps"])
+print(json.dumps({"run_time": sum(best), "steps": sum(steps)}))
+"""
+
+
+def loop_pairs(here: str, baseline: str, rounds: int, points=LOOP_POINTS, reps: int = 9,
+               t_end: float | None = None) -> dict:
+    """The compiled loop's cost per step in this tree and in ``baseline``, on the same grid
+    points (``LOOP_POINTS``, best of ``reps`` calls each): what is left when the sweep
+    around the loop costs nothing.  The two trees run at the same time, each pinned to one
+    of two cores and swapped every round, so that the shared machine's drift, which moves
+    its speed by 10–20 % from minute to minute, hits both alike (one after the other, it
+    decides the ratio); on one core they run in turns.  Returns both trees' ns per step
+    per round and the median of the rounds' ratios (baseline / here)."""
+    cores = sorted(os.sched_getaffinity(0))[:2] if hasattr(os, "sched_getaffinity") else []
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
+               NUMBA_NUM_THREADS="1")
+
+    def start(tree, cpu):
+        arg = json.dumps([cpu, reps, t_end, [list(p) for p in points]])
+        return subprocess.Popen([sys.executable, "-c", _LOOP, arg], cwd=tree,
+                                env=dict(env, PYTHONPATH=str(Path(tree).resolve())),
+                                stdout=subprocess.PIPE, text=True)
+
+    def finish(*procs):
+        outs = [p.communicate()[0] for p in procs]     # both waited for, even if one failed
+        for p in procs:
+            if p.returncode != 0:
+                raise SystemExit(f"a loop timing child exited {p.returncode}")
+        rs = [json.loads(out.strip().splitlines()[-1]) for out in outs]
+        return [(1e9 * r["run_time"] / r["steps"], r["steps"]) for r in rs]
+
+    here_ns, base_ns = [], []
+    for k in range(rounds):
+        if len(cores) == 2:
+            (ha, steps_here), (hb, steps_base) = finish(start(here, cores[k % 2]),
+                                                        start(baseline, cores[1 - k % 2]))
+        else:
+            (ha, steps_here), = finish(start(here, None))
+            (hb, steps_base), = finish(start(baseline, None))
+        here_ns.append(ha)
+        base_ns.append(hb)
+    ratio = float(np.median(np.array(base_ns) / np.array(here_ns)))
+    how = ("both trees at once, one core each, swapped every round" if len(cores) == 2
+           else "in turns")
+    print(f"   the compiled loop per step on {len(points)} grid points (best of {reps} calls "
+          f"each; {how}, {rounds} rounds): here {np.median(here_ns):.0f} ns, {baseline} "
+          f"{np.median(base_ns):.0f} ns: {ratio:.2f}x (baseline / here, median of rounds)")
+    return {"points": [list(p) for p in points], "reps": reps, "here_ns": here_ns,
+            "baseline_ns": base_ns, "steps_here": steps_here, "steps_baseline": steps_base,
+            "ratio": ratio}
 
 
 def objects(path) -> int:
@@ -484,6 +569,7 @@ def main(argv=None):
             here = str(Path(__file__).resolve().parents[1])
             if args.baseline:
                 out["baseline"] = baseline_part(here, args.baseline, tmp, args.repeat)
+                out["baseline_loop"] = loop_pairs(here, args.baseline, 2 * args.repeat)
             if args.memory:
                 m = peak_memory(here, big_grid(2000), Path(tmp) / "memory.h5", 2)
                 print(f"   20000 points, 2 jobs, CLI: peak resident memory of the sweep and its "

@@ -6,6 +6,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import bench_sweep  # noqa: E402
 
@@ -52,3 +54,27 @@ def test_a_baseline_that_cannot_compile_it_says_it_runs_on_the_jit(tmp_path, cap
     out = capsys.readouterr().out
     assert "no ahead-of-time extension (RuntimeError: no C compiler); it runs on the JIT" in out
     assert not (tree / "rodjit/stepping/built").exists()
+
+
+def test_loop_pairs_times_both_trees_on_the_same_points(capsys):
+    """The loop's cost per step in two trees at once (here: this tree against itself, so
+    both take the same steps); a child that fails stops the benchmark."""
+    here = str(Path(__file__).resolve().parents[1])
+    r = bench_sweep.loop_pairs(here, here, rounds=2, points=((40.0, 1000.0, 0.05),
+                                                              (70.0, 3000.0, 0.1)),
+                               reps=1, t_end=0.05)
+    assert r["steps_here"] == r["steps_baseline"] > 0
+    assert len(r["here_ns"]) == len(r["baseline_ns"]) == 2
+    assert all(0.0 < x < 1e6 for x in r["here_ns"] + r["baseline_ns"])
+    assert 0.0 < r["ratio"] < 100.0
+    assert "the compiled loop per step on 2 grid points" in capsys.readouterr().out
+
+
+def test_loop_pairs_stops_on_a_failing_child(tmp_path):
+    here = str(Path(__file__).resolve().parents[1])
+    broken = tmp_path / "broken"
+    (broken / "rodjit").mkdir(parents=True)
+    (broken / "rodjit" / "__init__.py").write_text("raise ImportError('not a rodjit')\n")
+    with pytest.raises(SystemExit, match="a loop timing child exited 1"):
+        bench_sweep.loop_pairs(here, str(broken), rounds=1, points=((40.0, 1000.0, 0.05),),
+                               reps=1, t_end=0.05)
