@@ -1,5 +1,6 @@
 """The ahead-of-time compiled loop of the default run and the sweeps' batch kernel for its
-types (``rodjit.stepping.aot``), built at install.  Everything else about the package is in pyproject.toml.
+types (``rodjit.stepping.aot``), built at install.  Everything else about the package is in
+pyproject.toml.
 
 ``build_ext`` compiles the extension ``rodjit.stepping._aot_loop`` in a separate
 interpreter that imports only the modules it needs (not ``rodjit/__init__``, which would

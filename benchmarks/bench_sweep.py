@@ -248,8 +248,8 @@ def loop_pairs(here: str, baseline: str, rounds: int, points=LOOP_POINTS, reps: 
     around the loop costs nothing.  The two trees run at the same time, each pinned to one
     of two cores and swapped every round, so that the shared machine's drift, which moves
     its speed by 10 % to 2× from one minute to the next, hits both alike (one after the
-    other, it decides the ratio); on one core they run in turns.  Returns both trees' ns per step
-    per round and the median of the rounds' ratios (baseline / here)."""
+    other, it decides the ratio); on one core they run in turns.  Returns both trees' ns
+    per step per round and the median of the rounds' ratios (baseline / here)."""
     cores = sorted(os.sched_getaffinity(0))[:2] if hasattr(os, "sched_getaffinity") else []
     env = dict(os.environ, OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1",
                NUMBA_NUM_THREADS="1")

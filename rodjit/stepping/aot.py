@@ -281,14 +281,21 @@ class AotLoop:
         return self._advance(self.p, self.ip, *arrays_and_max_steps)
 
 
+def _module_for(args, args_key: tuple | None):
+    """The extension if it is usable and was built for the types of ``args`` (whose
+    ``key`` the caller may already have), else None."""
+    module, k = _extension()
+    if module is None or (key(args) if args_key is None else args_key) != k:
+        return None
+    return module
+
+
 def loop_for(args, args_key: tuple | None = None) -> AotLoop | None:
     """The ahead-of-time loop for parameter tuples ``args`` (whose ``key`` the caller may
     already have), or None (the JIT's turn): no usable extension, or one built for other
     types."""
-    module, k = _extension()
-    if module is None or (key(args) if args_key is None else args_key) != k:
-        return None
-    return AotLoop(module, args)
+    module = _module_for(args, args_key)
+    return None if module is None else AotLoop(module, args)
 
 
 def batch_for(args, args_key: tuple | None = None):
@@ -297,8 +304,8 @@ def batch_for(args, args_key: tuple | None = None):
     of the kernel's arguments after the tuples; or None (the JIT's turn), as ``loop_for``.
     A sweep's worker on it loads no JIT code: the half second of Numba's import and of
     loading the batch kernel from the JIT's cache, at each worker's start."""
-    module, k = _extension()
-    if module is None or (key(args) if args_key is None else args_key) != k:
+    module = _module_for(args, args_key)
+    if module is None:
         return None
     p, ip = pack(args)
     entry = module.run_batch

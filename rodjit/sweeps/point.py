@@ -36,7 +36,7 @@ from .batch import BatchResult
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
            "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS",
-           "worker_info", "reissue_warnings", "bounce_values", "pass_on"]
+           "default_jobs", "worker_info", "reissue_warnings", "bounce_values", "pass_on"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -288,6 +288,14 @@ def run_points(points: tuple[PointTask, ...]) -> bytes:
     return pickle.dumps([run_point(task) for task in points], protocol=pickle.HIGHEST_PROTOCOL)
 
 
+def default_jobs() -> int:
+    """The cores this process may use (also Numba's default thread count)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not Linux
+        return os.cpu_count() or 1
+
+
 def worker_info() -> dict:
     """Who this worker is: its process, host and the threads Numba runs there (read from
     the environment where Numba is not loaded, as it would read it: a worker on the
@@ -301,6 +309,5 @@ def worker_info() -> dict:
         try:
             threads = int(os.environ.get("NUMBA_NUM_THREADS", ""))
         except ValueError:
-            threads = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
-                else (os.cpu_count() or 1)
+            threads = default_jobs()
     return {"pid": os.getpid(), "host": socket.gethostname(), "numba_threads": threads}

@@ -75,8 +75,8 @@ class _Worker:
 
     def __init__(self, ctx, warm, batched: bool = False):
         self.conn, child = ctx.Pipe()
-        self.process = ctx.Process(target=_worker_main, args=(child, warm, batched), daemon=True,
-                                   name="rodjit-sweep-worker")
+        self.process = ctx.Process(target=_worker_main, args=(child, warm, batched),
+                                   daemon=True, name="rodjit-sweep-worker")
         with worker_environment():
             self.process.start()
         child.close()

@@ -11,7 +11,7 @@ from contextlib import contextmanager
 from ..driver.run import Run
 from ..records.sink import Sink
 from .ensemble import load_batch_kernel
-from .point import worker_info
+from .point import default_jobs, worker_info
 
 __all__ = ["HEARTBEAT", "WORKER_ENV", "default_jobs", "worker_environment", "start_worker"]
 
@@ -20,14 +20,6 @@ HEARTBEAT = 0.2
 # one thread per worker: the workers are the parallelism (no oversubscribed cores)
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
               "MKL_NUM_THREADS": "1"}
-
-
-def default_jobs() -> int:
-    """The cores this process may use."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:   # not Linux
-        return os.cpu_count() or 1
 
 
 @contextmanager
