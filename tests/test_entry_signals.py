@@ -168,3 +168,17 @@ def test_a_signal_inside_llvmlites_callbacks_arrives_just_after_them():
         signal.signal(signal.SIGALRM, old)
         signals._PENDING.clear()
         signals._ALARM_BEFORE.clear()
+
+
+def test_a_signal_inside_the_import_of_multiprocessing_is_not_taken_for_a_worker(monkeypatch):
+    """A signal that lands while this process imports ``multiprocessing`` (found under load,
+    at the command's start) meets the module half made, without ``parent_process``: the
+    early handler must still say its one line and exit, not fail with a traceback."""
+    import types
+
+    from rodjit.driver import signals
+
+    monkeypatch.setitem(sys.modules, "multiprocessing", types.ModuleType("multiprocessing"))
+    assert signals.in_worker() is False
+    monkeypatch.delitem(sys.modules, "multiprocessing")
+    assert signals.in_worker() is False

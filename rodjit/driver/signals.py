@@ -156,9 +156,11 @@ def _exit_at_once(signum, frame):
 
 def in_worker() -> bool:
     """Whether this process is a worker started by another one (``multiprocessing``: a
-    sweep's pool), whose parent reports for it."""
-    mp = sys.modules.get("multiprocessing")
-    return mp is not None and mp.parent_process() is not None
+    sweep's pool), whose parent reports for it.  A ``multiprocessing`` still being imported
+    (a signal can land inside that import) lacks ``parent_process``: this process is then
+    the one importing it, not a worker, which has it whole before running any of ours."""
+    parent_process = getattr(sys.modules.get("multiprocessing"), "parent_process", None)
+    return parent_process is not None and parent_process() is not None
 
 
 def install_early_handlers(exit_now: bool = False) -> None:
