@@ -7,31 +7,76 @@
 """
 import os as _os
 import sys as _sys
+from typing import TYPE_CHECKING, Any
+
+from . import _lazy
 
 # being located by ``python -m rodjit``, or imported by the installed ``rodjit`` command:
-# handle SIGINT/SIGTERM before the heavy imports below
+# handle SIGINT/SIGTERM before anything heavy is imported
 if _sys.argv[:1] == ["-m"] or _os.path.basename(_sys.argv[0] if _sys.argv else "") in (
         "rodjit", "rodjit.exe"):
     from .driver.signals import install_early_handlers
     install_early_handlers(exit_now=True)
 
-from . import laws
-from .analysis import (Convergence, FitError, FitResult, TableFit, converge, fit, fit_table,
-                       load_convergence, observables)
-from .config import Config
-from .driver.files import (OutputExists, RunInterrupted, RunPlan, plan_run, resume_file,
-                           run_to_file)
-from .driver.run import SimulationError
-from .driver.simulate import simulate
-from .output.hdf5 import load_file
-from .output.run_view import open_run
-from .plotting.animation import animate
-from .plotting.dispatch import plot
-from .presets import load_preset, preset_names
-from .records.result import Result
-from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepPlan, SweepTable,
-                     load_sweep, plan_sweep, sweep)
-from .version import __version__
+# Every public name is loaded on first use (PEP 562): ``import rodjit`` and the command
+# line (a sweep's worker processes above all, each of which imports it) load only the
+# modules their work needs; ``rodjit.X`` and ``from rodjit import X`` read as if all were
+# imported here.
+_WHERE = {
+    "laws": ".laws",
+    "Convergence": ".analysis", "FitError": ".analysis", "FitResult": ".analysis",
+    "TableFit": ".analysis", "converge": ".analysis", "fit": ".analysis",
+    "fit_table": ".analysis", "load_convergence": ".analysis", "observables": ".analysis",
+    "Config": ".config",
+    "OutputExists": ".driver.files", "RunInterrupted": ".driver.files",
+    "RunPlan": ".driver.files", "plan_run": ".driver.files", "resume_file": ".driver.files",
+    "run_to_file": ".driver.files",
+    "SimulationError": ".driver.run",
+    "simulate": ".driver.simulate",
+    "load_file": ".output.hdf5",
+    "open_run": ".output.run_view",
+    "animate": ".plotting.animation",
+    "plot": ".plotting.dispatch",
+    "load_preset": ".presets", "preset_names": ".presets",
+    "Result": ".records.result",
+    "MissingMainGuard": ".sweeps", "SweepFailed": ".sweeps", "SweepInterrupted": ".sweeps",
+    "SweepPlan": ".sweeps", "SweepTable": ".sweeps", "load_sweep": ".sweeps",
+    "plan_sweep": ".sweeps", "sweep": ".sweeps",
+    "__version__": ".version",
+}
+
+if TYPE_CHECKING:      # what static tools and editors see: the same names, imported
+    from . import laws
+    from .analysis import (Convergence, FitError, FitResult, TableFit, load_convergence)
+    from .analysis.converge import converge
+    from .analysis.fit import fit
+    from .analysis.fit_table import fit_table
+    from .analysis.observables import observables
+    from .config import Config
+    from .driver.files import (OutputExists, RunInterrupted, RunPlan, plan_run, resume_file,
+                               run_to_file)
+    from .driver.run import SimulationError
+    from .driver.simulate import simulate
+    from .output.hdf5 import load_file
+    from .output.run_view import open_run
+    from .plotting.animation import animate
+    from .plotting.dispatch import plot
+    from .presets import load_preset, preset_names
+    from .records.result import Result
+    from .sweeps import (MissingMainGuard, SweepFailed, SweepInterrupted, SweepPlan, SweepTable,
+                         load_sweep, plan_sweep, sweep)
+    from .version import __version__
+
+
+def __getattr__(name: str) -> Any:
+    """A public name, loaded from its module on first use (``_WHERE``); or a subpackage
+    (``rodjit.analysis``, ``rodjit.output``, ...), imported as the old eager import did."""
+    return _lazy.attribute(__name__, _WHERE, name)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_WHERE))
+
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",

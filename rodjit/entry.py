@@ -26,13 +26,13 @@ def _finish(code: int) -> NoReturn:
     first: the interpreter's shutdown puts the default handlers back where Python had set
     one of its own (not where it was told to ignore), and a signal arriving then would kill
     the process (-15) after a successful run.  A
-    process holding files the disk failed (``output.h5files.abandon``) ends without the
+    process holding files the disk failed (``output.abandoned``) ends without the
     interpreter's shutdown, which would try to close them."""
     for s in (signal.SIGINT, signal.SIGTERM):
         signal.signal(s, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
-    h5files = sys.modules.get("rodjit.output.h5files")
-    if h5files is not None and h5files.abandoned():
+    held = sys.modules.get("rodjit.output.abandoned")
+    if held is not None and held.abandoned():
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)

@@ -3,9 +3,10 @@ floor or one below, and no modules import each other in a circle.
 
 Floors, lowest first (a module's floor is its first name under ``rodjit``):
 
-- ``version``, ``_jit``, ``_display``, ``_extras``, ``_cache_names``: no rodjit imports (the
-  installed version; the Numba decorators; how objects print in a shell and in Jupyter;
-  optional dependencies; placeholder classes of the cache namespaces);
+- ``version``, ``_jit``, ``_display``, ``_extras``, ``_cache_names``, ``_lazy``: no rodjit
+  imports (the installed version; the Numba decorators; how objects print in a shell and in
+  Jupyter; optional dependencies; placeholder classes of the cache namespaces; a package's
+  names loaded on first use);
 - ``model``: the stress laws and the rod's discrete system (MODEL.md);
 - ``kernels``: compiled forces, energies and banded solvers;
 - ``stepping``: the compiled time loop, its schemes and the layout of its arrays;
@@ -37,7 +38,7 @@ import rodjit
 PACKAGE = Path(rodjit.__file__).resolve().parent
 
 FLOORS = (
-    ("version", "_jit", "_display", "_extras", "_cache_names"),
+    ("version", "_jit", "_display", "_extras", "_cache_names", "_lazy"),
     ("model", "laws"),
     ("kernels",),
     ("stepping",),

@@ -16,6 +16,7 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
+from ..output.abandoned import quiet_disk_errors
 from .animate import animate_command
 from .config import config_command
 from .converge import converge_command
@@ -37,15 +38,9 @@ __all__ = ["main", "EXIT_OK", "EXIT_FAILED", "EXIT_USAGE", "EXIT_SIGNAL", "EXIT_
            "RUN_KINDS", "SWEEP_KINDS", "CONVERGENCE_KINDS", "PLOT_KINDS", "DEFAULT_OUTPUT"]
 
 
-def _quiet_disk_errors() -> None:
-    """h5py's reports of releasing files the disk refused say nothing the one-line error
-    does not (``output.h5files.quiet_disk_errors``)."""
-    from ..output.h5files import quiet_disk_errors
-
-    quiet_disk_errors()
-
-
-_quiet_disk_errors()
+# h5py's reports of releasing files the disk refused say nothing the one-line error does
+# not (``output.abandoned``, which imports no h5py)
+quiet_disk_errors()
 
 # the verbs, in the order the original module declared them (``rodjit --help`` sorts them)
 for _command in (run_command, sweep_command, presets_command, config_command, info_command,

@@ -68,7 +68,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
     """
     import signal
 
-    from ..driver.files import OutputExists
+    from ..output.h5files import OutputExists
     from ..driver.signals import hold_on_exit, pending_signal
     from ..sweeps import SweepFailed, SweepInterrupted, plan_sweep, sweep
 

@@ -7,8 +7,9 @@ ValueError`` that caught them still does.
 from __future__ import annotations
 
 import os
+from typing import Any
 
-__all__ = ["TooManySteps", "FileTooLarge", "OutputNotRegular", "OutputOtherKind"]
+__all__ = ["TooManySteps", "FileTooLarge", "OutputNotRegular", "OutputOtherKind", "WriteFailed"]
 
 
 class TooManySteps(ValueError):
@@ -126,3 +127,17 @@ class OutputOtherKind(ValueError):
 
     def __reduce__(self):
         return type(self), (self.path, self.found, self.kind)
+
+
+class WriteFailed(OSError):
+    """The disk refused a write (full, a size limit or quota, an I/O error): the file keeps
+    its last checkpoint and ``rodjit run --resume`` continues it once there is space.
+    ``cause``: what the disk said, if the message says more; ``table``, set only where a
+    sweep stopped on the refusal: its ``SweepTable`` (a floor above this one)."""
+
+    cause: str | None = None
+    table: Any
+
+    def __init__(self, message: str, cause: str | None = None):
+        super().__init__(message)
+        self.cause = cause

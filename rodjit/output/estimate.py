@@ -11,9 +11,9 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..stepping import layout as L
 from ..stepping.control import LAND_FIXED
 from .errors import FileTooLarge, TooManySteps
-from .run_layout import TABLES
 
 __all__ = ["Estimate", "estimate_run", "estimate_values", "check_run", "check_fixed_step",
            "fixed_step_error", "step_refusal", "free_space", "too_large", "size_refusal",
@@ -66,7 +66,7 @@ def estimate_values(values) -> Estimate:
     span = float(values["time.t_end"])
     snaps = _rows(span, values["output.snapshot_interval"])
     diags = _rows(span, values["output.diagnostics_interval"])
-    file_bytes = _OVERHEAD + snaps * (2 * n1 + 2) * 8 + diags * len(TABLES["diagnostics"]) * 8
+    file_bytes = _OVERHEAD + snaps * (2 * n1 + 2) * 8 + diags * len(L.DIAG_COLUMNS) * 8
     snap_buffer = max(1, min(snaps, max(16, 2**22 // n1)))
     memory = 8 * n1 * (3 * 3 + 8) + snap_buffer * 2 * n1 * 8 * 2 + 4096 * 64 * 8
     dt = values["time.dt"]

@@ -20,8 +20,9 @@ import h5py
 import numpy as np
 
 from ..config import MissingFile
+from .abandoned import abandon, abandoned, quiet_disk_errors
 from .cf import LIBVER
-from .errors import OutputNotRegular, OutputOtherKind
+from .errors import OutputNotRegular, OutputOtherKind, WriteFailed
 from .lock import FileBusy, is_link, is_locked
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
@@ -302,20 +303,6 @@ _CAUSES = {errno.ENOSPC: "no space left on the device",
            errno.EIO: "an input/output error of the device"}
 
 
-class WriteFailed(OSError):
-    """The disk refused a write (full, a size limit or quota, an I/O error): the file keeps
-    its last checkpoint and ``rodjit run --resume`` continues it once there is space.
-    ``cause``: what the disk said, if the message says more; ``table``, set only where a
-    sweep stopped on the refusal: its ``SweepTable`` (a floor above this one)."""
-
-    cause: str | None = None
-    table: Any
-
-    def __init__(self, message: str, cause: str | None = None):
-        super().__init__(message)
-        self.cause = cause
-
-
 def disk_cause(exc: BaseException | None) -> str | None:
     """What the disk said, if ``exc`` (or its cause) is a refused write: ENOSPC, EFBIG,
     EDQUOT or EIO, as raised by Python or reported inside an HDF5 message."""
@@ -331,47 +318,6 @@ def disk_cause(exc: BaseException | None) -> str | None:
             return _CAUSES[int(m.group(1))]
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None
-
-
-_DISK_ERRNO = re.compile(r"errno = (5|27|28|122)\b")
-
-
-def quiet_disk_errors() -> None:
-    """Silence the errors h5py reports while releasing the handles of a file the disk
-    refused (full, a size limit): they cannot be acted on, and the one-line error of the
-    write that failed says what happened (through ``sys.unraisablehook``, and
-    ``sys.excepthook`` for the tracebacks its compiled deallocators print)."""
-    import sys
-
-    def unraisable(u):
-        if not _DISK_ERRNO.search(str(u.exc_value)):
-            sys.__unraisablehook__(u)
-
-    def excepthook(kind, value, tb):
-        if not (isinstance(value, RuntimeError) and _DISK_ERRNO.search(str(value))):
-            sys.__excepthook__(kind, value, tb)
-
-    sys.unraisablehook = unraisable
-    sys.excepthook = excepthook
-
-
-# h5py objects of files the disk failed.  HDF5 cannot close a file it can no longer
-# write, and trying (h5py's deallocators do, at any garbage collection or at exit) prints
-# tracebacks or crashes the process: they are kept here, never released, and a process
-# that holds any ends by os._exit (the command line, a sweep's workers).
-_ABANDONED: list = []
-
-
-def abandon(*objects) -> None:
-    """Keep ``objects`` (h5py files, datasets, writers, a traceback with the frames that
-    hold them) alive for the rest of the process: never closed, flushed or freed."""
-    _ABANDONED.extend(o for o in objects if o is not None)
-
-
-def abandoned() -> bool:
-    """Whether this process holds files the disk failed (``abandon``): it must end by
-    ``os._exit``, without the interpreter's shutdown."""
-    return bool(_ABANDONED)
 
 
 def reserve_space(path, nbytes: int) -> int:

@@ -14,7 +14,7 @@ import os
 from typing import Mapping
 
 from ..output.estimate import format_size
-from ..output.h5files import WriteFailed
+from ..output.errors import WriteFailed
 
 __all__ = ["TooManyPoints", "BadGridItem", "SweepFileTooLarge", "RunsDirUnusable",
            "ResumeMismatch", "SweepWriteFailed", "DaskMissing", "FormatNotContinued",

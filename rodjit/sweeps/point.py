@@ -21,10 +21,8 @@ from typing import Any
 import numpy as np
 
 from ..config import ModelWarning
-from ..driver.files import run_to_file
 from ..driver.run import Run, SimulationError
 from ..model.laws import get_law
-from ..output.h5files import disk_cause, truncation
 from ..output.lock import lock_path
 from ..records.bounces import bounce_table, empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
@@ -194,6 +192,11 @@ def _finite(x: float) -> float:
 
 
 def _run_to_file(config, path: str) -> tuple[dict, dict]:
+    # the run file's writer and h5py load only where a point writes a run file: a worker
+    # of the ensemble engine never does, and starts faster without them
+    from ..driver.files import run_to_file
+    from ..output.h5files import truncation
+
     if os.path.exists(path) and truncation(path):
         os.unlink(path)     # this point's file, cut short by a full disk: nothing to keep
     try:
@@ -239,7 +242,11 @@ def run_point(task: PointTask) -> PointResult:
         values.update(bounce_values(values, bounces))
     except Exception as exc:   # a bug or a resource error: the sweep goes on without it
         save_path = task.save_path
-        disk = (disk_cause(exc) or "") if save_path is not None else ""
+        disk = ""
+        if save_path is not None:
+            from ..output.h5files import disk_cause    # loaded with its run file's writer
+
+            disk = disk_cause(exc) or ""
         if disk and save_path is not None:   # the run file: removed (the point runs again
             _remove_run_file(save_path)      # on --resume)
             values.update(status="failed", message=f"writing the run file failed: {disk}",

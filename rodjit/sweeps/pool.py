@@ -9,7 +9,7 @@ import time
 from collections import deque
 from multiprocessing.connection import wait
 
-from ..output.h5files import abandoned, quiet_disk_errors
+from ..output.abandoned import abandoned, quiet_disk_errors
 from .ensemble import lost as _lost
 from .ensemble import run_task
 from .point import PointTask

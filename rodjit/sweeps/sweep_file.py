@@ -31,7 +31,7 @@ would leave the file's structures inconsistent.  Each write therefore first rese
 disk space at the end of the file than it can use (``h5files.reserve_space``); if the disk
 refuses that, WriteFailed is raised with the file exactly as it was, every point written
 before kept.  A write that fails anyway (an I/O error) leaves its handles open
-(``h5files.abandon``): closing a file HDF5 cannot write only makes matters worse.
+(``output.abandoned``): closing a file HDF5 cannot write only makes matters worse.
 """
 from __future__ import annotations
 
