@@ -459,7 +459,10 @@ def test_a_signal_while_the_sweep_file_layout_is_written_waits_for_the_layout(
     handler raising inside its callbacks; a new file is removed, a reopened one stays
     resumable.  Run in a fresh interpreter: in a test worker that had run many files first,
     the signal was not seen (the whole suite only, in whichever worker drew this file)."""
-    code = ("import sys; sys.path[:0] = [sys.argv[1]]\n"
+    # Python's own SIGINT handler, even where the suite was started with SIGINT ignored
+    # (a background job of a non-interactive shell), which the child would inherit
+    code = ("import signal, sys; sys.path[:0] = [sys.argv[1]]\n"
+            "signal.signal(signal.SIGINT, signal.default_int_handler)\n"
             "import test_sweep_driver as t\n"
             "t._signal_during_layout(sys.argv[2], sys.argv[3] == 'True')\nprint('ok')\n")
     here = os.path.dirname(os.path.abspath(__file__))
