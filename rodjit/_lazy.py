@@ -1,16 +1,19 @@
-"""Names of a package loaded on first use (PEP 562 ``__getattr__``), for ``rodjit`` and
-``rodjit.sweeps``: importing the package costs almost nothing, and each name costs its own
-module's import when first read.  A sweep's every worker process and every command-line
-verb import rodjit, and most need a small part of it (a worker that runs batches never
-loads the plotting, analysis or run-file modules)."""
+"""Names of a package loaded on first use (PEP 562 ``__getattr__``): importing a package
+costs almost nothing, and each name costs its own module's import when first read.  A
+sweep's every worker process and every command-line verb import rodjit, and most need a
+small part of it (a worker that runs batches never loads the plotting, analysis or
+run-file modules).  ``rodjit`` and ``rodjit.sweeps`` load their public names so; every
+subpackage loads its submodules so (``submodules``), so that ``rodjit.output.hdf5`` or
+``rodjit.model.laws.Law`` read after ``import rodjit`` as when the package imported all of
+them."""
 from __future__ import annotations
 
 import importlib
 import sys
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
-__all__ = ["attribute"]
+__all__ = ["attribute", "submodules"]
 
 
 def attribute(package: str, where: Mapping[str, str], name: str) -> Any:
@@ -32,3 +35,12 @@ def attribute(package: str, where: Mapping[str, str], name: str) -> Any:
             raise AttributeError(f"module {package!r} has no attribute {name!r}") from None
     setattr(sys.modules[package], name, value)
     return value
+
+
+def submodules(package: str) -> Callable[[str], Any]:
+    """A ``__getattr__`` for the package ``package`` that imports its submodules on first
+    use (``attribute`` with no other names)."""
+    def __getattr__(name: str) -> Any:
+        return attribute(package, {}, name)
+
+    return __getattr__

@@ -68,6 +68,13 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
     """
     import signal
 
+    if scheduler in (None, "processes") and device != "cuda" and not dry_run:
+        # the workers' fork server imports rodjit on another core while this process
+        # imports what the sweep needs below (``sweeps.start_method``)
+        from ..sweeps.start_method import start_server
+
+        start_server()
+
     from ..output.h5files import OutputExists
     from ..driver.signals import hold_on_exit, pending_signal
     from ..sweeps import SweepFailed, SweepInterrupted, plan_sweep, sweep

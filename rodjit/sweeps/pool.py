@@ -1,8 +1,8 @@
-"""The local process pool: ``jobs`` spawned worker processes, each fed through a pipe
-(``executors`` describes what every executor does)."""
+"""The local process pool: ``jobs`` worker processes (forked from the fork server on Linux,
+else spawned: ``start_method``), each fed through a pipe (``executors`` describes what
+every executor does)."""
 from __future__ import annotations
 
-import multiprocessing as mp
 import os
 import signal
 import time
@@ -13,6 +13,7 @@ from ..output.abandoned import abandoned, quiet_disk_errors
 from .ensemble import lost as _lost
 from .ensemble import run_task
 from .point import PointTask
+from .start_method import context
 from .workers import HEARTBEAT, start_worker, worker_environment
 
 __all__ = ["ProcessPool"]
@@ -30,7 +31,8 @@ def _death_message(pid: int, code: int | None) -> str:
 
 
 def _die_with_parent() -> None:
-    """Linux: the kernel kills this worker if the sweep's process dies (even by SIGKILL)."""
+    """Linux: the kernel kills this worker if its parent dies (even by SIGKILL): the
+    sweep's process, or the fork server, which exits when the sweep's process does."""
     try:
         import ctypes
 
@@ -53,7 +55,10 @@ def _worker_main(conn, warm, batched: bool = False) -> None:
     _die_with_parent()
     quiet_disk_errors()       # a run file the disk refuses: the parent reports it
     try:
-        conn.send(("ready", start_worker(warm, batched)))
+        try:
+            conn.send(("ready", start_worker(warm, batched)))
+        except (BrokenPipeError, OSError):
+            return       # the sweep's process is gone (killed): nothing to say to anyone
         while True:
             try:
                 task = conn.recv()
@@ -110,7 +115,8 @@ class _Worker:
 
 
 class ProcessPool:
-    """``jobs`` worker processes (spawned: no state inherited).
+    """``jobs`` worker processes (forked from the fork server or spawned, ``start_method``:
+    no state of this process inherited).
 
     Each worker holds ``DEPTH`` points, one running and the next already in its pipe, so
     it never waits for the parent (which may be writing the sweep file).  A worker that
@@ -126,7 +132,7 @@ class ProcessPool:
         self.jobs = jobs
         self.warm = warm
         self.batched = batched
-        self.ctx = mp.get_context("spawn")
+        self.ctx = context()
         self.workers: list[_Worker] = []
         self.started = time.perf_counter()
         self.startup_time: float | None = None     # until every first worker was ready
