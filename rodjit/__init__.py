@@ -7,7 +7,7 @@
 """
 import os as _os
 import sys as _sys
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from . import _lazy
 
@@ -68,15 +68,8 @@ if TYPE_CHECKING:      # what static tools and editors see: the same names, impo
     from .version import __version__
 
 
-def __getattr__(name: str) -> Any:
-    """A public name, loaded from its module on first use (``_WHERE``); or a subpackage
-    (``rodjit.analysis``, ``rodjit.output``, ...), imported as the old eager import did."""
-    return _lazy.attribute(__name__, _WHERE, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_WHERE))
-
+# each public name loads from its module on first use; ``dir()`` lists them all before
+__getattr__, __dir__ = _lazy.public_names(__name__, _WHERE)
 
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",

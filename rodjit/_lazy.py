@@ -13,7 +13,7 @@ import sys
 from collections.abc import Callable, Mapping
 from typing import Any
 
-__all__ = ["attribute", "submodules"]
+__all__ = ["attribute", "public_names", "submodules"]
 
 
 def attribute(package: str, where: Mapping[str, str], name: str) -> Any:
@@ -37,10 +37,20 @@ def attribute(package: str, where: Mapping[str, str], name: str) -> Any:
     return value
 
 
+def public_names(package: str, where: Mapping[str, str]
+                 ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """``__getattr__`` and ``__dir__`` for the package ``package`` whose public names live
+    in the modules ``where`` says (``attribute``); ``dir()`` lists them before first use."""
+    def __getattr__(name: str) -> Any:
+        return attribute(package, where, name)
+
+    def __dir__() -> list[str]:
+        return sorted(set(vars(sys.modules[package])) | set(where))
+
+    return __getattr__, __dir__
+
+
 def submodules(package: str) -> Callable[[str], Any]:
     """A ``__getattr__`` for the package ``package`` that imports its submodules on first
     use (``attribute`` with no other names)."""
-    def __getattr__(name: str) -> Any:
-        return attribute(package, {}, name)
-
-    return __getattr__
+    return public_names(package, {})[0]

@@ -1,7 +1,10 @@
 """The package's names load on first use (``rodjit._lazy``): ``import rodjit``, the command
 line's help and a sweep worker running batches import only what their work needs, and every
 public name still reads as the object of its module."""
+import ast
 import importlib
+import importlib.util
+import inspect
 import os
 import subprocess
 import sys
@@ -112,3 +115,31 @@ def test_a_batch_worker_loads_no_run_file_writer():
     assert "rodjit.sweeps.ensemble" in loaded
     assert not loaded & {"h5py", "rodjit.driver.files", "rodjit.output.run_writer",
                          "rodjit.plotting.dispatch", "rodjit.analysis"}
+
+
+@pytest.mark.parametrize("package", [rodjit, rodjit.sweeps])
+def test_the_names_static_tools_see_are_the_lazy_ones(package):
+    """The imports under ``TYPE_CHECKING`` (what mypy and editors read) name exactly the
+    lazy names, each from the module ``_WHERE`` loads it from."""
+    tree = ast.parse(inspect.getsource(package))
+    block = next(node for node in tree.body if isinstance(node, ast.If)
+                 and isinstance(node.test, ast.Name) and node.test.id == "TYPE_CHECKING")
+    seen = {}
+    for node in block.body:
+        assert isinstance(node, ast.ImportFrom), ast.dump(node)
+        for alias in node.names:
+            module = "." * node.level + (node.module or "")
+            full = importlib.util.resolve_name(module, package.__name__)
+            seen[alias.asname or alias.name] = full
+    expected = {}
+    for name, where in package._WHERE.items():
+        full = importlib.util.resolve_name(where, package.__name__)
+        module = importlib.import_module(full)
+        # a name imported from a submodule of its module (``.analysis.fit``) is the same
+        # object: compare the objects
+        expected[name] = module if full == f"{package.__name__}.{name}" else getattr(module, name)
+    assert set(seen) == set(expected)
+    for name, full in seen.items():
+        module = importlib.import_module(full)
+        got = module if full == f"{package.__name__}.{name}" else getattr(module, name)
+        assert got is expected[name], name

@@ -68,11 +68,11 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
     """
     import signal
 
-    if scheduler in (None, "processes") and device != "cuda" and not dry_run:
+    from ..sweeps.start_method import POOL_SCHEDULERS, start_server
+
+    if scheduler in POOL_SCHEDULERS and device != "cuda" and not dry_run:
         # the workers' fork server imports rodjit on another core while this process
         # imports what the sweep needs below (``sweeps.start_method``)
-        from ..sweeps.start_method import start_server
-
         start_server()
 
     from ..output.h5files import OutputExists
@@ -223,8 +223,10 @@ def cap_jobs(jobs: int | None, scheduler: str | None, grid: Any, force: bool,
              quiet: bool) -> int | None:
     """--jobs for a local pool: at most the cores (unless forced, with a note when cut) and
     never more than the points."""
-    if jobs is None or isinstance(jobs, bool) or jobs < 1 or scheduler not in (None,
-                                                                               "processes"):
+    from ..sweeps.start_method import POOL_SCHEDULERS
+
+    if (jobs is None or isinstance(jobs, bool) or jobs < 1
+            or scheduler not in POOL_SCHEDULERS):
         return jobs
     from ..sweeps.executors import default_jobs
 

@@ -4,7 +4,7 @@ summary row per point in one HDF5 file (``rodjit sweep`` on the command line).
 The names below are loaded on first use (``rodjit._lazy``): a sweep's worker process
 imports ``rodjit.sweeps.pool`` or the Dask task's module and, through this package, only
 what running its points needs."""
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from .. import _lazy
 
@@ -29,13 +29,8 @@ if TYPE_CHECKING:      # what static tools and editors see: the same names, impo
     from .sweep_table import SweepTable, load_sweep
 
 
-def __getattr__(name: str) -> Any:
-    return _lazy.attribute(__name__, _WHERE, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_WHERE))
-
+# each public name loads from its module on first use; ``dir()`` lists them all before
+__getattr__, __dir__ = _lazy.public_names(__name__, _WHERE)
 
 __all__ = ["sweep", "Grid", "SweepTable", "load_sweep", "SweepInterrupted", "SweepProgress",
            "SweepFailed", "MissingMainGuard", "plan_sweep", "SweepPlan", "TooManyPoints",

@@ -13,6 +13,7 @@ from __future__ import annotations
 from .dask_cluster import DaskCluster
 from .ensemble import run_task
 from .pool import ProcessPool
+from .start_method import POOL_SCHEDULERS
 from .workers import HEARTBEAT, WORKER_ENV, default_jobs
 
 __all__ = ["InlineExecutor", "Inline", "ProcessPool", "DaskCluster", "make_executor",
@@ -54,7 +55,7 @@ def make_executor(scheduler: str | None, jobs: int, warm=None, batched: bool = F
     Dask cluster); workers load the kernels of the Config ``warm`` before their first
     point (``batched``: the ensemble engine's batch kernel, not a run's loop)."""
     check_scheduler(scheduler)
-    if scheduler in (None, "processes"):
+    if scheduler in POOL_SCHEDULERS:
         return ProcessPool(jobs, warm, batched)
     if scheduler == "inline":
         return InlineExecutor()

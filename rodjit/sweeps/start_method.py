@@ -26,9 +26,11 @@ import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-__all__ = ["PRELOAD", "WORKER_ENV", "worker_environment", "forks", "context",
-           "start_server"]
+__all__ = ["POOL_SCHEDULERS", "PRELOAD", "WORKER_ENV", "worker_environment", "forks",
+           "context", "start_server"]
 
+# the ``--scheduler`` values that run the sweep on the local pool (``executors``)
+POOL_SCHEDULERS = (None, "processes")
 # the module a worker runs (``pool._worker_main``), imported by the fork server
 PRELOAD = ["rodjit.sweeps.pool"]
 # one thread per worker: the workers are the parallelism (no oversubscribed cores)
@@ -74,6 +76,6 @@ def start_server() -> None:
         return
     from multiprocessing import forkserver
 
-    context()
+    context()          # (sets the preload the server imports)
     with worker_environment():
         forkserver.ensure_running()
