@@ -67,11 +67,12 @@ def test_a_server_started_ahead_gives_one_thread_workers_and_leaves_the_env_alon
 
 @pytest.mark.skipif(not LINUX, reason="the fork server is Linux's")
 def test_sigkill_of_the_sweep_ends_its_server_and_workers(tmp_path):
-    """The sweep's process killed outright: the fork server sees it gone and exits, and its
-    workers die with it (their parent's death signal); nothing keeps computing."""
+    """The sweep's process killed outright while its workers compute batches of several
+    seconds: the workers end at once (not when their batch is done), and with them the
+    fork server and the resource tracker; nothing keeps computing."""
     args = ["--grid", "floor.beta=linspace(0.01,0.05,16)", "--set", "time.t_end=6", "--set",
             "rod.N=200", "--set", "time.integrator=verlet", "--set", "time.control=cfl",
-            "--jobs", "2", "-o", "s.h5", "-q"]           # ~0.4 s a point
+            "--jobs", "2", "--batch-size", "8", "-o", "s.h5", "-q"]   # ~0.4 s a point
     proc = subprocess.Popen([sys.executable, "-m", "rodjit", "sweep", *args], cwd=tmp_path,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
@@ -80,9 +81,14 @@ def test_sigkill_of_the_sweep_ends_its_server_and_workers(tmp_path):
         children: list = []
         while time.monotonic() < deadline and proc.poll() is None:
             children = psutil.Process(proc.pid).children(recursive=True)
-            # the resource tracker, the server and two workers forked from it
-            if sum(c.ppid() != proc.pid for c in children) >= 2:
-                break
+            # the resource tracker, the server and two workers forked from it, both well
+            # into their first batch (ready long before: a third of a second of stepping)
+            workers = [c for c in children if c.ppid() != proc.pid]
+            try:
+                if len(workers) >= 2 and all(w.cpu_times().user > 0.3 for w in workers):
+                    break
+            except psutil.NoSuchProcess:
+                pass
             time.sleep(0.05)
         assert proc.poll() is None, "the sweep ended before its workers were seen"
         proc.send_signal(signal.SIGKILL)
@@ -92,7 +98,7 @@ def test_sigkill_of_the_sweep_ends_its_server_and_workers(tmp_path):
             return [c for c in children
                     if c.is_running() and c.status() != psutil.STATUS_ZOMBIE]
 
-        deadline = time.monotonic() + 30
+        deadline = time.monotonic() + 3      # a batch takes 3 s or more
         while running() and time.monotonic() < deadline:
             time.sleep(0.05)
         assert not running(), [c.cmdline()[:3] for c in running()]

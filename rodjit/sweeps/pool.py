@@ -3,8 +3,10 @@ else spawned: ``start_method``), each fed through a pipe (``executors`` describe
 every executor does)."""
 from __future__ import annotations
 
+import multiprocessing as mp
 import os
 import signal
+import threading
 import time
 from collections import deque
 from multiprocessing.connection import wait
@@ -31,17 +33,29 @@ def _death_message(pid: int, code: int | None) -> str:
 
 
 def _die_with_parent() -> None:
-    """Linux: the kernel kills this worker if its parent dies (even by SIGKILL): the
-    sweep's process, or the fork server, which exits when the sweep's process does."""
+    """End this worker the moment the sweep's process dies, even by SIGKILL, whatever the
+    worker is doing: on Linux the kernel kills a spawned worker with its parent
+    (``PR_SET_PDEATHSIG``); and a thread waits on the parent's sentinel (closed by its
+    death) and exits the process then.  The thread is what ends a worker forked from the
+    fork server, whose parent is the server: the server outlives the sweep's process while
+    any of its workers lives.  The batch kernel releases the GIL, so the thread runs
+    while the worker computes."""
     try:
         import ctypes
 
         libc = ctypes.CDLL(None, use_errno=True)
         libc.prctl(1, signal.SIGKILL)       # PR_SET_PDEATHSIG
-        if os.getppid() == 1:                # the parent died before prctl took effect
-            os._exit(1)
     except (OSError, AttributeError):
         pass
+    parent = mp.parent_process()
+    if parent is None:
+        return
+
+    def watch() -> None:
+        wait([parent.sentinel])
+        os._exit(1)
+
+    threading.Thread(target=watch, name="rodjit-parent-watch", daemon=True).start()
 
 
 def _worker_main(conn, warm, batched: bool = False) -> None:
