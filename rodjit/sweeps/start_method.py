@@ -13,9 +13,9 @@ import runs on another core while the command's own process imports what it need
 A forked worker prepares itself as a spawned one does (the caller's ``sys.path`` and
 working directory; a main script imported again under ``__mp_main__``, so the
 ``if __name__ == "__main__":`` guard is still needed: ``main_guard``).  The workers' environment is the
-server's, fixed when it starts, always inside ``worker_environment`` (one thread each); the
-server lives as long as the process that started it, and exits with it, its workers with
-it (``pool._die_with_parent``).  macOS spawns (a fork of a process that loaded the system's
+server's, fixed when it starts, always inside ``worker_environment`` (one thread each).  A
+worker ends the moment the sweep's process dies (``pool._die_with_parent``); the server
+lives while the process that started it or any of its workers does.  macOS spawns (a fork of a process that loaded the system's
 frameworks is unsafe there), Windows has no fork.
 """
 from __future__ import annotations
