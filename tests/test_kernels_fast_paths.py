@@ -165,7 +165,9 @@ def test_kernels_count_no_references(rng):
         e = f(state, trial, work, 3)
         assert e == sum(want) and np.array_equal(work[2, :3], np.cumsum(want))
         ir[name] = "".join(f.inspect_llvm().values())
-    assert "call void @NRT_incref" in ir["default"] and "call void @NRT_decref" in ir["default"]
+    # Numba's defaults count references (LLVM may inline NRT_incref, whose body it has,
+    # and keep the calls of NRT_decref, or the other way round, depending on the CPU)
+    assert "call void @NRT_incref" in ir["default"] or "call void @NRT_decref" in ir["default"]
     assert "@NRT_incref" not in ir["rodjit"] and "@NRT_decref" not in ir["rodjit"]
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..kernels.forces import energies
 from . import layout as L
-from .._jit import kernel, step_kernel
+from .._jit import exact_kernel, kernel, step_kernel
 
 # a bounce is ambiguous (its restitution says more about the rod's vibration than about the
 # impact) when its approach speed |w_impact| is below this fraction of the vibrational
@@ -120,7 +120,7 @@ def _update_extremes(ev, u0, ff, emin):
     ev[L.CUR_MIN_EPS] = min(ev[L.CUR_MIN_EPS], emin)
 
 
-@kernel
+@exact_kernel
 def vibration_energy(u, v, k, system, rod, floor):
     """Kinetic + stretch + bend energy about the centre of mass (total mass 1), the
     ``energy_vibration`` of the diagnostics; ``k`` is scratch for the curvatures."""

@@ -8,6 +8,13 @@ a change that is meant to alter results regenerates them with
     python tests/golden/make_golden.py
 
 and says so in CHANGELOG.md.
+
+Each golden records the machine that wrote it (``machine()``: the CPU as LLVM sees it).
+The kernels may fuse multiplies and adds (``rodjit._jit``), and where LLVM fuses depends
+on the CPU it compiles for: two CPUs with FMA (an Intel Xeon and an AMD EPYC, say) give
+the same run to rounding, not to the bit.  So a golden is compared bit for bit on a
+machine like the one that wrote it, and to the rounding that CPUs can differ by elsewhere
+(``tests/test_golden.py``).
 """
 from __future__ import annotations
 
@@ -56,6 +63,14 @@ SWEEP_BASE = {"time.integrator": "verlet", "time.cfl": 0.05, "time.control": "cf
 
 def config(name: str) -> rodjit.Config:
     return rodjit.Config().override(_COMMON | CASES[name])
+
+
+def machine() -> str:
+    """The CPU that Numba compiles for (LLVM's name of the host and its features): what
+    decides whether two machines give the same kernels' results to the bit."""
+    import llvmlite.binding as ll
+
+    return f"{ll.get_host_cpu_name()} {ll.get_host_cpu_features().flatten()}"
 
 
 def write_run(name: str, path: Path) -> None:
@@ -142,7 +157,7 @@ def main(folder: Path, names: list[str] | None = None) -> None:
             paths.append(Path(tmp) / f"{name}.h5")
         for path in paths:
             target = folder / (path.stem + ".npz")
-            np.savez_compressed(target, **extract(path))
+            np.savez_compressed(target, **extract(path), machine=np.array(machine()))
             print(target)
 
 
