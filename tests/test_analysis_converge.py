@@ -162,6 +162,7 @@ def test_spring_wall_table(alpha, ladder):
     assert conv["restitution_first"].value == pytest.approx(e, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_shock_forming_ladder_is_reported_not_extrapolated():
     # μ = 0, γ = 0 on the paper's floor: without viscosity the impact's fronts stay sharp
     # and the first restitution does not settle (0.868, 0.854, 0.848, 0.840)

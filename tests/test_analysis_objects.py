@@ -101,6 +101,7 @@ def test_open_run_gives_the_same_dataset_lazily(result, run_file):
                                       eager.u.isel(t=slice(None, None, -5)).values)
 
 
+@pytest.mark.slow
 def test_open_run_does_not_read_every_snapshot(tmp_path, monkeypatch):
     path = tmp_path / "long.h5"
     rodjit.run_to_file(CFG.override({"time.t_end": 2.0, "rod.N": 40,

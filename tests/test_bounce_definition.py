@@ -52,6 +52,7 @@ def _check_against_reference(kb, beta, n):
     assert not b["ambiguous"][0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kb, beta", [(1e6, 0.05), (1e4, 1e-3)])
 def test_first_bounce_matches_the_scipy_reference_n5(kb, beta):
     _check_against_reference(kb, beta, 5)
@@ -65,6 +66,7 @@ def test_first_bounce_matches_the_scipy_reference_n50(kb, beta):
     _check_against_reference(kb, beta, 50)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kb, beta, n", STIFF)
 def test_stiff_floor_bounces_are_impacts(kb, beta, n):
     """The first bounce is the first impact (the macroscopic contact of the observables,

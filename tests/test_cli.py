@@ -250,6 +250,7 @@ def _reference_and_resume(tmp_path, path):
 
 @pytest.mark.parametrize("signum, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)],
                          ids=["SIGINT", "SIGTERM"])
+@pytest.mark.slow
 def test_signal_then_resume_bit_for_bit(tmp_path, signum, code):
     proc, path = _start_long_run(tmp_path, "run.h5")
     proc.send_signal(signum)
@@ -264,6 +265,7 @@ def test_signal_then_resume_bit_for_bit(tmp_path, signum, code):
     _reference_and_resume(tmp_path, path)
 
 
+@pytest.mark.slow
 def test_sigkill_leaves_a_readable_file_that_resumes_bit_for_bit(tmp_path):
     proc, path = _start_long_run(tmp_path, "run.h5")
     time.sleep(0.3)

@@ -133,6 +133,7 @@ def _completed(path) -> int:
         return 0
 
 
+@pytest.mark.slow
 def test_ctrl_c_stops_a_real_sweep_and_resume_finishes_it(tmp_path):
     """A sweep in a subprocess with two workers: SIGINT once some points are on disk; the
     workers go away, the file keeps every finished point, --resume runs the rest and the

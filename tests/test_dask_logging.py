@@ -76,6 +76,7 @@ def test_a_local_clusters_silence_logs_still_sets_the_level(routed):
     assert dask_logging._HANDLER.level == logging.WARNING
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("quiet", [False, True], ids=["verbose", "quiet"])
 def test_a_dask_sweep_with_a_dead_worker_speaks_in_rodjit_lines(tmp_path, quiet):
     """A LocalCluster sweep whose point kills its worker: the scheduler's log records are

@@ -7,6 +7,7 @@ import pytest
 import rodjit
 
 
+@pytest.mark.slow
 def test_default_run_keeps_energy_over_200_s_at_mu_0():
     cfg = rodjit.Config().override({"time.t_end": 200.0, "output.snapshot_interval": 0.0,
                                     "output.diagnostics_interval": 0.05})

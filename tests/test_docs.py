@@ -272,6 +272,7 @@ def _same_measurement(name, key, value, fresh, stored):
                                   abs=max(fresh[motion_key], stored[motion_key]))
 
 
+@pytest.mark.slow
 def test_verification_figures_are_made_by_the_script(tmp_path):
     """The script makes every committed figure and the numbers the page quotes; the
     committed numbers are the ones a fresh run measures (to rounding across machines, or

@@ -341,6 +341,7 @@ def test_files_of_older_versions_are_judged_by_host_and_pid(tmp_path, small_conf
         assert set(writer_id.WRITER_ATTRS) <= set(f.attrs)
 
 
+@pytest.mark.slow
 def test_memory_stays_bounded_for_a_10x_longer_run(tmp_path):
     """Peak RSS of a run streaming ~80 MB of snapshots vs one 10x shorter (same process
     setup): growth under 20 MB, so nothing accumulates in memory."""

@@ -7,6 +7,7 @@ import sys
 import textwrap
 
 import numpy as np
+import pytest
 
 from rodjit import _jit
 from rodjit.kernels import forces
@@ -109,6 +110,7 @@ def test_kernels_run_as_python_with_the_jit_disabled():
     assert done.returncode == 0 and done.stdout.split() == ["True", "True"], done.stderr
 
 
+@pytest.mark.slow
 def test_a_law_of_a_fresh_process_compiles_inside_the_loop():
     """The whole chain in a process whose first compile is the run's: kernels, overloads
     and intrinsics registered on demand (the default on the JIT)."""

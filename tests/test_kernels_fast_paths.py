@@ -82,6 +82,7 @@ _SCAN = register(Law(name="aiki-kosugi-scan", kind="rod", params=ScanRod,
                      primitive=aiki_kosugi.rod_primitive, lower=aiki_kosugi.rod_lower))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("integrator", ["verlet", "semi-implicit"])
 def test_a_law_without_deriv_max_gives_the_same_run(integrator):
     """The scan and ``deriv_max`` give the same bound (bitwise, above); inlined into two

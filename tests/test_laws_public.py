@@ -2,6 +2,7 @@
 import math
 
 import numpy as np
+import pytest
 
 import rodjit
 import rodjit.laws as laws
@@ -15,6 +16,7 @@ def test_the_public_names():
         assert hasattr(laws, name), name
 
 
+@pytest.mark.slow
 def test_the_documented_example_registers_and_runs(tmp_path, monkeypatch):
     """The example in the module's docstring, as a user's module of its own."""
     doc = laws.__doc__

@@ -6,6 +6,7 @@ import custom_law  # noqa: F401  (registers "log-test")
 import rodjit
 
 
+@pytest.mark.slow
 def test_custom_law_runs_conserves_energy_and_sets_the_wave_speed():
     # small free vibration: ω_1 = π √f'(0) = π √κ for this law (f'(0) = κ, not 5κ/4)
     n, kappa = 40, 64.0

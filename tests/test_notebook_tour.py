@@ -18,6 +18,7 @@ def test_the_committed_notebook_has_no_outputs():
     assert all(not c.outputs and c.execution_count is None for c in code)
 
 
+@pytest.mark.slow
 def test_the_notebook_runs_without_errors(tmp_path):
     nbclient = pytest.importorskip("nbclient")
     pytest.importorskip("ipykernel")

@@ -19,8 +19,10 @@ def _mid_episode_t_end():
 
 @pytest.mark.parametrize("t_end, over", [
     (1.0, {}), ("mid-episode", {}),
-    (0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3}),   # many whole chunks of u, v
-    (0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3, "output.compression": "gzip"}),
+    pytest.param(0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3},
+                 marks=pytest.mark.slow),   # many whole chunks of u, v
+    pytest.param(0.5, {"rod.N": 200, "output.snapshot_interval": 1e-3,
+                       "output.compression": "gzip"}, marks=pytest.mark.slow),
 ], ids=["default", "mid-episode", "N200", "N200-gzip"])
 def test_file_equals_simulate_bit_for_bit(tmp_path, t_end, over):
     t_end = _mid_episode_t_end() if t_end == "mid-episode" else t_end

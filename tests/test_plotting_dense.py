@@ -168,6 +168,7 @@ def test_a_movie_of_sparse_snapshots_without_re_simulation_warns(run_file, conta
     assert ((t >= a) & (t <= b)).sum() < 5
 
 
+@pytest.mark.slow
 def test_the_command_line_says_a_failed_re_simulation_as_one_warning_line(
         run_file, contact, tmp_path, monkeypatch):
     """``rodjit plot`` and ``rodjit animate`` draw the snapshots they have when the run

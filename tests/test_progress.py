@@ -23,6 +23,7 @@ def test_simulate_with_a_bar(capsys):
     assert "run: 100%" in err and "t = 0.3 / 0.3 s" in err
 
 
+@pytest.mark.slow
 def test_callables_still_get_the_run(tmp_path):
     long = CFG.override({"time.t_end": 5.0, "rod.N": 40})   # many compiled chunks
     seen = []
@@ -51,6 +52,7 @@ def test_a_cold_cache_is_announced(monkeypatch, capsys):
     bar.close()
 
 
+@pytest.mark.slow
 def test_kernels_cold_reads_the_numba_cache(tmp_path):
     """Cold where Numba's cache is empty, not once a run has compiled into it: fresh
     interpreters with a cache of their own, which no other test can fill or refuse to

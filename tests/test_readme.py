@@ -87,6 +87,7 @@ def test_no_readme_command_writes_into_the_repository():
             assert path not in files and not path.startswith("docs/"), line
 
 
+@pytest.mark.slow
 def test_the_python_block_runs_as_a_script_then_every_command_in_order(shell):
     """One directory, the README's order: the first command, the Python block saved as
     ``script.py``, then every command of *Command line* and *The paper's figures*."""

@@ -169,6 +169,7 @@ def test_the_caps_keep_every_mode_from_growing_in_the_rows(params):
         [[_amplification(params, zz, th) for th in (0.3, 0.8)] for zz in z], rtol=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("integrator", sorted(DENSE))
 def test_interpolation_error_scales_as_h_to_the_order_plus_one(integrator):
     hs = STEPS[integrator] / 2.0 ** np.arange(3)

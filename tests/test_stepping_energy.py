@@ -97,6 +97,7 @@ def record_steps(cfg, max_steps, max_bounces=10**9, u0=None, v0=None):
     return run, out[:k]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("mu", [0.0, 0.005])
 def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
     """E^{n+1} − E^n = −μ dt Σ h ((v̄_{i+1} − v̄_i)/h)² at every accepted step of the real

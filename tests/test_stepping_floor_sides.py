@@ -160,6 +160,7 @@ def _first_contact(integrator, tol, floor_law="aiki-kosugi"):
     return np.vstack([res.u, res.v]), res
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("integrator", ["dp54", "dop853"])
 def test_first_contact_as_accurate_as_the_law_itself_in_fewer_trials(integrator):
     """The fall, the first contact and the chatter after it (0.5 s): against dop853 at

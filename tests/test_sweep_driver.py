@@ -106,6 +106,7 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
     assert float(ds["steps"].sel({"mu": 10.0, "beta": 0.05})) == loaded["steps"][3]
 
 
+@pytest.mark.slow
 def test_a_failing_point_is_recorded_and_the_sweep_goes_on(tmp_path):
     base = BASE.override(FAILING)
     table = rodjit.sweep(base, {"initial.velocity": [0.0, -100.0, -1.0]}, scheduler="inline",
@@ -122,6 +123,7 @@ KILLER = {"rod.law": "kill-test"}
 KILLER_GRID = {"rod.kappa": [100.0, 13.0], "initial.velocity": [0.0, -100.0]}
 
 
+@pytest.mark.slow
 def test_a_dying_worker_fails_its_point_only():
     grid = {"rod.kappa": [100.0, 50.0, 13.0], "rod.mu": [0.0, 1.0]}
     # batches of two: the last one kills its worker, runs again point by point, and each
@@ -312,6 +314,7 @@ def test_memory_does_not_grow_with_the_number_of_points(tmp_path):
     assert large - small < 2 * 2**20, (small, large)
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_of_two_workers(tmp_path, inline_table):
     distributed = pytest.importorskip("distributed")
 
@@ -393,6 +396,7 @@ def test_progress_reports_points_failures_and_time_left():
     assert seen[-1].eta == 0.0 and seen[0].eta > 0 and seen[0].elapsed > 0
 
 
+@pytest.mark.slow
 def test_the_same_sweep_with_jit_disabled(tmp_path):
     """A sweep in a process with NUMBA_DISABLE_JIT=1 (the kernels as plain Python) writes
     the same table as the compiled one, to rounding."""

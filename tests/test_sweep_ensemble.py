@@ -86,6 +86,7 @@ register(Law(name="raise-test", kind="rod", params=RaiseRod, from_config=_raisin
              value=value, deriv=deriv, primitive=primitive, lower=lower))
 
 
+@pytest.mark.slow
 def test_a_point_that_cannot_start_fails_alone_with_the_per_point_message():
     base = BASE.override({"rod.law": "raise-test"})
     batch = _check_against_points(base, {"rod.kappa": [100.0, 13.0, 50.0]})

@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 import rodjit
 
@@ -17,6 +18,7 @@ ARGS = ["--grid", "floor.beta=linspace(0.01,0.05,16)", "--set", "time.t_end=6", 
         "--jobs", "2", "--batch-size", "2", "-o", "s.h5"]       # ~0.4 s a point
 
 
+@pytest.mark.slow
 def test_sigkill_of_a_batched_sweep_then_resume_gives_the_uninterrupted_table(tmp_path):
     proc = subprocess.Popen([sys.executable, "-m", "rodjit", "sweep", *ARGS], cwd=tmp_path,
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)

@@ -20,6 +20,7 @@ def _overrides() -> list[dict]:
     return MYPY.get("overrides", [])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(importlib.util.find_spec("mypy") is None, reason="mypy not installed")
 def test_mypy_finds_no_error(tmp_path):
     env = dict(os.environ, PYTHONPATH=str(ROOT))

@@ -47,6 +47,7 @@ def _one_line(err: str) -> str:
     return lines[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("existing", [False, True])
 def test_two_runs_started_together_one_writes(tmp_path, existing):
     out = tmp_path / "same.h5"
