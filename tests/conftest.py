@@ -28,6 +28,44 @@ def quiet(**over):
     return rodjit.Config().override(base)
 
 
+# The compiled loops the suite's workers all need, compiled once into Numba's disk cache
+# before they start: on a cold cache (a fresh clone, as on CI) every xdist worker would
+# otherwise compile the same loops at the same time, each paying the whole cold compile.
+# Two processes share the integrators, one per core; on a warm cache each only loads.
+_WARM_SETS = (("verlet", "energy", "dop853"), ("semi-implicit", "dp54", "radau5"))
+_WARM = """
+import sys, warnings
+warnings.simplefilter("ignore")
+import rodjit
+for name in sys.argv[1:]:
+    over = {"output.snapshot_interval": 0.0, "output.diagnostics_interval": 0.0,
+            "time.integrator": name, "time.t_end": 0.01}
+    if name in ("verlet", "semi-implicit"):
+        over["time.control"] = "cfl"
+    cfg = rodjit.Config().override(over)
+    rodjit.simulate(cfg)
+    if name == "verlet":      # the sweeps' batch kernel too
+        rodjit.sweep(cfg, {"rod.mu": [0.0, 1.0]}, jobs=1, scheduler="inline")
+"""
+
+
+def pytest_sessionstart(session):
+    """On the xdist controller, before its workers start: fill Numba's disk cache with the
+    loops of every integrator (``_WARM_SETS``), so that no two workers compile the same
+    loop.  A failure here only costs the warm-up: the tests compile what they need."""
+    if os.environ.get("PYTEST_XDIST_WORKER") or not getattr(session.config.option,
+                                                            "numprocesses", None):
+        return
+    procs = [subprocess.Popen([sys.executable, "-c", _WARM, *names],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+             for names in _WARM_SETS]
+    for proc in procs:
+        try:
+            proc.wait(timeout=900)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+
+
 @pytest.fixture
 def jit_only(monkeypatch):
     """Runs on the JIT even under RODJIT_AOT=1: for tests of the JIT's own warm-up and
