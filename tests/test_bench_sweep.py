@@ -57,6 +57,7 @@ def test_a_baseline_that_cannot_compile_it_says_it_runs_on_the_jit(tmp_path, cap
     assert not (tree / "rodjit/stepping/built").exists()
 
 
+@pytest.mark.slow
 def test_loop_pairs_times_both_trees_on_the_same_points(capsys):
     """The loop's cost per step in two trees at once (here: this tree against itself, so
     both take the same steps); a child that fails stops the benchmark."""

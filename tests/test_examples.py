@@ -35,7 +35,8 @@ def _tracked_files() -> dict[str, int] | None:
             if p and (ROOT / p).is_file()}
 
 
-@pytest.mark.parametrize("script", sorted(EXPECTED))
+@pytest.mark.parametrize("script", [pytest.param(s, marks=pytest.mark.slow) if s == "sweep_mu.py"
+                                    else s for s in sorted(EXPECTED)])
 def test_example_runs(script, tmp_path):
     """Run as a user does (no argument: the current directory), it writes its files there
     and no file of the repository changes (docs/ included)."""

@@ -50,7 +50,7 @@ def _check(ptx):
     assert "div.rn.f64" in ptx
 
 
-@pytest.mark.parametrize("integrator", ["energy", "dp54"])
+@pytest.mark.parametrize("integrator", ["energy", pytest.param("dp54", marks=pytest.mark.slow)])
 def test_kernel_compiles_to_ptx(integrator):
     _check(_ptx({"time.integrator": integrator, "rod.N": 5}))
 
@@ -68,6 +68,7 @@ def test_largest_rod_compiles_to_ptx():
     _check(_ptx({"rod.N": N_MAX}))
 
 
+@pytest.mark.slow
 def test_law_registered_from_outside_compiles_to_ptx():
     """A user's law (tests/custom_law.py: its kernels call math.log1p) is retargeted like
     rodjit's own: no GPU version is written for it."""
@@ -179,6 +180,7 @@ def _deep_reason() -> str:
     return f"{line} | limit restored: {restored}"
 
 
+@pytest.mark.slow
 def test_compile_from_a_deep_stack_names_the_cause():
     """The compile runs on a thread of its own (``kernel.deep_call``): a caller already
     deep in its stack (a test runner's worker, a user's framework) leaves the compile all

@@ -91,7 +91,7 @@ def _simulated(args, **kw):
                           timeout=900, **kw)
 
 
-@pytest.mark.parametrize("integrator", ["energy", "dp54"])
+@pytest.mark.parametrize("integrator", ["energy", pytest.param("dp54", marks=pytest.mark.slow)])
 def test_gpu_sweep_matches_cpu(tmp_path, integrator):
     """energy (the default, implicit) and dp54 (explicit, adaptive, dense output): every
     summary column the GPU computes, and every bounce record, as the CPU's; the sweep file

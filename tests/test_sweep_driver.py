@@ -137,6 +137,7 @@ def test_a_dying_worker_fails_its_point_only():
     assert np.all(table["steps"][:4] > 0)
 
 
+@pytest.mark.slow
 def test_points_waiting_behind_a_dying_point_run_elsewhere():
     """One worker, batches of two queued two deep: the batch of the two killers kills its
     worker, each of its points runs again alone and fails alone, and the batch queued

@@ -29,6 +29,7 @@ def test_linux_forks_from_the_server_and_other_systems_spawn(monkeypatch):
     assert start_method.context().get_start_method() == "spawn"
 
 
+@pytest.mark.slow
 def test_forked_and_spawned_workers_give_the_same_table(tmp_path, monkeypatch):
     base = load_preset("paper-mu100").override({"time.t_end": 1.0})
     grid = {"rod.mu": [0.0, 50.0, 100.0], "floor.beta": [0.03, 0.1]}
