@@ -39,3 +39,62 @@ def test_a_missing_file_is_a_file_not_found_error(read, tmp_path):
     assert str(pickle.loads(pickle.dumps(exc))) == str(exc)
     if getattr(read, "__self__", None) is not rodjit.Config:      # a file rodjit writes
         assert isinstance(exc, rodjit.output.hdf5.NotARunFile)
+
+
+@pytest.mark.parametrize("changes", [{"time.t_end": 1e300},
+                                     {"output.snapshot_interval": 0.0, "time.t_end": 1e5},
+                                     {"time.dt": 1e-9, "time.t_end": 100.0,
+                                      "output.snapshot_interval": 0.0,
+                                      "output.diagnostics_interval": 0.0}],
+                         ids=["t_end 1e300", "diagnostics of a long run", "1e11 fixed steps"])
+def test_simulate_refuses_what_run_to_file_refuses(changes, tmp_path):
+    """``simulate`` and ``run_to_file`` share one size and step estimate
+    (``output.estimate.check_run``): what the file writer refuses, the in-memory run
+    refuses too, before anything is allocated, with the same limits and their keywords."""
+    from rodjit.output.errors import FileTooLarge, TooManySteps
+
+    cfg = rodjit.Config().override(changes)
+    with pytest.raises((FileTooLarge, TooManySteps)) as file_refusal:
+        rodjit.run_to_file(cfg, tmp_path / "x.h5")
+    with pytest.raises(type(file_refusal.value)):
+        rodjit.simulate(cfg, progress=_never_called)
+    assert list(tmp_path.iterdir()) == []
+
+
+def _never_called(run):
+    raise AssertionError(f"the run started (t = {run.t})")
+
+
+def test_simulate_takes_the_limits():
+    small = SHORT.override({"output.snapshot_interval": 1e-4})
+    with pytest.raises(ValueError, match=r"more than the limit of 1 KiB"):
+        rodjit.simulate(small, max_output=1024)
+    with pytest.raises(ValueError, match=r"needs 1e\+03 steps .* more than the limit of 10"):
+        rodjit.simulate(small.override({"time.dt": 1e-5}), max_steps=10)
+
+
+@pytest.mark.parametrize("limit", [float("nan"), 1.5, 0, -1, True, "many"])
+def test_a_limit_that_is_no_limit_is_named(limit, tmp_path):
+    """NaN would turn a limit off (every comparison false); a fraction was shown rounded
+    ("2 points, more than the limit of 2"): both refused, naming the keyword."""
+    from rodjit.sweeps.grid import Grid
+
+    with pytest.raises(ValueError, match=r"^max_points = .* is (out of range|not a number)"):
+        Grid.from_spec({"rod.mu": [0.0, 1.0]}, max_points=limit)
+    with pytest.raises(ValueError, match=r"^max_points = "):
+        rodjit.plan_sweep(SHORT, {"rod.mu": [0.0, 1.0]}, max_points=limit)
+    with pytest.raises(ValueError, match=r"^max_steps = "):
+        rodjit.run_to_file(SHORT, tmp_path / "x.h5", max_steps=limit)
+    with pytest.raises(ValueError, match=r"^max_steps = "):
+        rodjit.plan_sweep(SHORT.override({"time.dt": 1e-3}), {"rod.mu": [0.0, 1.0]},
+                          max_steps=limit)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_infinity_is_the_api_s_way_to_lift_a_limit():
+    import math
+
+    from rodjit.sweeps.grid import Grid
+
+    assert len(Grid.from_spec({"rod.mu": [0.0, 1.0]}, max_points=math.inf)) == 2
+    assert rodjit.simulate(SHORT, max_steps=math.inf, max_output=math.inf).t[-1] > 0

@@ -19,7 +19,7 @@ __all__ = ["animate_command"]
               help="Frames per second.")
 @click.option("--duration", type=click.FloatRange(0, None, min_open=True), default=5.0,
               show_default=True, help="Length of the movie in seconds (frames: fps x "
-              "duration, sampled evenly from the snapshots).")
+              "duration, at most 10,000, sampled evenly from the snapshots).")
 @click.option("--quantity", type=click.Choice(("strain", "v")), default="strain",
               show_default=True, help="What colours the rod.")
 @click.option("--dpi", type=click.IntRange(10, 600), default=100, show_default=True)

@@ -13,7 +13,8 @@ import click
 
 __all__ = ["DEFAULT_OUTPUT", "CONFIG_METAVAR", "config_argument", "set_option",
            "output_option", "overwrite_option", "quiet_option", "progress_option",
-           "max_output_option", "max_steps_option", "jobs_option", "scheduler_option",
+           "max_output_option", "max_steps_option", "max_points_option", "jobs_option",
+           "scheduler_option", "CountLimit",
            "load_config", "base_config", "overrides", "key_values", "command_line",
            "progress", "run_bar", "sweep_bar", "close"]
 
@@ -63,10 +64,36 @@ def max_output_option(what: str) -> Callable[[F], F]:
                         help=f"Refuse {what} would exceed SIZE (e.g. 500M, 50GiB, inf).")
 
 
+class CountLimit(click.ParamType):
+    """A limit on a count (``--max-steps``, ``--max-points``): a whole number >= 1, never
+    NaN or infinity, which would turn the limit off (``output.estimate.check_count_limit``,
+    the API's check: one line naming the option, exit code 2)."""
+
+    name = "count"
+
+    def convert(self, value: Any, param: click.Parameter | None,
+                ctx: click.Context | None) -> float:
+        from ..output.estimate import check_count_limit
+        from .exits import UsageError
+
+        option = param.opts[0] if param is not None and param.opts else "limit"
+        try:
+            return check_count_limit(option, value, unlimited=False)
+        except ValueError as exc:
+            raise UsageError(exc) from None
+
+
 def max_steps_option(what: str) -> Callable[[F], F]:
     """``--max-steps N``; ``what``: what is refused."""
-    return click.option("--max-steps", type=float, default=1e10, show_default=True,
+    return click.option("--max-steps", type=CountLimit(), default=1e10, show_default=True,
                         metavar="N", help=f"Refuse {what} needs more than N steps.")
+
+
+def max_points_option() -> Callable[[F], F]:
+    """``--max-points N``."""
+    return click.option("--max-points", type=CountLimit(), default=1e6, show_default=True,
+                        metavar="N", help="Refuse a grid of more than N points (counted "
+                                          "before it is made).")
 
 
 def jobs_option() -> Callable[[F], F]:
