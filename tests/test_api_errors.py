@@ -98,3 +98,67 @@ def test_infinity_is_the_api_s_way_to_lift_a_limit():
 
     assert len(Grid.from_spec({"rod.mu": [0.0, 1.0]}, max_points=math.inf)) == 2
     assert rodjit.simulate(SHORT, max_steps=math.inf, max_output=math.inf).t[-1] > 0
+
+
+@pytest.mark.parametrize("threads", ["0", "abc", "-1", ""])
+def test_a_numba_thread_count_numba_cannot_use_is_named(monkeypatch, threads):
+    """What loads Numba (the first compile) checks NUMBA_NUM_THREADS first: Numba's own
+    error ("Number of threads specified must be > 0.") did not name the variable."""
+    from rodjit._jit import check_numba_environment
+
+    monkeypatch.setenv("NUMBA_NUM_THREADS", threads)
+    with pytest.raises(ValueError, match=r"^environment variable NUMBA_NUM_THREADS = "):
+        check_numba_environment()
+    monkeypatch.setenv("NUMBA_NUM_THREADS", "2")
+    check_numba_environment()
+
+
+@pytest.mark.parametrize("changes", [None, "rod.mu=1", ["rod.mu", 1.0], [("rod.mu", 1.0)], 3],
+                         ids=["None", "text", "list", "pairs", "number"])
+def test_override_names_its_argument(changes):
+    """``override`` of something not a mapping raised an AttributeError about ``.items``."""
+    with pytest.raises(TypeError, match=r"^Config\.override\(changes\): changes must be a "
+                                        r"mapping of dotted keys to values"):
+        rodjit.Config().override(changes)
+    assert rodjit.Config().override({"rod.mu": 1.0}).rod.mu == 1.0
+
+
+def _plain_value(e, p):
+    return p.kappa * e
+
+
+def _law(**changes):
+    from typing import NamedTuple
+
+    from rodjit.laws import Law
+    from rodjit.model.laws import aiki_kosugi
+
+    class Refused(NamedTuple):
+        kappa: float
+
+    parts = dict(name="refused-test", kind="rod", params=Refused,
+                 from_config=lambda rod: Refused(float(rod.kappa)),
+                 value=aiki_kosugi.rod_value, deriv=aiki_kosugi.rod_deriv,
+                 primitive=aiki_kosugi.rod_primitive, lower=aiki_kosugi.rod_lower)
+    return Law(**{**parts, **changes})
+
+
+@pytest.mark.parametrize("law,named", [
+    (None, "law must be a rodjit.laws.Law, not None"),
+    ("aiki-kosugi", "law must be a rodjit.laws.Law, not 'aiki-kosugi'"),
+    (lambda: _law(value=_plain_value), "law.value must be a compiled function"),
+    (lambda: _law(lower=None), "law.lower must be a compiled function"),
+    (lambda: _law(deriv_max=_plain_value), "law.deriv_max must be a compiled function"),
+    (lambda: _law(params=dict), "law.params must be a NamedTuple class"),
+    (lambda: _law(from_config=None), "law.from_config must be callable"),
+], ids=["None", "a name", "plain value", "no lower", "plain deriv_max", "params dict",
+        "from_config None"])
+def test_register_refuses_what_is_not_a_law_at_registration(law, named):
+    """A law with a plain Python function (or None) was accepted and failed when a run first
+    compiled the loop with it; ``register(None)`` raised an AttributeError."""
+    from rodjit.laws import law_names, register
+
+    law = law() if callable(law) else law
+    with pytest.raises(TypeError, match=rf"^register\(law\): {named}"):
+        register(law)
+    assert "refused-test" not in law_names("rod")

@@ -366,3 +366,15 @@ def test_any_warning_a_command_issues_is_said_as_one_line(tmp_path, monkeypatch)
     assert r.exit_code == 0, r.output
     assert _warning_lines(r.stderr)[:1] == ["warning: something odd"]
     assert _warning_lines(r.stderr).count("warning: something odd") == 1
+
+
+def test_a_run_asked_for_a_device_says_devices_are_for_sweeps(tmp_path, monkeypatch):
+    """click said only "No such option: --device"."""
+    monkeypatch.chdir(tmp_path)
+    for args in (["--device", "cuda"], ["--device=auto"]):
+        r = invoke("run", *args)
+        assert r.exit_code == 2, r.output
+        assert ("--device is not an option of rodjit run: devices are for sweeps: "
+                "'rodjit sweep --device cuda'") in r.output
+    assert "No such option" in invoke("run", "--nosuch").output
+    assert list(tmp_path.iterdir()) == []

@@ -94,3 +94,14 @@ def test_converge_refuses_a_time_ladder_that_sets_no_steps_and_prints_predictabi
     assert "predictability_time: none before t_end = 0.6 s" in r.output
     r = _run("converge", *common, "--also", "none")
     assert r.exit_code == 0 and "predictability_time" not in r.output
+
+
+def test_fit_table_with_a_ragged_row_is_one_line(tmp_path):
+    """A row with more cells than the header raised an AttributeError (csv's key None)."""
+    p = tmp_path / "drops.csv"
+    p.write_text("initial.height,restitution_first\n0.5,0.8\n1.0,0.7,0.3\n")
+    r = CliRunner().invoke(main, ["fit", "rod.mu", "--table", str(p)])
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1, r.output
+    assert "line 3: 3 cells, more than the 2 columns of the header" in lines[0]
+    assert [q.name for q in tmp_path.iterdir()] == ["drops.csv"]

@@ -241,6 +241,23 @@ def test_fault_file_size_limit_on_a_picture(tmp_path, args):
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
 
 
+@pytest.mark.parametrize("threads", ["0", "abc", "-2", ""])
+def test_an_environment_numba_cannot_use_is_named(tmp_path, threads):
+    """NUMBA_NUM_THREADS=0 failed the run with Numba's "Number of threads specified must be
+    > 0." once it compiled (after the run file was made), "abc" printed Numba's warning with
+    its traceback: one line naming the variable, exit 2, before anything is written."""
+    import os
+
+    env = dict(os.environ, NUMBA_NUM_THREADS=threads)
+    r = subprocess.run([sys.executable, "-m", "rodjit", "run", *TINY, "-o", "x.h5"],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    assert lines[0].startswith(f"Error: environment variable NUMBA_NUM_THREADS = "
+                               f"{threads!r} is out of range"), lines[0]
+    assert list(tmp_path.iterdir()) == []
+
+
 def _importing_numpy(pid: int) -> bool:
     """Has process ``pid`` started loading NumPy (rodjit's own import is under way)?"""
     try:

@@ -79,6 +79,9 @@ CASES = [
                                      "nan"], "--max-steps nan"),
     ("inf --max-steps of fit", ["fit", "rod.mu", "--target", "restitution_first=0.5",
                                 "--max-steps", "inf"], "--max-steps inf"),
+    # fit's tolerance: a search that never stops (0, -1, nan) or stops at once (inf)
+    *[(f"{v} --ftol", ["fit", "rod.mu", "--target", "restitution_first=0.5", "--ftol", v],
+       f"ftol = {v} is out of range") for v in ("nan", "-1.0", "0.0", "inf")],
 ]
 
 

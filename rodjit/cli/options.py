@@ -14,7 +14,7 @@ import click
 __all__ = ["DEFAULT_OUTPUT", "CONFIG_METAVAR", "config_argument", "set_option",
            "output_option", "overwrite_option", "quiet_option", "progress_option",
            "max_output_option", "max_steps_option", "max_points_option", "jobs_option",
-           "scheduler_option", "CountLimit",
+           "scheduler_option", "CountLimit", "verb_saying_where",
            "load_config", "base_config", "overrides", "key_values", "command_line",
            "progress", "run_bar", "sweep_bar", "close"]
 
@@ -105,6 +105,30 @@ def jobs_option() -> Callable[[F], F]:
 def scheduler_option(help: str = SCHEDULER_AS_SWEEP) -> Callable[[F], F]:
     """``--scheduler local|tcp://HOST:PORT``."""
     return click.option("--scheduler", metavar=SCHEDULER_METAVAR, help=help)
+
+
+def verb_saying_where(elsewhere: dict[str, str]) -> type[click.Command]:
+    """A verb's command class that answers an option it lacks but another verb has with
+    where that option belongs, instead of click's bare "No such option".
+
+    Parameters
+    ----------
+    elsewhere : dict of str to str
+        Option (``"--device"``) -> what to say about it.
+    """
+
+    class Verb(click.Command):
+        def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+            try:
+                return super().parse_args(ctx, args)
+            except click.NoSuchOption as exc:
+                where = elsewhere.get(exc.option_name)
+                if where is None:
+                    raise
+                raise click.UsageError(f"{exc.option_name} is not an option of rodjit "
+                                       f"{self.name}: {where}", ctx) from None
+
+    return Verb
 
 
 # ---- reading them ---------------------------------------------------------------------

@@ -16,7 +16,9 @@ from .wording import output_exists, word
 __all__ = ["run_command", "say_run"]
 
 
-@click.command("run")
+@click.command("run", cls=options.verb_saying_where({
+    "--device": "devices are for sweeps: 'rodjit sweep --device cuda' runs a grid's points "
+                "on the GPU; a run runs on the CPU"}))
 @options.config_argument()
 @options.output_option(f"HDF5 file to write [default: PRESET.h5, CONFIG.h5 or "
                        f"{options.DEFAULT_OUTPUT}]")

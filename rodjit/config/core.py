@@ -219,7 +219,13 @@ class Config:
         ------
         ValueError
             An unknown key (naming the closest valid one) or a value out of range.
+        TypeError
+            ``changes`` is not a mapping (a ``"rod.mu=1"`` text, a list, None).
         """
+        if not isinstance(changes, Mapping):
+            raise TypeError(f"Config.override(changes): changes must be a mapping of dotted "
+                            f"keys to values, e.g. {{'rod.mu': 100.0}}, not "
+                            f"{_short(changes)} ({type(changes).__name__})")
         return self._replaced(changes, text=True)
 
     def _replaced(self, changes: Mapping[str, Any], *, text: bool) -> "Config":
@@ -320,3 +326,8 @@ class Config:
         from .._display import html_table
         return html_table(*self._overview())
 
+
+def _short(value: Any) -> str:
+    """``repr(value)``, cut to a message's length."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
