@@ -75,7 +75,7 @@ def test_info_and_plot_of_a_sweep_file(tmp_path, monkeypatch):
                           (["--x", "rod.N"], "'rod.N' is not a swept key"),
                           (["--kind", "heatmap", "--at", "rod.mu=10"],
                            "a heatmap needs two swept keys with several values")):
-        r = invoke("plot", "sweep.h5", *args)
+        r = invoke("plot", "sweep.h5", "--overwrite", *args)
         assert r.exit_code == 2 and message in r.stderr, r.stderr
 
 

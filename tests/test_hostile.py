@@ -217,7 +217,7 @@ def test_fault_file_size_limit_on_a_run(tmp_path, limit):
 
 
 @pytest.mark.parametrize("args", [["plot", "r.h5", "-o", "x.png"],
-                                  ["plot", "r.h5", "-o", "old.pdf"],
+                                  ["plot", "r.h5", "-o", "old.pdf", "--overwrite"],
                                   ["animate", "r.h5", "-o", "x.gif", "--fps", "4",
                                    "--duration", "1"]], ids=["plot png", "plot over an old pdf",
                                                              "animate gif"])

@@ -48,8 +48,15 @@ def overwrite_option(help: str = "Replace an existing output file.") -> Callable
 
 
 def quiet_option() -> Callable[[F], F]:
-    """``-q/--quiet``."""
-    return click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+    """``-q/--quiet``: nothing but errors, no warning either (``say.keep_quiet``)."""
+    def quiet(ctx: click.Context, param: click.Parameter, value: bool) -> bool:
+        from .say import keep_quiet
+
+        keep_quiet(value)
+        return value
+
+    return click.option("-q", "--quiet", is_flag=True, callback=quiet,
+                        help="Print nothing but errors (no warnings either).")
 
 
 def progress_option() -> Callable[[F], F]:

@@ -133,15 +133,15 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
 
 
 def say_run(summary: Any, quiet: bool) -> None:
-    """A run's warnings on stderr, once each, even with --quiet (what the results do not
-    mean); then, unless quiet, its report on stdout without them (said once).
+    """A run's warnings on stderr, once each (what the results do not mean); then its
+    report on stdout without them (said once).  With --quiet, neither.
 
     Parameters
     ----------
     summary : RunSummary
         What the run (or its resumption) returned.
     quiet : bool
-        --quiet: the warnings only.
+        --quiet: nothing (``say_warning`` says no warning under it).
     """
     for text in summary.warnings:
         say_warning(text)
