@@ -7,7 +7,8 @@ command with one line and exit code 128 + the signal number (130, 143), not a Tr
 or click's "Aborted!".  Nothing is half-written then: no output file is open outside a
 StopFlag except while a sweep file is created, which is removed if that is cut short.
 Every error, click's usage errors included, is one line on stderr; so is an environment
-Numba cannot start with (``NUMBA_NUM_THREADS``), refused before any verb runs (exit 2).  SIGXFSZ is ignored: a
+Numba cannot start with (``NUMBA_NUM_THREADS``), refused before any verb runs (exit 2),
+and standard output refusing a write (a full disk: exit 1).  SIGXFSZ is ignored: a
 file-size limit (``ulimit -f``) then fails the write (EFBIG), which is reported in one line
 like a full disk, instead of killing the process.
 """

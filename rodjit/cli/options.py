@@ -14,7 +14,7 @@ import click
 __all__ = ["DEFAULT_OUTPUT", "CONFIG_METAVAR", "config_argument", "set_option",
            "output_option", "overwrite_option", "quiet_option", "progress_option",
            "max_output_option", "max_steps_option", "max_points_option", "jobs_option",
-           "scheduler_option", "CountLimit", "verb_saying_where",
+           "scheduler_option", "count_limit", "verb_saying_where",
            "load_config", "base_config", "overrides", "key_values", "command_line",
            "progress", "run_bar", "sweep_bar", "close"]
 
@@ -71,36 +71,34 @@ def max_output_option(what: str) -> Callable[[F], F]:
                         help=f"Refuse {what} would exceed SIZE (e.g. 500M, 50GiB, inf).")
 
 
-class CountLimit(click.ParamType):
-    """A limit on a count (``--max-steps``, ``--max-points``): a whole number >= 1, never
-    NaN or infinity, which would turn the limit off (``output.estimate.check_count_limit``,
-    the API's check: one line naming the option, exit code 2)."""
+def count_limit(ctx: click.Context, param: click.Parameter, value: Any) -> float:
+    """The callback of a limit on a count (``--max-steps``, ``--max-points``): a whole
+    number >= 1, never NaN or infinity, which would turn the limit off
+    (``output.estimate.check_count_limit``, the API's check: one line naming the option,
+    exit code 2)."""
+    from ..output.estimate import check_count_limit
+    from .exits import UsageError
 
-    name = "count"
-
-    def convert(self, value: Any, param: click.Parameter | None,
-                ctx: click.Context | None) -> float:
-        from ..output.estimate import check_count_limit
-        from .exits import UsageError
-
-        option = param.opts[0] if param is not None and param.opts else "limit"
-        try:
-            return check_count_limit(option, value, unlimited=False)
-        except ValueError as exc:
-            raise UsageError(exc) from None
+    option = param.opts[0] if param.opts else str(param.name)
+    try:
+        return check_count_limit(option, value, unlimited=False)
+    except ValueError as exc:
+        raise UsageError(exc) from None
 
 
 def max_steps_option(what: str) -> Callable[[F], F]:
     """``--max-steps N``; ``what``: what is refused."""
-    return click.option("--max-steps", type=CountLimit(), default=1e10, show_default=True,
-                        metavar="N", help=f"Refuse {what} needs more than N steps.")
+    return click.option("--max-steps", default="1e10", callback=count_limit,
+                        show_default=True, metavar="N",
+                        help=f"Refuse {what} needs more than N steps.")
 
 
 def max_points_option() -> Callable[[F], F]:
     """``--max-points N``."""
-    return click.option("--max-points", type=CountLimit(), default=1e6, show_default=True,
-                        metavar="N", help="Refuse a grid of more than N points (counted "
-                                          "before it is made).")
+    return click.option("--max-points", default="1e6", callback=count_limit,
+                        show_default=True, metavar="N",
+                        help="Refuse a grid of more than N points (counted before it is "
+                             "made).")
 
 
 def jobs_option() -> Callable[[F], F]:
