@@ -162,3 +162,24 @@ def test_register_refuses_what_is_not_a_law_at_registration(law, named):
     with pytest.raises(TypeError, match=rf"^register\(law\): {named}"):
         register(law)
     assert "refused-test" not in law_names("rod")
+
+
+def test_a_convergence_study_replaces_only_a_convergence_file(tmp_path):
+    """``Convergence.save(path, overwrite=True)`` replaced any file with HDF5."""
+    import importlib
+
+    from rodjit.output.errors import OutputOtherKind
+
+    cfg = rodjit.Config().override({"time.t_end": 0.05, "rod.mu": 1.0})
+    study = rodjit.converge(cfg, {"rod.N": [3, 5]}, also=False, observables=["min_u0"],
+                            jobs=1)
+    notes = tmp_path / "notes.txt"
+    notes.write_text("my notes\n")
+    with pytest.raises(OutputOtherKind, match="'.*notes.txt' is not a rodjit file"):
+        study.save(notes, overwrite=True)
+    assert notes.read_text() == "my notes\n"
+    study.save(tmp_path / "conv.h5")
+    study.save(tmp_path / "conv.h5", overwrite=True)
+    load = importlib.import_module("rodjit.analysis.converge").load_convergence
+    assert load(tmp_path / "conv.h5")["key"] == "rod.N"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["conv.h5", "notes.txt"]

@@ -28,8 +28,9 @@ __all__ = ["animate_command"]
 def animate_command(file: str, output: str | None, fps: int, duration: float, quantity: str,
                     dpi: int, overwrite: bool) -> None:
     """A movie of a run file: the rod over the floor, coloured by strain."""
-    if file_kind(file) != "run":
-        raise UsageError(f"{file!r} is a sweep file; animate draws run files")
+    kind = file_kind(file)
+    if kind != "run":
+        raise UsageError(f"{file!r} is a {kind} file; animate draws run files")
     from ..output.h5files import WriteFailed
     from ..plotting import MissingMatplotlib, NothingToDraw
     from ..plotting.animation import MissingWriter, animate
