@@ -126,6 +126,24 @@ _WHEN_LOADED: list[Callable[[], None]] = []
 _STATE = {"loaded": False, "loading": False}
 
 
+def check_numba_environment() -> None:
+    """ValueError (one line naming the variable) if ``NUMBA_NUM_THREADS`` is set to what
+    Numba cannot use: Numba's import fails on 0 with "Number of threads specified must be
+    > 0." and answers a non-number with a warning holding its own traceback, neither
+    naming the variable; a run would fail (or warn) only once it compiles, after its file
+    was made.  The command line checks it before any verb runs (``rodjit.entry``)."""
+    text = os.environ.get("NUMBA_NUM_THREADS")
+    if text is None:
+        return
+    try:
+        threads = int(text)
+    except ValueError:
+        threads = 0
+    if threads < 1:
+        raise ValueError(f"environment variable NUMBA_NUM_THREADS = {text[:40]!r} is out of "
+                         f"range (a whole number of threads >= 1, or unset)")
+
+
 def load_numba():
     """Import Numba and make ready what rodjit compiles with it, once per process; return
     the ``numba`` module.
@@ -142,6 +160,7 @@ def load_numba():
         if not (_STATE["loaded"] or _STATE["loading"]):
             _STATE["loading"] = True
             try:
+                check_numba_environment()
                 import numba
                 import numba.core.cpu
 

@@ -6,7 +6,9 @@ a clean stop at its next checkpoint, ``driver.signals.StopFlag``), a signal ends
 command with one line and exit code 128 + the signal number (130, 143), not a Traceback
 or click's "Aborted!".  Nothing is half-written then: no output file is open outside a
 StopFlag except while a sweep file is created, which is removed if that is cut short.
-Every error, click's usage errors included, is one line on stderr.  SIGXFSZ is ignored: a
+Every error, click's usage errors included, is one line on stderr; so is an environment
+Numba cannot start with (``NUMBA_NUM_THREADS``), refused before any verb runs (exit 2),
+and standard output refusing a write (a full disk: exit 1).  SIGXFSZ is ignored: a
 file-size limit (``ulimit -f``) then fails the write (EFBIG), which is reported in one line
 like a full disk, instead of killing the process.
 """
@@ -31,12 +33,27 @@ def _finish(code: int) -> NoReturn:
     for s in (signal.SIGINT, signal.SIGTERM):
         signal.signal(s, signal.SIG_IGN)
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    code = _stdout_refused(code)
     held = sys.modules.get("rodjit.output.abandoned")
     if held is not None and held.abandoned():
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)
     sys.exit(code)
+
+
+def _stdout_refused(code: int) -> int:
+    """``code``, or 1 with one line naming the cause where standard output refused a write
+    (``_PipeSafe.failed``) and the command had nothing else to say (exit 0)."""
+    out = sys.stdout
+    if not isinstance(out, _PipeSafe):
+        return code
+    out.flush()
+    if out.failed is None or code != 0:
+        return code
+    cause = out.failed.strerror or str(out.failed)
+    print(f"Error: could not write to standard output: {cause}", file=sys.stderr)
+    return 1
 
 
 def _exit_interrupted(signum: int) -> NoReturn:
@@ -47,25 +64,42 @@ def _exit_interrupted(signum: int) -> NoReturn:
 
 
 class _PipeSafe:
-    """Standard output that a reader closing its end (``rodjit info x.h5 | head -1``, ``|
-    true``) cannot fail: what is left to print goes to /dev/null, and the command ends
-    with the exit code of its work, as ``head``-style pipes expect."""
+    """Standard output that cannot fail the command's work: a reader closing its end
+    (``rodjit info x.h5 | head -1``, ``| true``) sends what is left to /dev/null and the
+    command ends with the exit code of its work, as ``head``-style pipes expect; any other
+    refused write (a full disk: ``rodjit config > /dev/full``, a size limit, EIO) does the
+    same and is kept in ``failed``, which ``_finish`` reports in one line (exit 1) where
+    the work itself succeeded, instead of a Traceback from wherever the write was."""
 
     def __init__(self, stream: TextIO) -> None:
         self._stream = stream
+        self.failed: OSError | None = None
 
     def write(self, text: str) -> int:
         try:
             return self._stream.write(text)
         except BrokenPipeError:
             self._drop()
-            return len(text)
+        except OSError as exc:
+            self._refused(exc)
+        return len(text)
 
     def flush(self) -> None:
         try:
             self._stream.flush()
         except BrokenPipeError:
             self._drop()
+        except OSError as exc:
+            self._refused(exc)
+
+    def _refused(self, exc: OSError) -> None:
+        if self.failed is None:
+            self.failed = exc
+        self._drop()
+        try:
+            self._stream.flush()     # what the buffer still holds goes to /dev/null too
+        except OSError:
+            pass
 
     def _drop(self) -> None:
         null = os.open(os.devnull, os.O_WRONLY)
@@ -98,6 +132,13 @@ def main() -> None:
         install_early_handlers()     # (already while ``rodjit/__init__`` was imported)
         if hasattr(signal, "SIGXFSZ"):
             signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        from ._jit import check_numba_environment
+
+        try:
+            check_numba_environment()    # before a verb makes a file it could not finish
+        except ValueError as exc:
+            print(f"Error: {exc}", file=sys.stderr)
+            _finish(2)
         import click
 
         from .cli import main as command, one_line

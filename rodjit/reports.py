@@ -1,4 +1,5 @@
-"""What ``rodjit info`` says about a rodjit file, for both kinds of file (runs, sweeps).
+"""What ``rodjit info`` says about a rodjit file, for every kind of file (runs, sweeps,
+convergence studies).
 
 One path for every kind: ``info`` reads the file's kind, asks that kind's reader for an
 ``About`` (format version, attributes, status, the kind's own lines, configuration and
@@ -79,7 +80,39 @@ def _about_sweep(path: str) -> About:
                  "base configuration:", table.base, table.report())
 
 
-READERS = {"run": _about_run, "sweep": _about_sweep}     # rodjit_kind -> About of a file
+def _about_convergence(path: str) -> About:
+    import math
+
+    from .analysis.converge import FORMAT_VERSION as CONVERGENCE_FORMAT_VERSION
+    from .analysis.converge import load_convergence
+    from .config import Config
+
+    d = load_convergence(path)
+
+    def listed(values) -> str:       # the ladders are stored as floats
+        return ", ".join(f"{float(v):g}" for v in values)
+
+    details = [f"ladder    {d['key']} = {listed(d['levels'])}"]
+    if d.get("time_key"):
+        details.append(f"time      {d['time_key']} = {listed(d['time_levels'])} at "
+                       f"{d['key']} = {float(d['time_at']):g}")
+        p = float(d.get("predictability_time", math.nan))
+        details.append("predictability time " + (
+            "not measured" if math.isnan(p) else "none before t_end" if p == math.inf
+            else f"{p:.4g} s"))
+    rows = ["observables (continuum value ± error, observed order, status):"]
+    for name, o in d["observables"].items():
+        order = float(o.get("order", math.nan))
+        rows.append(f"  {name}: {float(o['value']):.6g} ± {float(o['error']):.2g}  "
+                    f"p={f'{order:.2f}' if math.isfinite(order) else '—'}  {o['status']}")
+    rows += [f"  warning: {w}" for w in str(d.get("warnings", "")).splitlines() if w]
+    return About(int(d.get("format_version", CONVERGENCE_FORMAT_VERSION)), d, "completed",
+                 details, "base configuration:", Config.from_stored_toml(str(d["config"])),
+                 "\n".join(rows))
+
+
+# rodjit_kind -> About of a file
+READERS = {"run": _about_run, "sweep": _about_sweep, "convergence": _about_convergence}
 
 
 def readable_kind(path) -> str:

@@ -368,3 +368,53 @@ def test_any_warning_a_command_issues_is_said_as_one_line(tmp_path, monkeypatch)
     assert r.exit_code == 0, r.output
     assert _warning_lines(r.stderr)[:1] == ["warning: something odd"]
     assert _warning_lines(r.stderr).count("warning: something odd") == 1
+
+
+def test_a_run_asked_for_a_device_says_devices_are_for_sweeps(tmp_path, monkeypatch):
+    """click said only "No such option: --device"."""
+    monkeypatch.chdir(tmp_path)
+    for args in (["--device", "cuda"], ["--device=auto"]):
+        r = invoke("run", *args)
+        assert r.exit_code == 2, r.output
+        assert ("--device is not an option of rodjit run: devices are for sweeps: "
+                "'rodjit sweep --device cuda'") in r.output
+    assert "No such option" in invoke("run", "--nosuch").output
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_quiet_says_no_warning(tmp_path, monkeypatch):
+    """``-q`` ("print nothing but errors") still printed the model's warnings."""
+    monkeypatch.chdir(tmp_path)
+    args = ("run", "-o", "w.h5", "--t-end", "0.02", "--set", "rod.N=3")
+    loud = CliRunner().invoke(main, list(args))
+    assert loud.exit_code == 0, loud.output
+    assert _warning_lines(loud.stderr) == [f"warning: {rodjit.config.SHOCK_WARNING}"]
+    for p in tmp_path.iterdir():
+        p.unlink()
+    quiet = CliRunner().invoke(main, [*args, "-q"])
+    assert quiet.exit_code == 0, quiet.output
+    assert quiet.stderr == "" and quiet.stdout == ""
+    # the next command (in this process) says its warnings again
+    again = CliRunner().invoke(main, ["run", "--dry-run", "--set", "gravity.g=9.81"])
+    assert any("gravity.g = 9.81 > 0" in line for line in _warning_lines(again.stderr))
+
+
+def test_plot_and_animate_replace_a_picture_only_with_overwrite(tmp_path, monkeypatch):
+    """``rodjit plot`` replaced its default picture without a word: like every writer, it
+    refuses an existing file (one line, exit 2, the file as it was) unless --overwrite."""
+    pytest.importorskip("matplotlib")
+    monkeypatch.chdir(tmp_path)
+    assert invoke("run", "--t-end", "0.2", "--set", "rod.N=3", "-q").exit_code == 0
+    for verb, picture in (("plot", "default_heights.png"), ("animate", "default.gif")):
+        (tmp_path / picture).write_bytes(b"an older picture")
+        r = CliRunner().invoke(main, [verb, "default.h5", "--fps", "2", "--duration", "1"]
+                               if verb == "animate" else [verb, "default.h5"])
+        assert r.exit_code == 2, r.output
+        assert r.stderr.strip() == (f"Error: output file {picture!r} already exists; use "
+                                    f"--overwrite to replace it")
+        assert (tmp_path / picture).read_bytes() == b"an older picture"
+        r = CliRunner().invoke(main, [verb, "default.h5", "--overwrite"]
+                               + (["--fps", "2", "--duration", "1"] if verb == "animate"
+                                  else []))
+        assert r.exit_code == 0 and r.stdout.strip() == f"wrote {picture}", r.output
+        assert (tmp_path / picture).read_bytes() != b"an older picture"

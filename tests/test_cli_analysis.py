@@ -94,3 +94,63 @@ def test_converge_refuses_a_time_ladder_that_sets_no_steps_and_prints_predictabi
     assert "predictability_time: none before t_end = 0.6 s" in r.output
     r = _run("converge", *common, "--also", "none")
     assert r.exit_code == 0 and "predictability_time" not in r.output
+
+
+def test_fit_table_with_a_ragged_row_is_one_line(tmp_path):
+    """A row with more cells than the header raised an AttributeError (csv's key None)."""
+    p = tmp_path / "drops.csv"
+    p.write_text("initial.height,restitution_first\n0.5,0.8\n1.0,0.7,0.3\n")
+    r = CliRunner().invoke(main, ["fit", "rod.mu", "--table", str(p)])
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1, r.output
+    assert "line 3: 3 cells, more than the 2 columns of the header" in lines[0]
+    assert [q.name for q in tmp_path.iterdir()] == ["drops.csv"]
+
+
+def test_converge_replaces_only_a_convergence_file_and_info_reads_it(tmp_path, monkeypatch):
+    """``converge -o X --overwrite`` turned any file into HDF5 (a text file, a FIFO, a run
+    file, its own configuration) and ``rodjit info`` could not read what it wrote: it
+    refuses, before the study runs, what ``run -o`` refuses (one line, exit 2, the file as
+    it was), and ``info`` reads a convergence file."""
+    import hashlib
+    import os
+
+    import rodjit
+
+    monkeypatch.chdir(tmp_path)
+    study = ["converge", "cfg.toml", "--ladder", "rod.N=3,5", "--also", "none",
+             "--observable", "min_u0", "-j", "1"]
+    (tmp_path / "cfg.toml").write_text("[rod]\nmu = 1.0\n[time]\nt_end = 0.05\n")
+    (tmp_path / "notes.txt").write_text("my notes\n")
+    os.mkfifo(tmp_path / "pipe.h5")
+    rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.02, "rod.N": 3}),
+                       tmp_path / "run.h5")
+
+    def digest():
+        return {p.name: hashlib.sha256(p.read_bytes()).hexdigest()
+                for p in tmp_path.iterdir() if p.is_file() and not p.name.endswith(".lock")}
+
+    before = digest()
+    for target, said in (("notes.txt", "'notes.txt' is not a rodjit file; --overwrite "
+                                       "replaces only rodjit convergence files"),
+                         ("cfg.toml", "'cfg.toml' is not a rodjit file"),
+                         ("run.h5", "'run.h5' is a rodjit run file"),
+                         ("pipe.h5", "'pipe.h5' is a named pipe (FIFO), not a regular file")):
+        r = CliRunner().invoke(main, [*study, "-o", target, "--overwrite"])
+        lines = r.stderr.strip().splitlines()
+        assert r.exit_code == 2 and len(lines) == 1, r.output
+        assert said in lines[0], lines[0]
+    assert digest() == before
+    r = CliRunner().invoke(main, [*study, "-o", "conv.h5"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, ["info", "conv.h5"])
+    assert r.exit_code == 0, r.output
+    lines = r.stdout.splitlines()
+    assert lines[0].startswith("rodjit convergence file conv.h5 (format 2")
+    assert "ladder    rod.N = 3, 5" in lines and "  mu = 1.0" in lines
+    assert lines[2].startswith("command   rodjit converge cfg.toml --ladder rod.N=3,5")
+    assert any(line.startswith("  min_u0: ") for line in lines), r.stdout
+    r = CliRunner().invoke(main, [*study, "-o", "conv.h5", "--overwrite"])
+    assert r.exit_code == 0, r.output
+    r = CliRunner().invoke(main, ["animate", "conv.h5"])
+    assert r.exit_code == 2 and "is a convergence file; animate draws run files" in r.stderr

@@ -75,7 +75,7 @@ def test_info_and_plot_of_a_sweep_file(tmp_path, monkeypatch):
                           (["--x", "rod.N"], "'rod.N' is not a swept key"),
                           (["--kind", "heatmap", "--at", "rod.mu=10"],
                            "a heatmap needs two swept keys with several values")):
-        r = invoke("plot", "sweep.h5", *args)
+        r = invoke("plot", "sweep.h5", "--overwrite", *args)
         assert r.exit_code == 2 and message in r.stderr, r.stderr
 
 
@@ -251,3 +251,30 @@ def test_set_with_a_unit_says_values_are_si_numbers(tmp_path, monkeypatch):
     assert r.exit_code == 2 and list(tmp_path.iterdir()) == []
     assert "values are plain SI numbers without units; write it in s" in r.stderr
     assert "docs/units.md" in r.stderr
+
+
+@pytest.mark.parametrize("scheduler,capped", [("local", True), ("processes", True),
+                                              ("tcp://127.0.0.1:1", False)])
+def test_jobs_on_this_machine_are_capped_at_its_cores(monkeypatch, tmp_path, scheduler,
+                                                      capped):
+    """Dask's local cluster starts --jobs worker processes on this machine, as the pool
+    does: both are capped at the cores (a note says so); a remote cluster is not."""
+    import rodjit.sweeps
+    import rodjit.sweeps.executors
+    import rodjit.sweeps.start_method
+
+    asked = {}
+
+    def recorder(*args, jobs=None, **kwargs):
+        asked["jobs"] = jobs
+        raise ValueError("stopped before any worker starts")
+
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(rodjit.sweeps.executors, "default_jobs", lambda: 2)
+    monkeypatch.setattr(rodjit.sweeps.start_method, "start_server", lambda: None)
+    monkeypatch.setattr(rodjit.sweeps, "sweep", recorder)
+    r = CliRunner().invoke(main, ["sweep", "--grid", "rod.mu=0,1,2,3,4,5,6,7", "-j", "6",
+                                  "--scheduler", scheduler])
+    assert r.exit_code == 2 and "stopped before any worker starts" in r.stderr, r.output
+    assert asked["jobs"] == (2 if capped else 6)
+    assert ("--jobs 6 is more than the 2 cores; using 2" in r.stderr) == capped

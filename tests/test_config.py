@@ -142,3 +142,25 @@ def test_a_value_with_a_unit_says_values_are_si_numbers():
         Config().override({"rod.N": "50 segments"})
     with pytest.raises(ValueError, match=r"^rod\.mu = 'fast' is not a number \(float >= 0\)$"):
         Config().override({"rod.mu": "fast"})          # no number: no unit hint
+
+
+@pytest.mark.parametrize("changes,warned", [
+    ({"gravity.g": 9.81}, "gravity.g = 9.81 > 0 pulls the rod up"),
+    ({"gravity.g": 9.81, "initial.velocity": -1.0}, "gravity.g = 9.81 > 0 pulls the rod up"),
+    ({"floor.beta": 50.0}, "floor.beta = 50.0 puts the floor's bending limit"),
+    ({"floor.beta": 1.0}, "floor.beta = 1.0 puts the floor's bending limit"),
+], ids=["g up", "g up, too slow down", "beta 50", "beta 1"])
+def test_a_set_up_that_is_surely_a_mistake_warns(changes, warned):
+    """``gravity.g = +9.81`` (the rod flies up: "no impact") and ``floor.beta = 50`` (a
+    bending limit 50 rod lengths deep) were accepted without a word."""
+    cfg = Config().override({"rod.mu": 1.0, **changes})
+    said = [w for w in cfg.warnings() if w.startswith(warned)]
+    assert len(said) == 1, cfg.warnings()
+
+
+@pytest.mark.parametrize("changes", [{}, {"gravity.g": 0.0}, {"floor.beta": 0.5},
+                                     {"gravity.g": 9.81, "initial.velocity": -5.0},
+                                     {"gravity.g": 1.0, "initial.height": -0.01}],
+                         ids=["default", "free rod", "beta 0.5", "thrown down", "in contact"])
+def test_a_set_up_that_reaches_the_floor_says_nothing(changes):
+    assert Config().override({"rod.mu": 1.0, **changes}).warnings() == ()

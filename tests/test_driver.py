@@ -196,6 +196,31 @@ def test_a_later_run_of_the_same_types_reuses_the_compiled_entries(monkeypatch, 
     assert np.array_equal(resumed.u, rodjit.simulate(cfg).u_final)
 
 
+def test_a_first_run_counts_its_compile_time_once(monkeypatch, jit_only):
+    """``start``'s compile was counted by ``_entry`` and again by ``start``'s own clock
+    around it, so a first run reported twice its compile time."""
+    import time
+
+    import rodjit.driver.run as run_module
+    from rodjit._jit import Kernel
+
+    cfg = rodjit.Config().override({"time.t_end": 0.05, "rod.mu": 2.0})
+    rodjit.simulate(cfg)                        # compiled or loaded in this process
+    original = Kernel.entry_point
+    slow = 0.4
+
+    def slow_compile(self, args):               # a compile of ``slow`` seconds
+        if self.__name__ == "start":
+            time.sleep(slow)
+        return original(self, args)
+
+    monkeypatch.setattr(Kernel, "entry_point", slow_compile)
+    monkeypatch.setattr(run_module, "_COMPILED", {})     # as in a fresh process
+    run = Run(cfg)
+    run.start(None)
+    assert slow <= run.compile_time < 1.5 * slow, run.compile_time
+
+
 def test_a_block_is_finite_exactly_when_every_value_is():
     """The drain's test of a block's diagnostics (a sum, then each value only where the
     sum is not finite): finite values whose sum overflows pass, any inf or NaN fails."""

@@ -2,9 +2,13 @@
 to ``rodjit.cli.EXIT_CODES``, and the codes the commands exit with are the table's."""
 from __future__ import annotations
 
+import os
 import re
+import subprocess
+import sys
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from rodjit import cli
@@ -56,3 +60,18 @@ def test_the_commands_exit_with_the_table_codes():
     source = Path(cli.__file__).read_text()
     for code in re.findall(r"sys\.exit\((\d+)\)", source):
         assert int(code) in cli.EXIT_CODES, code
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [["config", "paper-mu100"], ["presets"], ["--help"]],
+                         ids=["config", "presets", "help"])
+def test_standard_output_on_a_full_disk_is_one_line_and_exit_1(tmp_path, args):
+    """stdout refusing a write (``> /dev/full``) ended in a Traceback from the write:
+    it is the one line of a refused write, exit 1, and nothing is left behind."""
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-m", "rodjit", *args], stdout=full,
+                           stderr=subprocess.PIPE, text=True, cwd=tmp_path, timeout=120)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == cli.EXIT_FAILED, r.stderr
+    assert lines == ["Error: could not write to standard output: No space left on device"]
+    assert list(tmp_path.iterdir()) == []

@@ -217,7 +217,7 @@ def test_fault_file_size_limit_on_a_run(tmp_path, limit):
 
 
 @pytest.mark.parametrize("args", [["plot", "r.h5", "-o", "x.png"],
-                                  ["plot", "r.h5", "-o", "old.pdf"],
+                                  ["plot", "r.h5", "-o", "old.pdf", "--overwrite"],
                                   ["animate", "r.h5", "-o", "x.gif", "--fps", "4",
                                    "--duration", "1"]], ids=["plot png", "plot over an old pdf",
                                                              "animate gif"])
@@ -239,6 +239,23 @@ def test_fault_file_size_limit_on_a_picture(tmp_path, args):
     assert r.returncode == 1 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
     assert "file size limit" in lines[0] and "nothing was written" in lines[0]
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+@pytest.mark.parametrize("threads", ["0", "abc", "-2", ""])
+def test_an_environment_numba_cannot_use_is_named(tmp_path, threads):
+    """NUMBA_NUM_THREADS=0 failed the run with Numba's "Number of threads specified must be
+    > 0." once it compiled (after the run file was made), "abc" printed Numba's warning with
+    its traceback: one line naming the variable, exit 2, before anything is written."""
+    import os
+
+    env = dict(os.environ, NUMBA_NUM_THREADS=threads)
+    r = subprocess.run([sys.executable, "-m", "rodjit", "run", *TINY, "-o", "x.h5"],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    assert lines[0].startswith(f"Error: environment variable NUMBA_NUM_THREADS = "
+                               f"{threads!r} is out of range"), lines[0]
+    assert list(tmp_path.iterdir()) == []
 
 
 def _importing_numpy(pid: int) -> bool:

@@ -57,6 +57,31 @@ CASES = [
     ("empty grid item", ["sweep", "--grid", "rod.mu=1,,2"], "empty"),
     ("empty first grid item", ["sweep", "--grid", "rod.mu=,1"], "empty"),
     ("subnormal below the resolution", ["run", "--set", "time.dt=5e-324"], "time.dt"),
+    # a limit is raised, never turned off (NaN compares false) nor rounded in its message
+    ("nan --max-points", ["sweep", "--grid", "rod.mu=0,1", "--max-points", "nan"],
+     "--max-points nan"),
+    ("inf --max-points", ["sweep", "--grid", "rod.mu=0,1", "--max-points", "inf"],
+     "--max-points inf"),
+    ("fractional --max-points", ["sweep", "--grid", "rod.mu=0,1", "--max-points", "1.5"],
+     "--max-points 1.5"),
+    ("zero --max-points", ["sweep", "--grid", "rod.mu=0,1", "--max-points", "0"],
+     "--max-points 0"),
+    ("nan --max-steps", ["run", *TINY, "--set", "time.dt=1e-3", "--max-steps", "nan"],
+     "--max-steps nan"),
+    ("inf --max-steps", ["run", *TINY, "--max-steps", "inf"], "--max-steps inf"),
+    ("fractional --max-steps", ["run", *TINY, "--max-steps", "2.5"], "--max-steps 2.5"),
+    ("400-digit --max-steps", ["run", *TINY, "--max-steps", BIG], "--max-steps 9"),
+    ("nan --max-steps of a dry run", ["run", "--dry-run", *TINY, "--max-steps", "nan"],
+     "--max-steps nan"),
+    ("nan --max-points of a dry run", ["sweep", "--dry-run", "--grid", "rod.mu=0,1",
+                                       "--max-points", "nan"], "--max-points nan"),
+    ("nan --max-steps of converge", ["converge", "--ladder", "rod.N=3,5", "--max-steps",
+                                     "nan"], "--max-steps nan"),
+    ("inf --max-steps of fit", ["fit", "rod.mu", "--target", "restitution_first=0.5",
+                                "--max-steps", "inf"], "--max-steps inf"),
+    # fit's tolerance: a search that never stops (0, -1, nan) or stops at once (inf)
+    *[(f"{v} --ftol", ["fit", "rod.mu", "--target", "restitution_first=0.5", "--ftol", v],
+       f"ftol = {v} is out of range") for v in ("nan", "-1.0", "0.0", "inf")],
 ]
 
 

@@ -73,10 +73,27 @@ def test_one_estimate_for_every_path():
     import inspect
 
     from rodjit.analysis import evaluate
-    from rodjit.driver import files
+    from rodjit.driver import files, simulate
 
     assert "check_run(" in inspect.getsource(files._resume_locked)
     assert "check_run(" in inspect.getsource(evaluate.check_limits)
+    assert "check_run(" in inspect.getsource(simulate.simulate)
+
+
+@pytest.mark.parametrize("duration", ["inf", "1e9", "nan", "501"])
+def test_a_movie_s_length_is_bounded(run_file, tmp_path, duration):
+    """``animate`` lays out fps x duration frame times before drawing any (a duration of
+    1e9 s asked for 149 GiB, inf raised a Traceback): at most ``MAX_FRAMES`` frames, one
+    line naming the duration and its range, nothing written."""
+    from rodjit.plotting.animation import MAX_FRAMES
+
+    r = invoke("animate", run_file, "-o", tmp_path / "m.gif", "--duration", duration)
+    lines = r.stderr.strip().splitlines()
+    assert r.exit_code == 2 and len(lines) == 1, r.output
+    assert "duration" in lines[0], lines[0]
+    assert f"at most {MAX_FRAMES / 20:g} at fps = 20" in lines[0], lines[0]
+    assert f"at most {MAX_FRAMES:,}" in invoke("animate", "--help").output.replace("\n", " ")
+    assert list(tmp_path.iterdir()) == []
 
 
 STUDIES = [["converge", "--ladder", "rod.N=5,10", "--also", "none"],

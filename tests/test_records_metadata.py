@@ -27,3 +27,26 @@ def test_every_sweep_summary_column_is_described():
     from rodjit.sweeps.point import SUMMARY_COLUMNS
 
     assert set(SUMMARY_COLUMNS) <= set(COLUMN_MEANINGS["summary"])
+
+
+def test_the_ambiguous_bounce_s_threshold_is_the_one_the_events_apply(tmp_path):
+    """The file's ``/bounces/ambiguous`` said "0.1 of the vibration speed" where the code
+    (``stepping.events.AMBIGUOUS_SPEED``) and docs/MODEL.md say 0.2."""
+    import re
+    from pathlib import Path
+
+    import h5py
+
+    import rodjit
+    from rodjit.stepping.events import AMBIGUOUS_SPEED
+
+    path = tmp_path / "r.h5"
+    rodjit.run_to_file(rodjit.Config().override({"time.t_end": 0.02, "rod.N": 3}), path)
+    with h5py.File(path) as f:
+        attrs = f["bounces/ambiguous"].attrs
+        texts = [str(attrs["description"]), str(attrs["long_name"])]
+    for text in texts:
+        said = re.findall(r"below ([0-9.]+) of the|slower than ([0-9.]+) of the", text)
+        assert said and float("".join(said[0])) == AMBIGUOUS_SPEED, text
+    model = (Path(__file__).resolve().parents[1] / "docs" / "MODEL.md").read_text()
+    assert f"|w_impact| < {AMBIGUOUS_SPEED:g} √(2 E_vib,impact/m)" in model

@@ -30,6 +30,7 @@ __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
 DEFAULT_OBSERVABLES = ("restitution_first", "contact_time_first", "min_u0",
                        "max_floor_force")
 FORMAT_VERSION = 2     # 2: time_status, predictability_time, time_steps
+KIND = "convergence"   # root attribute rodjit_kind of a convergence file
 # The status of a time study whose runs all took the same number of steps: the ladder did
 # not change the steps, so the spread of its values says nothing about the time error.
 NOT_MEASURED = "not measured"
@@ -158,9 +159,11 @@ class Convergence:
                 "predictability_time": self.predictability_time,
                 "time_steps": list(self.time_steps)}
 
-    def save(self, path: str | os.PathLike[str], overwrite: bool = False) -> None:
-        """Write an HDF5 file (root attribute ``rodjit_kind = "convergence"``): root
-        attributes key, levels, time key/levels, config (TOML), warnings,
+    def save(self, path: str | os.PathLike[str], overwrite: bool = False,
+             command: str | None = None) -> None:
+        """Write an HDF5 file (root attribute ``rodjit_kind = "convergence"``; ``rodjit
+        info`` and ``rodjit plot`` read it): root attributes created, command, key,
+        levels, time key/levels, config (TOML), warnings,
         predictability_time and time_steps (format 2); one group per observable with
         datasets ``h``, ``values``, ``orders`` (and ``time_h``, ``time_values``) and
         attributes value, error, order, status, message, time_error and
@@ -169,31 +172,41 @@ class Convergence:
         Parameters
         ----------
         path : str or os.PathLike
-            The file to write (written to ``path.part``, then renamed).
+            The file to write (written to ``path.part``, then renamed; through a symbolic
+            link, its target).
         overwrite : bool
-            Replace an existing file.
+            Replace an existing convergence file.
+        command : str, optional
+            The command line recorded in the file (root attribute ``command``; default:
+            this call).
 
         Raises
         ------
         ValueError
-            ``path`` exists and ``overwrite`` is false.
+            As every writer's output (``output.h5files.check_output``): ``path`` exists
+            and ``overwrite`` is false (``OutputExists``), or it is not a rodjit
+            convergence file, whatever ``overwrite`` (``OutputOtherKind``: a configuration,
+            a text file, a run or sweep file), or not a regular file (a FIFO, a device),
+            or its directory is missing or not writable.
         """
         from importlib.metadata import PackageNotFoundError, version
 
         import h5py
 
-        from ..output.h5files import OutputExists
+        from ..output.h5files import check_output, now
 
         try:
             rodjit_version = version("rodjit")
         except PackageNotFoundError:
             rodjit_version = "0.0.0+unknown"
-        if os.path.exists(path) and not overwrite:
-            raise OutputExists(path)
-        tmp = f"{path}.part"
+        check_output(path, overwrite, KIND)
+        target = os.path.realpath(path)      # a link is written through, as by every writer
+        tmp = f"{target}.part"
         with h5py.File(tmp, "w") as f:
-            f.attrs.update({"rodjit_kind": "convergence", "format_version": FORMAT_VERSION,
-                            "rodjit_version": rodjit_version, "key": self.key,
+            f.attrs.update({"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
+                            "rodjit_version": rodjit_version, "created": now(),
+                            "command": command or f"rodjit.converge(...).save({str(path)!r})",
+                            "key": self.key,
                             "levels": np.asarray(self.levels, float),
                             "time_key": self.time_key or "",
                             "time_levels": np.asarray(self.time_levels, float),
@@ -218,7 +231,7 @@ class Convergence:
                         oc.time.values)
                     g.attrs.update({"time_status": oc.time.status,
                                     "time_message": oc.time.message})
-        os.replace(tmp, path)
+        os.replace(tmp, target)
 
 
 def load_convergence(path: str | os.PathLike[str]) -> dict[str, Any]:
@@ -243,7 +256,7 @@ def load_convergence(path: str | os.PathLike[str]) -> dict[str, Any]:
     import h5py
 
     with h5py.File(path, "r") as f:
-        if f.attrs.get("rodjit_kind") != "convergence":
+        if f.attrs.get("rodjit_kind") != KIND:
             raise ValueError(f"{str(path)!r} is not a rodjit convergence file")
         out = {k: (v.item() if hasattr(v, "item") and np.ndim(v) == 0 else v)
                for k, v in f.attrs.items()}

@@ -54,10 +54,12 @@ def check_limits(configs, *, max_output: float | None = None, max_steps: float |
     ``max_steps`` fixed steps and
     holding at most ``max_output`` bytes of output (in memory, or in the temporary file
     a pool worker writes)."""
-    from ..output.estimate import ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, check_run
+    from ..output.estimate import (ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, check_count_limit,
+                                   check_run)
     from ..sweeps.grid import MAX_POINTS
 
-    max_points = MAX_POINTS if max_points is None else max_points
+    max_points = check_count_limit("max_points", MAX_POINTS if max_points is None
+                                   else max_points)
 
     if len(configs) > max_points:
         raise ValueError(f"{len(configs):,} runs are more than the limit of "

@@ -4,6 +4,7 @@ with bisection); ``fit_table``: least squares of several keys against measuremen
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, Any, Iterable, Mapping
 
@@ -216,7 +217,7 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
         Values scanning the bracket, >= 2 (default 8; geometric when the bracket spans two
         decades or more).
     ftol : float
-        Stop when the observable is this close to the target.
+        Stop when the observable is this close to the target (finite, > 0).
     xtol : float, optional
         Stop when the bracket is this narrow (default 1e-9 of the bracket).
     max_iter : int
@@ -251,7 +252,8 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
         crossed more than once (naming where), or the observable is undefined at a scanned
         value.
     ValueError
-        An unknown observable, a bad bracket, or a key that is not real-valued.
+        An unknown observable, a bad bracket, a key that is not real-valued, or an
+        ``ftol`` or ``xtol`` that is not a finite number > 0.
     TypeError
         ``config`` is not a ``rodjit.Config``.
     """
@@ -267,6 +269,13 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
         raise ValueError(f"bracket must be two numbers (lo, hi), not {bracket!r}") from None
     if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
         raise ValueError(f"bracket = {bracket!r} is out of range (finite lo < hi)")
+    for name_, tol in (("ftol", ftol), ("xtol", xtol)):
+        if name_ == "xtol" and tol is None:
+            continue
+        if isinstance(tol, bool) or not isinstance(tol, numbers.Real) or not (
+                0 < tol < math.inf):
+            raise ValueError(f"{name_} = {tol!r} is out of range (a finite number > 0: "
+                             f"the search stops within it)")
     base.override({key: lo}), base.override({key: hi})       # key and range valid
     if isinstance(base.get(key), int) or isinstance(base.get(key), str):
         raise ValueError(f"{key} is not a real-valued key; fit needs a continuous parameter")

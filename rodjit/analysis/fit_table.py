@@ -43,8 +43,8 @@ def read_measurements(path) -> list[dict]:
     Raises
     ------
     ValueError
-        The file is missing or empty, a column is unknown, or a cell is not a number
-        (naming the line and column).
+        The file is missing or empty, a column is unknown, a row has more cells than the
+        header has columns, or a cell is not a number (naming the line and column).
     """
     from ..config import MissingFile, valid_keys
     from .observables import OBSERVABLES
@@ -66,6 +66,10 @@ def read_measurements(path) -> list[dict]:
         raise ValueError(f"measurement table {str(path)!r} has no rows")
     out = []
     for n, row in enumerate(rows, start=2):
+        if None in row:       # csv.DictReader's key for the cells past the header's columns
+            raise ValueError(f"measurement table {str(path)!r} line {n}: "
+                             f"{len(header) + len(row[None])} cells, more than the "
+                             f"{len(header)} columns of the header")
         parsed = {}
         for k, v in row.items():
             k = k.strip()

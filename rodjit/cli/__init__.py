@@ -7,9 +7,9 @@ One module per verb (``run``, ``sweep``, ``presets``, ``config``, ``info``, ``pl
 warning lines, ``wording`` how the command line words the API's typed errors (the API's
 messages speak Python, the command line its options), ``group`` the ``rodjit`` group.
 
-``info`` and ``plot`` dispatch on a file's ``rodjit_kind`` root attribute (``run`` or
-``sweep``): ``info`` prints ``reports.info`` (one path for both kinds), ``plot`` checks that
-the figure asked for belongs to the file's kind.  Each command imports what it runs when it
+``info`` and ``plot`` dispatch on a file's ``rodjit_kind`` root attribute (``run``,
+``sweep`` or ``convergence``): ``info`` prints ``reports.info`` (one path for every kind),
+``plot`` checks that the figure asked for belongs to the file's kind.  Each command imports what it runs when it
 runs, so ``rodjit --help`` and usage errors do not wait for NumPy, h5py and Numba to load.
 Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configuration error
 (nothing written), 130/143 interrupted by SIGINT/SIGTERM (checkpoint written).

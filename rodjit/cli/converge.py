@@ -8,7 +8,7 @@ import click
 
 from . import options
 from .exits import UsageError
-from .options import key_values
+from .options import command_line, key_values
 
 __all__ = ["converge_command"]
 
@@ -28,7 +28,8 @@ __all__ = ["converge_command"]
               default="restitution_first,contact_time_first,min_u0,max_floor_force",
               show_default=True, help="Comma-separated observables to study.")
 @options.output_option("Write the study to this HDF5 file (rodjit_kind = convergence).")
-@options.overwrite_option()
+@options.overwrite_option("Replace an existing convergence file (never another kind of "
+                          "file).")
 @options.jobs_option()
 @options.scheduler_option()
 @options.set_option()
@@ -50,23 +51,25 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
     Exit codes: 0 done, 2 usage or configuration error (a ladder over a key that does not
     set the integrator's steps names the key that does; nothing run or written).
     """
-    import os
-
-    from ..analysis.converge import converge
+    from ..analysis.converge import KIND, converge
     from ..output.estimate import parse_size
+    from ..output.h5files import check_output
 
     try:
         cfg = options.base_config(config, sets)
         limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
-        if output and os.path.exists(output) and not overwrite:
-            raise ValueError(f"{output!r} exists; use --overwrite to replace it")
+        if output:      # before the study runs: as every writer's output (run -o's rule)
+            check_output(output, overwrite, KIND)
         names = [o.strip() for o in observables.split(",") if o.strip()]
         result = converge(cfg, key_values("--ladder", ladder),
                           also=(False if also is not None and also.strip() == "none"
                                 else key_values("--also", also) if also else None),
                           observables=names, jobs=jobs, scheduler=scheduler, **limits)
         if output:
-            result.save(output, overwrite=True)
+            result.save(output, overwrite=True, command=command_line(
+                "converge", config, [("--ladder", ladder), ("--also", also),
+                                     ("--observable", observables), ("-o", output),
+                                     ("--set", sets)], [("--overwrite", overwrite)]))
     except ValueError as exc:
         raise UsageError(exc) from None
     click.echo(repr(result))

@@ -11,7 +11,7 @@ import click
 from .exits import RunFailed, UsageError
 
 __all__ = ["RUN_KINDS", "SWEEP_KINDS", "CONVERGENCE_KINDS", "PLOT_KINDS", "file_kind", "draw",
-           "is_convergence"]
+           "check_picture", "is_convergence"]
 
 # copies of plotting.KINDS and plotting.sweep.KINDS (tests/test_cli.py checks they agree):
 # importing those modules would load numpy, h5py and Numba before every command
@@ -32,17 +32,14 @@ def file_kind(path: str) -> str:
 
 
 def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
-         **plot_options: Any) -> None:
-    """``plot(path, image, kind, **plot_options)`` into ``output`` (default FILE_KIND.png)."""
+         overwrite: bool = False, **plot_options: Any) -> None:
+    """``plot(path, image, kind, **plot_options)`` into ``output`` (default FILE_KIND.png);
+    an existing image is replaced only with ``overwrite`` (--overwrite), as every writer's
+    output."""
     from ..plotting import MissingMatplotlib, NothingToDraw
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
-    from ..output.h5files import check_output
-
-    try:
-        check_output(out, overwrite=True)
-    except ValueError as exc:
-        raise UsageError(exc) from None
+    check_picture(out, overwrite)
     from ..output.h5files import WriteFailed
 
     try:
@@ -56,6 +53,18 @@ def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
     except ValueError as exc:
         raise UsageError(exc) from None
     click.echo(f"wrote {written}")
+
+
+def check_picture(output: str, overwrite: bool) -> None:
+    """UsageError (one line) unless the picture ``output`` can be written: its directory,
+    a special file, and an existing file only with --overwrite
+    (``output.h5files.check_output``)."""
+    from ..output.h5files import check_output
+
+    try:
+        check_output(output, overwrite=overwrite)
+    except ValueError as exc:
+        raise UsageError(exc) from None
 
 
 def is_convergence(path: str) -> bool:

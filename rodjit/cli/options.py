@@ -13,7 +13,8 @@ import click
 
 __all__ = ["DEFAULT_OUTPUT", "CONFIG_METAVAR", "config_argument", "set_option",
            "output_option", "overwrite_option", "quiet_option", "progress_option",
-           "max_output_option", "max_steps_option", "jobs_option", "scheduler_option",
+           "max_output_option", "max_steps_option", "max_points_option", "jobs_option",
+           "scheduler_option", "count_limit", "verb_saying_where",
            "load_config", "base_config", "overrides", "key_values", "command_line",
            "progress", "run_bar", "sweep_bar", "close"]
 
@@ -47,8 +48,15 @@ def overwrite_option(help: str = "Replace an existing output file.") -> Callable
 
 
 def quiet_option() -> Callable[[F], F]:
-    """``-q/--quiet``."""
-    return click.option("-q", "--quiet", is_flag=True, help="Print nothing but errors.")
+    """``-q/--quiet``: nothing but errors, no warning either (``say.keep_quiet``)."""
+    def quiet(ctx: click.Context, param: click.Parameter, value: bool) -> bool:
+        from .say import keep_quiet
+
+        keep_quiet(value)
+        return value
+
+    return click.option("-q", "--quiet", is_flag=True, callback=quiet,
+                        help="Print nothing but errors (no warnings either).")
 
 
 def progress_option() -> Callable[[F], F]:
@@ -63,10 +71,34 @@ def max_output_option(what: str) -> Callable[[F], F]:
                         help=f"Refuse {what} would exceed SIZE (e.g. 500M, 50GiB, inf).")
 
 
+def count_limit(ctx: click.Context, param: click.Parameter, value: Any) -> float:
+    """The callback of a limit on a count (``--max-steps``, ``--max-points``): a whole
+    number >= 1, never NaN or infinity, which would turn the limit off
+    (``output.estimate.check_count_limit``, the API's check: one line naming the option,
+    exit code 2)."""
+    from ..output.estimate import check_count_limit
+    from .exits import UsageError
+
+    option = param.opts[0] if param.opts else str(param.name)
+    try:
+        return check_count_limit(option, value, unlimited=False)
+    except ValueError as exc:
+        raise UsageError(exc) from None
+
+
 def max_steps_option(what: str) -> Callable[[F], F]:
     """``--max-steps N``; ``what``: what is refused."""
-    return click.option("--max-steps", type=float, default=1e10, show_default=True,
-                        metavar="N", help=f"Refuse {what} needs more than N steps.")
+    return click.option("--max-steps", default="1e10", callback=count_limit,
+                        show_default=True, metavar="N",
+                        help=f"Refuse {what} needs more than N steps.")
+
+
+def max_points_option() -> Callable[[F], F]:
+    """``--max-points N``."""
+    return click.option("--max-points", default="1e6", callback=count_limit,
+                        show_default=True, metavar="N",
+                        help="Refuse a grid of more than N points (counted before it is "
+                             "made).")
 
 
 def jobs_option() -> Callable[[F], F]:
@@ -78,6 +110,30 @@ def jobs_option() -> Callable[[F], F]:
 def scheduler_option(help: str = SCHEDULER_AS_SWEEP) -> Callable[[F], F]:
     """``--scheduler local|tcp://HOST:PORT``."""
     return click.option("--scheduler", metavar=SCHEDULER_METAVAR, help=help)
+
+
+def verb_saying_where(elsewhere: dict[str, str]) -> type[click.Command]:
+    """A verb's command class that answers an option it lacks but another verb has with
+    where that option belongs, instead of click's bare "No such option".
+
+    Parameters
+    ----------
+    elsewhere : dict of str to str
+        Option (``"--device"``) -> what to say about it.
+    """
+
+    class Verb(click.Command):
+        def parse_args(self, ctx: click.Context, args: list[str]) -> list[str]:
+            try:
+                return super().parse_args(ctx, args)
+            except click.NoSuchOption as exc:
+                where = elsewhere.get(exc.option_name)
+                if where is None:
+                    raise
+                raise click.UsageError(f"{exc.option_name} is not an option of rodjit "
+                                       f"{self.name}: {where}", ctx) from None
+
+    return Verb
 
 
 # ---- reading them ---------------------------------------------------------------------

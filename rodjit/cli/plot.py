@@ -5,6 +5,7 @@ from typing import Any
 
 import click
 
+from . import options
 from .exits import UsageError
 from .files import (CONVERGENCE_KINDS, PLOT_KINDS, RUN_KINDS, SWEEP_KINDS, draw, file_kind,
                     is_convergence)
@@ -54,9 +55,11 @@ def parse_figsize(text: str | None) -> tuple[float, float] | None:
 @click.option("--dpi", type=click.IntRange(10, 2400), default=150, show_default=True,
               help="Resolution of PNG images.")
 @click.option("--figsize", metavar="W,H", help="Figure size in inches, e.g. 8,5.")
+@options.overwrite_option("Replace an existing image.")
 def plot_command(file: str, output: str | None, kind: str | None, quantity: str | None,
                  x_key: str | None, y_key: str | None, at: tuple[str, ...],
-                 panels: str | None, dpi: int, figsize: str | None) -> None:
+                 panels: str | None, dpi: int, figsize: str | None,
+                 overwrite: bool) -> None:
     """Draw a figure of a rodjit file (a run or a sweep) as PNG, PDF or SVG (by the suffix
     of -o)."""
     if is_convergence(file):
@@ -65,7 +68,7 @@ def plot_command(file: str, output: str | None, kind: str | None, quantity: str 
                              "--quantity, --x, --y or --at")
         from ..plotting.convergence import plot_convergence_file
 
-        draw(plot_convergence_file, file, output, "convergence")
+        draw(plot_convergence_file, file, output, "convergence", overwrite)
         return
     kind_of_file = file_kind(file)
     style = {"dpi": dpi, "figsize": parse_figsize(figsize)}
@@ -78,7 +81,7 @@ def plot_command(file: str, output: str | None, kind: str | None, quantity: str 
         if quantity and kind != "spacetime":
             raise UsageError("--quantity is for --kind spacetime on a run file")
         plot_run(file, output, kind or "heights",
-                 dict(style, **({"quantity": quantity} if quantity else {})))
+                 dict(style, **({"quantity": quantity} if quantity else {})), overwrite)
         return
     if kind is not None and kind not in SWEEP_KINDS:
         raise UsageError(f"--kind {kind} is for run files; a sweep file takes one of "
@@ -89,10 +92,11 @@ def plot_command(file: str, output: str | None, kind: str | None, quantity: str 
         raise UsageError(exc) from None
     plot_sweep(file, output, kind or "restitution",
                {"quantity": quantity, "x": x_key, "y": y_key, "at": fixed, "panels": panels,
-                **style})
+                **style}, overwrite)
 
 
-def plot_run(path: str, output: str | None, kind: str, plot_options: dict[str, Any]) -> None:
+def plot_run(path: str, output: str | None, kind: str, plot_options: dict[str, Any],
+             overwrite: bool = False) -> None:
     """Draw figure ``kind`` of the run file ``path`` into ``output``.
 
     Parameters
@@ -105,14 +109,16 @@ def plot_run(path: str, output: str | None, kind: str, plot_options: dict[str, A
         One of ``RUN_KINDS``.
     plot_options : dict
         Passed to ``plotting.plot_file``.
+    overwrite : bool, optional
+        Replace an existing image (otherwise refused in one line).
     """
     from ..plotting import plot_file
 
-    draw(plot_file, path, output, kind, **plot_options)
+    draw(plot_file, path, output, kind, overwrite, **plot_options)
 
 
-def plot_sweep(path: str, output: str | None, kind: str,
-               plot_options: dict[str, Any]) -> None:
+def plot_sweep(path: str, output: str | None, kind: str, plot_options: dict[str, Any],
+               overwrite: bool = False) -> None:
     """Draw figure ``kind`` of the sweep file ``path`` into ``output``.
 
     Parameters
@@ -125,7 +131,9 @@ def plot_sweep(path: str, output: str | None, kind: str,
         One of ``SWEEP_KINDS``.
     plot_options : dict
         Passed to ``plotting.sweep.plot_sweep_file``.
+    overwrite : bool, optional
+        Replace an existing image (otherwise refused in one line).
     """
     from ..plotting.sweep import plot_sweep_file
 
-    draw(plot_sweep_file, path, output, kind, **plot_options)
+    draw(plot_sweep_file, path, output, kind, overwrite, **plot_options)

@@ -16,7 +16,9 @@ from .wording import output_exists, word
 __all__ = ["run_command", "say_run"]
 
 
-@click.command("run")
+@click.command("run", cls=options.verb_saying_where({
+    "--device": "devices are for sweeps: 'rodjit sweep --device cuda' runs a grid's points "
+                "on the GPU; a run runs on the CPU"}))
 @options.config_argument()
 @options.output_option(f"HDF5 file to write [default: PRESET.h5, CONFIG.h5 or "
                        f"{options.DEFAULT_OUTPUT}]")
@@ -131,15 +133,15 @@ def run_command(config: str | None, output: str | None, sets: tuple[str, ...],
 
 
 def say_run(summary: Any, quiet: bool) -> None:
-    """A run's warnings on stderr, once each, even with --quiet (what the results do not
-    mean); then, unless quiet, its report on stdout without them (said once).
+    """A run's warnings on stderr, once each (what the results do not mean); then its
+    report on stdout without them (said once).  With --quiet, neither.
 
     Parameters
     ----------
     summary : RunSummary
         What the run (or its resumption) returned.
     quiet : bool
-        --quiet: the warnings only.
+        --quiet: nothing (``say_warning`` says no warning under it).
     """
     for text in summary.warnings:
         say_warning(text)

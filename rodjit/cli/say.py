@@ -1,4 +1,5 @@
-"""What a verb says besides its result: warnings as one ``warning:`` line each, once."""
+"""What a verb says besides its result: warnings as one ``warning:`` line each, once; none
+under ``--quiet``."""
 from __future__ import annotations
 
 import contextlib
@@ -9,9 +10,10 @@ import click
 
 from .exits import one_line
 
-__all__ = ["say_warning", "warnings_as_lines"]
+__all__ = ["say_warning", "warnings_as_lines", "keep_quiet"]
 
 _said: set[str] | None = None     # the warnings said by the running command
+_quiet = False                    # --quiet: the running command says no warning
 
 
 def say_warning(text: str) -> None:
@@ -22,6 +24,8 @@ def say_warning(text: str) -> None:
     text : str
         The warning (put on one line).
     """
+    if _quiet:
+        return
     text = one_line(text)
     if _said is not None:
         if text in _said:
@@ -35,9 +39,9 @@ def warnings_as_lines() -> Iterator[None]:
     """While a command runs, every warning it issues (its own, a library's, a worker's
     passed on by a sweep) is said by ``say_warning``: one line, once, with neither the file
     and line that issued it nor its source line."""
-    global _said
-    previous = _said
-    _said = set()
+    global _said, _quiet
+    previous, previous_quiet = _said, _quiet
+    _said, _quiet = set(), False
 
     def show(message: Any, *_args: Any, **_kw: Any) -> None:
         say_warning(str(message))
@@ -47,4 +51,11 @@ def warnings_as_lines() -> Iterator[None]:
         try:
             yield
         finally:
-            _said = previous
+            _said, _quiet = previous, previous_quiet
+
+
+def keep_quiet(quiet: bool) -> None:
+    """``--quiet``: the running command says no warning (``say_warning``) until it ends
+    (``warnings_as_lines`` restores what was before)."""
+    global _quiet
+    _quiet = bool(quiet)

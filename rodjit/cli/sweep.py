@@ -40,8 +40,7 @@ __all__ = ["sweep_command", "failed_points"]
 @options.progress_option()
 @options.max_output_option("a sweep whose sweep file, or (with --save-runs) any run file,")
 @options.max_steps_option("a point whose fixed time.dt")
-@click.option("--max-points", type=float, default=1e6, show_default=True, metavar="N",
-              help="Refuse a grid of more than N points (counted before it is made).")
+@options.max_points_option()
 @click.option("--dry-run", is_flag=True,
               help="Check everything (configuration, every point, output paths, limits), "
                    "print the points, the swept keys and the files' estimated sizes, and "
@@ -221,12 +220,13 @@ def make_grid(grid_options: tuple[str, ...], max_points: float) -> Any:
 
 def cap_jobs(jobs: int | None, scheduler: str | None, grid: Any, force: bool,
              quiet: bool) -> int | None:
-    """--jobs for a local pool: at most the cores (unless forced, with a note when cut) and
-    never more than the points."""
+    """--jobs for workers on this machine (the local pool, or Dask's ``local`` cluster, which
+    starts --jobs worker processes here too): at most the cores (unless forced, with a note
+    when cut) and never more than the points.  A remote cluster's workers are its own."""
     from ..sweeps.start_method import POOL_SCHEDULERS
 
     if (jobs is None or isinstance(jobs, bool) or jobs < 1
-            or scheduler not in POOL_SCHEDULERS):
+            or scheduler not in (*POOL_SCHEDULERS, "local")):
         return jobs
     from ..sweeps.executors import default_jobs
 

@@ -11,7 +11,7 @@ from .errors import ConfigError
 from .sections import check_dt_range
 
 __all__ = ["CROSS_CHECKS", "RUN_CHECKS", "SHOCK_WARNING", "VERLET_MU_MAX", "VERLET_WARNING",
-           "viscous_warning", "model_warnings"]
+           "viscous_warning", "model_warnings", "setup_warnings", "ROD_LENGTH"]
 
 # The texts of ``Config.warnings`` (tests and the convergence tool use them too).
 SHOCK_WARNING = (
@@ -58,6 +58,31 @@ def model_warnings(mu: float, gamma: float, integrator: str) -> tuple[str, ...]:
     entry = registry_get(integrator)
     if mu > entry.viscous_mu_max:
         out.append(viscous_warning(entry.name, entry.viscous_mu_max))
+    return tuple(out)
+
+
+ROD_LENGTH = 1.0     # the rod's natural length (nodes at x = i/N; docs/MODEL.md, "Units")
+
+
+def setup_warnings(g: float, height: float, velocity: float, beta: float) -> tuple[str, ...]:
+    """The set-ups that are valid but almost surely not what was meant
+    (``Config.warnings``): a gravity that pulls the rod up (``gravity.g > 0``) so that its
+    free flight from ``initial.height`` at ``initial.velocity`` never reaches the floor
+    (a run without an impact: the sign of g is along +u, -9.81 pulls down); a floor
+    whose bending limit ``floor.beta`` is no thin layer but at least the rod's length
+    deep.  ``gravity.g = 0`` (a free rod, the verification runs) says nothing."""
+    out = []
+    comes_down = velocity < 0 and velocity * velocity >= 2.0 * g * height
+    if g > 0 and height > 0 and not comes_down:
+        out.append(f"gravity.g = {g!r} > 0 pulls the rod up, away from the floor (gravity.g "
+                   f"is signed along +u: -9.81 pulls down): from initial.height = "
+                   f"{height!r} at initial.velocity = {velocity!r} it never comes down, so "
+                   f"the run has no impact")
+    if beta >= ROD_LENGTH:
+        out.append(f"floor.beta = {beta!r} puts the floor's bending limit (where its stress "
+                   f"is infinite) {beta:g} below its surface, at least the rod's length "
+                   f"{ROD_LENGTH:g}: the floor law models a thin bending layer (default "
+                   f"0.05), not a floor softer than the rod is long")
     return tuple(out)
 
 

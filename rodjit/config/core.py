@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from .checks import CROSS_CHECKS, RUN_CHECKS, model_warnings
+from .checks import CROSS_CHECKS, RUN_CHECKS, model_warnings, setup_warnings
 from .errors import ConfigError
 from .keys import FIELDS, parse_value, strip_quotes, unknown_key_error
 from .sections import (SECTIONS, FloorConfig, GravityConfig, InitialConfig, OutputConfig,
@@ -84,9 +84,14 @@ class Config:
         -------
         tuple of str
             One sentence per known limitation (empty: nothing known): the shock-forming
-            μ = γ = 0 model, verlet at large μ.
+            μ = γ = 0 model, verlet at large μ; and per set-up that is valid but almost
+            surely a mistake (``checks.setup_warnings``): a ``gravity.g > 0`` under which
+            the rod never comes down to the floor (no impact), a ``floor.beta`` at least
+            the rod's length.
         """
-        return model_warnings(self.rod.mu, self.rod.gamma, self.time.integrator)
+        return (model_warnings(self.rod.mu, self.rod.gamma, self.time.integrator)
+                + setup_warnings(self.gravity.g, self.initial.height, self.initial.velocity,
+                                 self.floor.beta))
 
     def check_runnable(self) -> None:
         """Refuse, in one line, a configuration that is valid but whose run could not keep
@@ -219,7 +224,13 @@ class Config:
         ------
         ValueError
             An unknown key (naming the closest valid one) or a value out of range.
+        TypeError
+            ``changes`` is not a mapping (a ``"rod.mu=1"`` text, a list, None).
         """
+        if not isinstance(changes, Mapping):
+            raise TypeError(f"Config.override(changes): changes must be a mapping of dotted "
+                            f"keys to values, e.g. {{'rod.mu': 100.0}}, not "
+                            f"{_short(changes)} ({type(changes).__name__})")
         return self._replaced(changes, text=True)
 
     def _replaced(self, changes: Mapping[str, Any], *, text: bool) -> "Config":
@@ -320,3 +331,8 @@ class Config:
         from .._display import html_table
         return html_table(*self._overview())
 
+
+def _short(value: Any) -> str:
+    """``repr(value)``, cut to a message's length."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."

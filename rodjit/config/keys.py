@@ -232,13 +232,15 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
                            unit="N"),
         "beta": KeySpec("float", "> 0", _pos, unit="m",
                         meaning="bending limit beta of the floor (its stress is singular at "
-                                "u_0 = -beta)"),
+                                "u_0 = -beta; a thin layer: beta >= 1, the rod's length, "
+                                "warns)"),
         "law": KeySpec("str", "a registered floor law",
                        meaning="stress law sigma_b of the floor"),
     },
     "gravity": {
         "g": KeySpec("float", "finite, signed along +u (negative pulls down)",
-                     meaning="gravitational acceleration along +u", unit="m s-2"),
+                     meaning="gravitational acceleration along +u (g > 0 that never brings "
+                             "the rod down to the floor warns: no impact)", unit="m s-2"),
     },
     "initial": {
         "height": KeySpec("float", "> -floor.beta",

@@ -298,16 +298,18 @@ class Run:
             if not self._warm:
                 self.warm_up()
             return
-        t0 = time.perf_counter()
         arrays = (self.state, self.work, self.clock, self.count, self.ev, self.snap_t,
                   self.snap_step, self.snap_u, self.snap_v, self.diag, self.fail)
         if self._aot is not None:
-            code = self._aot.start(*arrays)
+            call = self._aot.start
         else:
             args = (*self._args(), *arrays)
-            code = self._entry("start", start, args)(*args)
-        t1 = time.perf_counter()
-        self.compile_time += t1 - t0
+            call = self._entry("start", start, args)    # its compile time counted there
+            arrays = args
+        t0 = time.perf_counter()
+        code = call(*arrays)
+        # the initial evaluation is no step: it counts with the start-up, once
+        self.compile_time += time.perf_counter() - t0
         self.warm_up()
         if code == L.FAILED:
             raise SimulationError(self.failure_message())

@@ -17,7 +17,7 @@ from .errors import FileTooLarge, TooManySteps
 
 __all__ = ["Estimate", "estimate_run", "estimate_values", "check_run", "check_fixed_step",
            "fixed_step_error", "step_refusal", "free_space", "too_large", "size_refusal",
-           "parse_size", "format_size",
+           "parse_size", "format_size", "check_count_limit",
            "ESTIMATE_KEYS", "MAX_OUTPUT", "MAX_STEPS"]
 
 MAX_OUTPUT = 10 * 2**30     # bytes a run file may reach unless the caller raises the limit
@@ -38,6 +38,48 @@ class Estimate:
         return (f"{self.snapshots:.6g} snapshot rows, {self.diagnostics:.6g} diagnostics rows, "
                 f"about {format_size(self.file_bytes)} of file, "
                 f"{format_size(self.memory_bytes)} of memory{steps}")
+
+
+def check_count_limit(name: str, value, *, unlimited: bool = True) -> float:
+    """``value`` as a limit on a count (``max_steps``, ``max_points``): a whole number >= 1,
+    or (``unlimited``) ``math.inf`` for none; ValueError naming ``name`` otherwise.  NaN
+    would make every comparison false and so turn the limit off without a word, and a
+    fraction would be shown rounded ("2 points, more than the limit of 2").  The command
+    line passes ``unlimited=False``: a limit there is raised, never turned off.
+
+    Parameters
+    ----------
+    name : str
+        The limit as the message names it (``"max_steps"``, ``"--max-points"``).
+    value : float, int or str
+        The limit (a text is read as a number).
+    unlimited : bool, optional
+        Accept ``math.inf`` (no limit).
+
+    Returns
+    -------
+    float
+        The limit.
+
+    Raises
+    ------
+    ValueError
+        Not a number, NaN, below 1, a fraction, or (unless ``unlimited``) infinite.
+    """
+    whole = "a whole number >= 1" + (", or math.inf for no limit" if unlimited else "")
+    named = f"{name} " if name.startswith("--") else f"{name} = "   # an option, a keyword
+    try:
+        number = float(value)
+    except (TypeError, ValueError, OverflowError):
+        shown = repr(value) if len(repr(value)) <= 26 else f"{repr(value)[:13]}...'"
+        raise ValueError(f"{named}{shown} is not a number ({whole})") from None
+    if isinstance(value, bool) or not (number >= 1) or (
+            math.isfinite(number) and number != math.floor(number)) or (
+            math.isinf(number) and not unlimited):
+        shown = value if isinstance(value, str) else repr(value)
+        shown = shown if len(shown) <= 24 else f"{shown[:12]}...({len(shown)} characters)"
+        raise ValueError(f"{named}{shown} is out of range ({whole})")
+    return number
 
 
 def _rows(span: float, interval: float) -> float:
@@ -81,11 +123,14 @@ def fixed_step_error(values, max_steps: float = MAX_STEPS) -> str | None:
 
 
 def step_refusal(values, max_steps: float = MAX_STEPS) -> ValueError | None:
-    """The error (TooManySteps for more than ``max_steps``) saying why a fixed time.dt (in ``values``, a mapping of ``ESTIMATE_KEYS``) cannot run as
-    asked, or None: a step below the resolution of t (the run would never advance), more
-    than ``max_steps`` steps, or a step that does not divide an output interval (the loop
-    would shorten a step before every output time to land on it: not the fixed step asked
-    for).  The last step is the only one that may be shorter, to end on time.t_end."""
+    """The error (TooManySteps for more than ``max_steps``) saying why a fixed time.dt (in
+    ``values``, a mapping of ``ESTIMATE_KEYS``) cannot run as asked, or None: a step below
+    the resolution of t (the run would never advance), more than ``max_steps`` steps, or a
+    step that does not divide an output interval (the loop would shorten a step before
+    every output time to land on it: not the fixed step asked for).  The last step is the
+    only one that may be shorter, to end on time.t_end.  A ``max_steps`` that is no limit
+    (NaN, a fraction: ``check_count_limit``) is raised, whatever the step."""
+    check_count_limit("max_steps", max_steps)
     dt, t_end = values["time.dt"], float(values["time.t_end"])
     if dt is None:
         return None
@@ -130,7 +175,8 @@ def check_fixed_step(config, max_steps: float = MAX_STEPS) -> None:
     """ValueError (one line) if ``config``'s fixed time.dt cannot run as asked
     (``fixed_step_error``)."""
     if config.time.dt is None:
-        return   # adaptive steps: nothing to check
+        check_count_limit("max_steps", max_steps)
+        return   # adaptive steps: nothing more to check
     error = step_refusal(_values(config), max_steps)
     if error is not None:
         raise error

@@ -25,6 +25,7 @@ from h5py import h5a, h5d, h5p, h5s, h5t
 
 from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS, INT_COLUMNS
 from ..stepping import layout as L
+from ..stepping.events import AMBIGUOUS_SPEED
 from ..stepping.registry import SCHEME_STATS
 from ..version import __version__
 from . import cf
@@ -65,7 +66,8 @@ _DESCRIPTIONS = {
     "episodes/t_end": "end of the episode",
     "bounces/open": "true if the bounce's last episode had not ended when the run stopped",
     "bounces/ambiguous": ("true if the bounce's restitution is not an impact's: open or not "
-                          "over when the run stopped, or an approach speed below 0.1 of the "
+                          "over when the run stopped, not falling at impact (w_impact >= 0), "
+                          f"or an approach speed below {AMBIGUOUS_SPEED:g} of the "
                           "vibrational velocity scale sqrt(2 energy_vibration_impact)"),
     "bounces/restitution_energy": ("w_release / sqrt(w_impact^2 + 2 energy_vibration_impact):"
                                    " the rebound over the energy brought into the impact"),

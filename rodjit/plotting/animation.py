@@ -30,12 +30,16 @@ from .source import RunSource
 if TYPE_CHECKING:
     from ..records.result import Result
 
-__all__ = ["animate", "FORMATS", "MissingWriter", "FRAMES_PER_CONTACT"]
+__all__ = ["animate", "FORMATS", "MissingWriter", "FRAMES_PER_CONTACT", "MAX_FRAMES"]
 
 FORMATS = (".gif", ".mp4")
 QUANTITIES = ("strain", "v")
 FRAMES_PER_CONTACT = 12   # frames spread over each contact (from its start to its end)
 MIN_FRAMES_PER_CONTACT = 4   # fewer than this each in half the movie: the contacts skipped
+# the most frames a movie may ask for (8 min 20 s at 20 fps): the frame times are laid out
+# before any is drawn, so ``fps * duration`` frames are arrays of that length (a duration
+# of 1e9 s asked for 149 GiB), and a GIF's frames are held until it is written
+MAX_FRAMES = 10_000
 
 
 class MissingWriter(RuntimeError):
@@ -122,7 +126,7 @@ def animate(source: Result | str | os.PathLike[str], output: str | os.PathLike[s
     fps : int
         Frames per second, 1 to 120.
     duration : float
-        Length of the movie in seconds.
+        Length of the movie in seconds, > 0; at most ``MAX_FRAMES`` frames.
     quantity : str
         What colours the rod: ``strain``, ``u`` or ``v``.
     dpi : int
@@ -149,8 +153,10 @@ def animate(source: Result | str | os.PathLike[str], output: str | os.PathLike[s
                          f"one of {', '.join(FORMATS)}")
     if not (isinstance(fps, int) and 1 <= fps <= 120):
         raise ValueError(f"fps = {fps!r} is out of range (whole number from 1 to 120)")
-    if not (duration > 0):
-        raise ValueError(f"duration = {duration!r} is out of range (seconds > 0)")
+    if not (duration > 0) or not fps * duration <= MAX_FRAMES:
+        raise ValueError(f"duration = {duration!r} is out of range (seconds > 0, at most "
+                         f"{MAX_FRAMES / fps:g} at fps = {fps}: a movie has at most "
+                         f"{MAX_FRAMES:,} frames)")
     if quantity not in QUANTITIES:
         raise ValueError(f"quantity = {quantity!r} is not allowed (one of "
                          f"{', '.join(QUANTITIES)})")

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
+from ..stepping.events import AMBIGUOUS_SPEED
+
 __all__ = ["Meaning", "COLUMN_MEANINGS", "meaning", "UNIT_SYSTEM"]
 
 UNIT_SYSTEM = ("the units of the parameters: SI (m, kg, s) for a rod of natural length 1 m "
@@ -68,8 +70,9 @@ COLUMN_MEANINGS: dict[str, dict[str, Meaning]] = {
                                            "impact", "J"),
         "restitution_energy": Meaning("energy restitution w_release / sqrt(w_impact^2 + "
                                       "2 energy_vibration_impact)", "1"),
-        "ambiguous": Meaning("restitution not an impact's (open, unfinished or approach "
-                             "slower than 0.1 of the vibration speed)", "1"),
+        "ambiguous": Meaning("restitution not an impact's (open, unfinished, not falling "
+                             f"or approach slower than {AMBIGUOUS_SPEED:g} of the vibration "
+                             "speed)", "1"),
         "open": Meaning("bounce still in contact when the run stopped", "1"),
     },
 }

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..config import (CROSS_CHECKS, RUN_CHECKS, Config, field_spec, number_with_unit,
                       parse_value)
+from ..output.estimate import check_count_limit
 from .errors import BadGridItem, TooManyPoints
 
 __all__ = ["Grid", "parse_grid_option", "format_value", "MAX_POINTS"]
@@ -63,7 +64,9 @@ def _count(key: str, vals) -> int:
 
 
 def _check_size(counts: dict[str, int], max_points: float) -> None:
-    """TooManyPoints naming the count if the grid of these axis lengths is too large."""
+    """TooManyPoints naming the count if the grid of these axis lengths is too large; a
+    ValueError if ``max_points`` is no limit (``output.estimate.check_count_limit``)."""
+    check_count_limit("max_points", max_points)
     if math.prod(counts.values()) > max_points:
         raise TooManyPoints(counts, max_points)
 
@@ -177,8 +180,9 @@ class Grid:
         Raises
         ------
         ValueError
-            An empty spec, an unknown key, a value outside its key's range, or more than
-            ``max_points`` points (naming the count).
+            An empty spec, an unknown key, a value outside its key's range, more than
+            ``max_points`` points (naming the count), or a ``max_points`` that is not a
+            whole number >= 1 (or ``math.inf``).
         """
         if isinstance(spec, Grid):
             _check_size(dict(zip(spec.keys, spec.shape)), max_points)

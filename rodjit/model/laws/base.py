@@ -135,10 +135,15 @@ def register(law: Law) -> Law:
 
     Raises
     ------
+    TypeError
+        ``law`` is not a ``Law``, its ``params`` not a NamedTuple class, its
+        ``from_config`` not callable, or one of its functions not compiled (a plain Python
+        function, None): refused here, naming the field, not when a run first compiles it.
     ValueError
         ``law.kind`` is neither ``"rod"`` nor ``"floor"``, or its parameter class belongs
         to another registered law.
     """
+    _check_parts(law)
     if law.kind not in ("rod", "floor"):
         raise ValueError(f"law kind must be 'rod' or 'floor', not {law.kind!r}")
     if law.params in _BY_TYPE:
@@ -157,6 +162,47 @@ def register(law: Law) -> Law:
     _BY_TYPE[law.params] = law
     _BY_NAME[(law.kind, law.name)] = law
     return law
+
+
+_REQUIRED = ("value", "deriv", "primitive", "lower")
+_OPTIONAL = ("deriv_max", "difference", "extension", "extension_deriv")
+
+
+def _check_parts(law: Any) -> None:
+    """TypeError naming ``register``'s argument or the field of it that is not what a law
+    needs (``register``)."""
+    if not isinstance(law, Law):
+        raise TypeError(f"register(law): law must be a rodjit.laws.Law, not "
+                        f"{_shown(law)}")
+    params = law.params
+    if not (isinstance(params, type) and issubclass(params, tuple)
+            and hasattr(params, "_fields")):
+        raise TypeError(f"register(law): law.params must be a NamedTuple class (the law's "
+                        f"parameters), not {_shown(params)}")
+    if not callable(law.from_config):
+        raise TypeError(f"register(law): law.from_config must be callable (config section "
+                        f"-> {params.__name__}), not {_shown(law.from_config)}")
+    for name in _REQUIRED + _OPTIONAL:
+        function = getattr(law, name)
+        if function is None and name in _OPTIONAL:
+            continue
+        # a law_kernel (``_jit.Kernel``) or a Numba dispatcher: both keep the Python
+        # function they compile as ``py_func``; a plain function would fail only when a
+        # run first compiles the loop with it
+        if not hasattr(function, "py_func"):
+            raise TypeError(f"register(law): law.{name} must be a compiled function "
+                            f"(decorate it with rodjit.laws.law_kernel), not "
+                            f"{_shown(function)}")
+
+
+def _shown(value: Any) -> str:
+    """How a refusal shows a value: a function by its name, anything else by its repr
+    (cut short), with its type."""
+    if callable(value) and hasattr(value, "__qualname__"):
+        return f"the plain Python function {value.__qualname__!r}" if isinstance(
+            value, type(_shown)) else f"{value.__qualname__!r} ({type(value).__name__})"
+    text = repr(value)
+    return f"{text if len(text) <= 40 else text[:37] + '...'} ({type(value).__name__})"
 
 
 def _fingerprint(law: Law) -> str:
