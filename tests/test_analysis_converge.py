@@ -12,7 +12,7 @@ import pytest
 import rodjit
 from rodjit.analysis.converge import converge, load_convergence
 from rodjit.analysis.known import free_free_frequencies, spring_wall_impact
-from rodjit.analysis.richardson import observed_order, study
+from rodjit.analysis.richardson import SAFETY_UNCHECKED, observed_order, study
 from rodjit.model import reference
 from rodjit.model.system import build_system, masses
 
@@ -65,7 +65,9 @@ def test_statuses_say_what_the_ladder_does():
     h = [1 / 25, 1 / 50, 1 / 100, 1 / 200]
     assert study("a", h, [1.0, 2.0, 1.0, 2.0]).status == "not converging"
     s = study("b", h, [1.0, 1.5, 1.25, 1.375])
-    assert s.status == "oscillating" and s.extrapolated == 1.375 and s.error == 0.125
+    # the last difference, times the safety factor of an order nothing checks
+    assert s.status == "oscillating" and s.extrapolated == 1.375
+    assert s.error == SAFETY_UNCHECKED * 0.125
     s = study("c", h, [1.0, 1.1, 1.101, 1.15])          # does not settle
     assert s.status == "not converging" and math.isnan(s.extrapolated)
     s = study("d", h, [1.0, 1.5, 1.6, 1.61])            # orders 2.3, 3.3: scatter
@@ -431,3 +433,39 @@ def test_predictability_time_of_the_chaotic_and_the_damped_paper_runs():
                     observables=["restitution_first"], jobs=1)
     assert conv.predictability_time == math.inf
     assert "none before t_end" in repr(conv)
+
+
+def test_tolerance_ladder_bars_contain_the_error_against_a_tight_reference():
+    """A three-level dp54 tolerance ladder (its differences alternate: no order) prints
+    bars that contain the error measured against dop853 at rtol 1e-12 (another scheme, far
+    tighter): the bare last difference (5.6e-7) was short of the contact time's error
+    (6.7e-7)."""
+    cfg = rodjit.load_preset("paper-mu0").override({
+        "time.t_end": 1.0, "time.integrator": "dp54", "output.snapshot_interval": 0.0})
+    names = ["restitution_first", "contact_time_first"]
+    conv = converge(cfg, {"time.rtol": [1e-4, 2.5e-5, 6.25e-6]}, also=False,
+                    observables=names, jobs=1)
+    tight = cfg.override({"time.integrator": "dop853", "time.rtol": 1e-12,
+                          "time.atol": 1e-14})
+    ref = rodjit.analysis.observables(rodjit.simulate(tight))
+    for name in names:
+        oc = conv[name]
+        assert math.isfinite(oc.value) and math.isfinite(oc.error), name
+        assert abs(oc.value - ref[name]) <= oc.error, (name, oc.value, ref[name], oc.error)
+
+
+def test_a_shock_forming_rod_ladder_prints_no_limit_not_a_bar():
+    """μ = γ = 0 on a three-level rod.N ladder: the model has no continuum limit, so the
+    first-bounce observables print their values along the ladder and "no limit" (no
+    extrapolation, no ±), where an extrapolation printed 0.13606 ± 0.00051 for a contact
+    time that finer rods put at 0.1379."""
+    cfg = rodjit.load_preset("paper-mu0").override({
+        "time.t_end": 0.7, "output.snapshot_interval": 0.0, "time.integrator": "dop853"})
+    conv = converge(cfg, {"rod.N": [10, 20, 40]}, also=False,
+                    observables=["contact_time_first"], jobs=1)
+    oc = conv["contact_time_first"]
+    assert oc.space.status == "no limit"
+    assert math.isnan(oc.value) and math.isnan(oc.error)
+    line = [ln for ln in repr(conv).splitlines() if "contact_time_first" in ln][0]
+    assert "no limit" in line and "±" not in line
+    assert all(f"{v:.6g}" in line for v in oc.space.values)

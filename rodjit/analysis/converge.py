@@ -11,6 +11,8 @@ from typing import TYPE_CHECKING, Any, Callable, Literal, Mapping, Sequence
 
 import numpy as np
 
+from ..config.checks import SHOCK_WARNING
+from ..records.observables import OBSERVABLES
 from .evaluate import evaluate
 from .ladders import (TIME_KEYS, cap_key, cap_text, check_ladder, check_time_key,
                       default_time_ladder, levels, same_steps, step_keys, steps_text)
@@ -25,7 +27,7 @@ if TYPE_CHECKING:
 __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
            "FORMAT_VERSION", "default_time_ladder", "step_keys", "predictability_time",
            "PREDICTABILITY_FRACTION", "PREDICTABILITY_CONVERGENCE",
-           "PREDICTABILITY_NOISE", "NOT_MEASURED"]
+           "PREDICTABILITY_NOISE", "NOT_MEASURED", "NO_LIMIT"]
 
 DEFAULT_OBSERVABLES = ("restitution_first", "contact_time_first", "min_u0",
                        "max_floor_force")
@@ -34,6 +36,11 @@ KIND = "convergence"   # root attribute rodjit_kind of a convergence file
 # The status of a time study whose runs all took the same number of steps: the ladder did
 # not change the steps, so the spread of its values says nothing about the time error.
 NOT_MEASURED = "not measured"
+# The status of a first-bounce observable on a rod.N ladder of a rod whose model warns of
+# no continuum limit (``config.checks.SHOCK_WARNING``: μ = γ = 0), unless the ladder itself
+# confirms an order (four levels whose orders agree, as in the linear limit of a slow
+# impact): its values along the ladder are printed, not an extrapolation with a bar.
+NO_LIMIT = "no limit"
 @dataclass
 class ObservableConvergence:
     """One observable: the space ladder study, the time ladder study and the time
@@ -129,6 +136,10 @@ class Convergence:
             order = f"p={s.order:.2f}" if math.isfinite(s.order) else "p=—"
             t = (f" (time {oc.time_error:.2g})" if math.isfinite(oc.time_error) else
                  f" (time {oc.time_status})" if oc.time_status else "")
+            if s.status == NO_LIMIT:
+                along = ", ".join(f"{v:.6g}" for v in s.values)
+                lines.append(f"  {name}: {along} along {self.key}  {NO_LIMIT}")
+                continue
             lines.append(f"  {name}: {oc.value:.6g} ± {oc.error:.2g}{t}  {order}  {s.status}")
         if self.time_key:
             p = self.predictability_time
@@ -379,6 +390,8 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
     warnings += [f"run failed at {x}" for x in failed]
     # the model's own limits (the shock-forming μ = γ = 0 rod), once each along the ladder
     warnings += list(dict.fromkeys(w for c in configs for w in c.warnings()))
+    # no continuum limit of the first-bounce observables along rod.N (shock-forming rod)
+    no_limit = key == "rod.N" and any(SHOCK_WARNING in c.warnings() for c in configs)
     measured = True
     if t_key is not None:
         if same_steps(t_runs):
@@ -422,6 +435,14 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
                 ", ".join(f"{v}: {st}" for v, st in zip(values, statuses)) + ")")
             if s.status == "converged":
                 s.status = "pre-asymptotic"
+        checked = s.status == "exact" or (s.status == "converged" and len(s.orders) >= 2)
+        if no_limit and name in OBSERVABLES and not checked:
+            # the model warns of no limit and no fourth level confirms an order: an
+            # extrapolation here would print a bar that nothing supports
+            s.status, s.order = NO_LIMIT, math.nan
+            s.extrapolated, s.error = math.nan, math.nan
+            s.message = ("the model has no continuum limit as rod.N grows (rod.mu = "
+                         "rod.gamma = 0): the values along the ladder estimate none")
         oc = ObservableConvergence(name, s, statuses=statuses)
         if t_key is not None:
             ts = study(name, levels(t_key, t_values), _values_of(t_runs, name))
@@ -447,7 +468,7 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
                 oc.time_error = abs(here - ref) if math.isfinite(here) else math.nan
                 if ts.status not in ("converged", "exact", "oscillating"):
                     warnings.append(f"{name}: {t_key} ladder {ts.status}: {ts.message}")
-        if s.status not in ("converged", "exact"):
+        if s.status not in ("converged", "exact", NO_LIMIT):
             warnings.append(f"{name}: {s.status}: {s.message}")
         out[name] = oc
     p_time = math.nan
