@@ -58,10 +58,11 @@ class ImpactStream:
 
     The kernels run compiled where the process has loaded Numba (a run on the JIT, a sweep
     worker), else as Python (``_jit.python_module``, the same bits): reading a run file
-    or a run on the loop compiled ahead of time never imports Numba, whose import and
-    kernel load cost 1.2 s where the Python form takes 4 µs a sample (20 ms for the 5001
-    samples of the paper's runs; compiled: 0.1 ms).  So a stream switches to the compiled
-    kernels once it has taken ``PYTHON_ROWS`` samples, about what that import costs."""
+    or a run on the loop compiled ahead of time never imports Numba, whose import and the
+    kernels' load from the disk cache take 0.53 s, where the Python form reads the 5001
+    samples of a ``paper-mu100`` run file in 7 ms (1.4 µs a sample; compiled: 0.25 ms).
+    So a stream switches to the compiled kernels once it has taken ``PYTHON_ROWS``
+    samples, about what that import costs."""
 
     PYTHON_ROWS = 1 << 18
     BLOCK_ROWS = 1 << 16     # rows read at a time from a run's tables (``read``)
