@@ -79,6 +79,7 @@ import importlib.util
 import os
 import sys
 import threading
+import types
 from pathlib import Path
 from typing import Any, Callable, cast
 
@@ -332,6 +333,27 @@ def python_function(compiled):
     multiply-adds the kernel may use, so a value can differ from the kernel's in its last
     bit."""
     return getattr(compiled, "py_func", compiled)
+
+
+def numba_loaded() -> bool:
+    """Whether this process has loaded Numba (``load_numba``): a kernel called now costs
+    its dispatch only, not Numba's import."""
+    return _STATE["loaded"]
+
+
+def python_module(module) -> types.SimpleNamespace:
+    """The names of ``module`` with each of its kernels replaced by its Python function,
+    whose calls to the module's other kernels go to their Python functions too: the
+    module's code run by the interpreter, without Numba (``python_function`` for one
+    kernel).  Its values are the compiled ones to the bit where every kernel is compiled
+    without fused multiply-adds (``exact_kernel``) and calls no kernel of another module."""
+    names = dict(vars(module))
+    for name, obj in vars(module).items():
+        if isinstance(obj, Kernel):
+            f = obj.py_func
+            names[name] = types.FunctionType(f.__code__, names, f.__name__, f.__defaults__,
+                                             f.__closure__)
+    return types.SimpleNamespace(**names)
 
 
 class _AfterNumba(importlib.abc.MetaPathFinder):

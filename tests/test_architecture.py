@@ -29,6 +29,7 @@ attribute of a module it imported; private modules (``_jit``, ...) are the packa
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -336,3 +337,53 @@ def test_the_meaning_walk_sees_classes_and_constants(tmp_path):
         "class Inline": frozenset({"rodjit.driver.files", "rodjit.sweeps.run"}),
         "FLUSH_INTERVAL": frozenset({"rodjit.driver.files", "rodjit.sweeps.run",
                                      "rodjit.sweeps.grid"})}
+
+
+# ---- one implementation of the first-impact observables --------------------------------
+FIRST_IMPACT = "rodjit.stepping.impact_stream"
+# the modules that fill the first-impact columns (records.impact.IMPACT_COLUMNS) -> the
+# module they take them from: the implementation itself, or records.impact, which runs it
+# for one run
+FIRST_IMPACT_CALLERS = {
+    "rodjit.stepping.ensemble": FIRST_IMPACT,               # the CPU engine's batch call
+    "rodjit.gpu.trajectory": FIRST_IMPACT,                  # a GPU thread
+    "rodjit.records.impact": FIRST_IMPACT,                  # one run (ImpactStream)
+    "rodjit.records.result": "rodjit.records.impact",       # Result.impact
+    "rodjit.output.run_writer": "rodjit.records.impact",    # a run file as it is written
+    "rodjit.output.summary": "rodjit.records.impact",       # a run file read back
+    "rodjit.sweeps.point": "rodjit.records.impact",         # a sweep point's sink
+    "rodjit.sweeps.ensemble": "rodjit.records.impact",      # the CPU engine's columns
+    "rodjit.gpu.engine": "rodjit.records.impact",           # the GPU engine's columns
+}
+# what the implementation computes: the codes and the values of its ``finish``
+FIRST_IMPACT_NAMES = ("LIFT_OFF", "OPEN_AT_END", "NO_IMPACT", "UNDEFINED", "OUT_SIZE",
+                      "O_RESTITUTION", "O_APEX", "O_CONTACT_TIME", "O_T_IMPACT",
+                      "O_W_IMPACT", "O_REBOUND", "O_MIN_U0", "O_EV_IMPACT")
+
+
+def _calls_of(tree, name: str) -> bool:
+    return any(isinstance(node, ast.Call)
+               and ((isinstance(node.func, ast.Name) and node.func.id == name)
+                    or (isinstance(node.func, ast.Attribute) and node.func.attr == name))
+               for node in ast.walk(tree))
+
+
+def test_the_first_impact_observables_have_one_implementation(graph):
+    """One module computes the first-impact observables of a sweep row (either engine), a
+    run file's summary and a Result (``stepping.impact_stream``): it alone defines their
+    codes and values, every module that fills the first-impact columns takes them from it
+    (or from ``records.impact``, which runs it for one run), and a module that names a code
+    or a value imports it.  The whole-table NumPy ``first_impact`` (``records.contacts``)
+    serves the analysis API (``records.observables.observables``), never a column."""
+    known = modules()
+    _, constants = definitions(known)
+    for name in FIRST_IMPACT_NAMES:
+        assert set(constants.get(name, {})) == {FIRST_IMPACT}, name
+    for caller, source in FIRST_IMPACT_CALLERS.items():
+        assert source in graph[caller], f"{caller} does not import {source}"
+    pattern = re.compile(r"\b(" + "|".join(FIRST_IMPACT_NAMES) + r")\b")
+    naming = {name for name, path in known.items() if pattern.search(path.read_text())}
+    assert naming - {FIRST_IMPACT} <= {name for name in known if FIRST_IMPACT in graph[name]}
+    callers = {name for name, path in known.items()
+               if _calls_of(ast.parse(path.read_text(), str(path)), "first_impact")}
+    assert callers == {"rodjit.records.observables"}, sorted(callers)

@@ -133,8 +133,7 @@ OBSERVABLES_NAMES = {
                 "lift_energy"],
     "contacts": ["energy_vibration", "merge_episodes", "flight_groups", "macroscopic_contacts",
                  "FirstImpact", "first_impact", "STATUSES"],
-    "impact_track": ["TRACK_COLUMNS", "ImpactTrack", "IMPACT_COLUMNS", "impact_values",
-                     "impact_line"],
+    "impact": ["TRACK_COLUMNS", "IMPACT_COLUMNS", "impact_values", "impact_line"],
     "observables": ["observables", "OBSERVABLES"],
 }
 

@@ -100,32 +100,6 @@ def test_a_point_that_overflows_its_arrays_runs_on_the_per_point_path(monkeypatc
     assert np.all(batch.bounce_count > 0)
 
 
-def test_the_compiled_observables_equal_the_numpy_reference_on_a_run():
-    """``stepping.impact.first_contact`` against ``records.observables.first_impact`` on a
-    simulated run's own arrays."""
-    from rodjit.records.observables import TRACK_COLUMNS, first_impact, physics_of
-    from rodjit.stepping import impact as I
-
-    res = rodjit.simulate(load_preset("paper-mu100"))
-    d = res.diagnostics
-    track = np.stack([np.asarray(d[c], float) for c in TRACK_COLUMNS], axis=1)
-    eps = np.stack([res.episodes["t_start"], res.episodes["t_end"]], axis=1)
-    b = res.bounces
-    brows = np.stack([np.asarray(b[c], float) for c in BOUNCE_COLUMNS], axis=1)
-    phys = physics_of(res)
-    out, st = np.zeros(I.OUT_SIZE), np.zeros(3)
-    code = I.first_contact(track, len(track), eps, len(eps), brows, len(brows), phys.g,
-                           phys.flight_time, phys.t_final, phys.in_contact, out, st)
-    fi = first_impact(d, res.episodes, res.bounces, phys)
-    assert code == I.LIFT_OFF and fi.status == "lift-off"
-    assert out[I.O_RESTITUTION] == fi.restitution
-    assert out[I.O_APEX] == fi.restitution_apex
-    assert out[I.O_CONTACT_TIME] == fi.contact_time
-    assert out[I.O_REBOUND] == fi.rebound_speed and out[I.O_MIN_U0] == fi.min_u0
-    assert out[I.O_W_IMPACT] == fi.w_impact
-    assert out[I.O_EV_IMPACT] == fi.energy_vibration_impact
-
-
 def test_pool_dask_and_inline_give_the_same_table(tmp_path):
     base = load_preset("paper-mu100").override({"time.t_end": 1.0})
     grid = {"rod.mu": [0.0, 50.0, 100.0], "floor.beta": [0.03, 0.1]}

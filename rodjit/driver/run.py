@@ -92,6 +92,9 @@ class Block:
         self.episodes = run.episodes[:n_ep]
         self.bounces = run.bounces[:n_bounce]
         self.finite = _all_finite(self.diagnostics)
+        # the loop's contact state at the block's end (``Sink.block``)
+        self.in_contact = bool(run.ev[L.IN_CONTACT] != 0.0)
+        self.contact_start = float(run.ev[L.EP_START])
 
 
 def _all_finite(rows: np.ndarray) -> bool:
@@ -405,7 +408,8 @@ class Run:
 
     def drain(self, block: Block, sink: Sink) -> None:
         """Hand ``block`` to ``sink``: snapshots, diagnostics (refused, with SimulationError,
-        if any value is not finite), episodes, bounces.  The run stays not ``drained`` if
+        if any value is not finite), episodes, bounces, then all of it at once
+        (``Sink.block``).  The run stays not ``drained`` if
         this raises."""
         if block.snapshots[0].size:
             sink.snapshots(*block.snapshots)
@@ -418,6 +422,8 @@ class Run:
             sink.episodes(block.episodes)
         if block.bounces.shape[0]:
             sink.bounces(block.bounces)
+        sink.block(block.diagnostics, block.episodes, block.bounces, block.in_contact,
+                   block.contact_start)
         self._undrained -= 1
 
     def pending_bounce(self):

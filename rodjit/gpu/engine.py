@@ -7,11 +7,10 @@ thread starts where ``rodjit run`` would; it runs the CPU's loop (``kernel``, ``
 functions as a CPU point's (``records.extremes.Extremes``, ``records.bounces.bounce_table``,
 ``sweeps.point.bounce_values``, ``Run.failure_message``).
 
-The first-impact columns (``records.impact_track.IMPACT_COLUMNS``) come from the values
-each thread streams from its diagnostics rows (``stepping.impact_stream``, equal to the CPU
-engine's ``impact.first_contact`` on the whole track), turned into columns by the CPU
-engine's own ``sweeps.ensemble.impact_columns``.  ``compile_time``, ``run_time`` and
-``wall_time`` of a point are its equal share of its batch's.
+The first-impact columns (``records.impact.IMPACT_COLUMNS``) come from the values each
+thread streams from its diagnostics rows (``stepping.impact_stream``, as the CPU engine
+does), turned into columns by ``records.impact.impact_columns``.  ``compile_time``,
+``run_time`` and ``wall_time`` of a point are its equal share of its batch's.
 """
 from __future__ import annotations
 
@@ -30,10 +29,11 @@ from .._jit import Kernel
 from ..records.bounces import bounce_table
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.extremes import Extremes
-from ..stepping import impact as I
+from ..records.impact import impact_columns
+from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..sweeps.batch import BatchResult
-from ..sweeps.ensemble import impact_columns
+from ..sweeps.ensemble import point_lift_energy
 from ..sweeps.point import bounce_values, empty_columns
 from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
@@ -288,10 +288,10 @@ def run_batch(configs, index) -> BatchResult:
                 if w:
                     said.append(w)
             at = np.asarray(part, dtype=np.int64)
-            impact_columns(cols, at, fout[:, T.F_IMPACT:T.F_IMPACT + I.OUT_SIZE],
+            impact_columns(cols, at, fout[:, T.F_IMPACT:T.F_IMPACT + S.OUT_SIZE],
                            iout[:, T.I_IMPACT],
-                           [types.SimpleNamespace(config=runs[j].config,
-                                                  params=runs[j].params()) for j in part])
+                           lambda q: point_lift_energy(types.SimpleNamespace(
+                               config=runs[part[q]].config, params=runs[part[q]].params())))
             for j in part:
                 got = bounce_values({"impact_status": cols["impact_status"][j]}, tables[j])
                 for name, x in got.items():

@@ -11,16 +11,14 @@ output buffers: snapshots are dropped (they are taken so that the steps land on 
 output times as a run's), diagnostics rows are folded into the running extremes of
 ``records.extremes.Extremes``, bounce rows are copied out, and the bounce still open at the
 end is written by ``stepping.events.write_bounce``, as ``Run.pending_bounce`` does.  The
-first-impact observables are streamed from the same blocks (``stepping.impact_stream``:
-a few dozen doubles a thread instead of the diagnostics track the CPU engine keeps) and
-equal the CPU engine's ``impact.first_contact``.
+first-impact observables are streamed from the same blocks (``stepping.impact_stream``,
+a few dozen doubles a thread, as the CPU engine does).
 """
 import math
 
 from ..driver.run import NO_PROGRESS
 from ..kernels.forces import OK
 from ..stepping import layout as L
-from ..stepping import impact as I
 from ..stepping import impact_stream as S
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
@@ -36,8 +34,8 @@ F_STRAIN_MIN = 5   # smallest strain, bottom height; largest floor force (diagno
 F_U0_MIN = 6
 F_FORCE_MAX = 7
 F_FAIL = 8         # the loop's ``fail`` array (layout.FAIL_SIZE values) from here
-F_IMPACT = F_FAIL + L.FAIL_SIZE    # impact_stream.finish's ``out`` (impact.OUT_SIZE values)
-F_SIZE = F_IMPACT + I.OUT_SIZE
+F_IMPACT = F_FAIL + L.FAIL_SIZE    # impact_stream.finish's ``out`` (OUT_SIZE values)
+F_SIZE = F_IMPACT + S.OUT_SIZE
 
 # columns of the integer results (``iout``)
 I_CODE = 0         # layout.DONE, layout.FAILED, or BAD_DIAGNOSTICS
@@ -47,7 +45,7 @@ I_SAMPLES = 3      # diagnostics rows folded into the extremes
 I_BOUNCES = 4      # closed bounce rows written to the point's bounce rows
 I_DROPPED = 5      # closed bounce rows that did not fit there
 I_PENDING = 6      # 0: no bounce pending at the end; 1: pending, closed episode; 2: open
-I_IMPACT = 7       # impact_stream.finish's code (impact.LIFT_OFF, ...)
+I_IMPACT = 7       # impact_stream.finish's code (LIFT_OFF, ...)
 I_SIZE = 8
 
 BAD_DIAGNOSTICS = 101   # a block of diagnostics held a non-finite value (``Run.drain``)
@@ -153,4 +151,4 @@ def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
     iout[I_IMPACT] = S.finish(imp, pending, row[L.BC_T_IMPACT], row[L.BC_T_RELEASE],
                               pending and is_open, row[L.BC_MIN_U0], system.g,
                               ev[L.FLIGHT_TIME], clock[L.T], state[0, 0] < 0.0,
-                              fout[F_IMPACT:F_IMPACT + I.OUT_SIZE], imp[S.ST:S.ST + 3])
+                              fout[F_IMPACT:F_IMPACT + S.OUT_SIZE], imp[S.ST:S.ST + 3])

@@ -8,6 +8,7 @@ whose valid checkpoint matches the first ``lengths`` rows of every table.
 """
 from __future__ import annotations
 
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -18,7 +19,7 @@ import numpy as np
 from ..records.bounces import bounce_table
 from ..records.columns import BOOL_COLUMNS
 from ..records.extremes import Extremes
-from ..records.impact_track import ImpactTrack
+from ..records.impact import ImpactStream
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .cf import LIBVER
@@ -64,17 +65,31 @@ class RunWriter(Sink):
         self.checkpoint = checkpoint
         self.compile_time_before = float(checkpoint["compile_time"])
         self.extremes = Extremes()
-        self.track = ImpactTrack()       # the columns of the first-impact observables
+        self.impact = ImpactStream(config)    # the first-impact observables
         b = self.tables["bounces"]       # every bounce row, kept for the summary
         self._bounces = [[np.zeros(0, _kept(name, buf.dtype)) if new else
                           d[:b.length].astype(_kept(name, d.dtype))]
                          for name, d, buf in zip(TABLES["bounces"], b.ds, b.buf)]
         if not new:
             self.extremes.read(f["diagnostics"], self.tables["diagnostics"].length)
-            self.track.read(f, self.tables["diagnostics"].length,
-                            self.tables["episodes"].length)
+            self._read_impact(f, checkpoint["ev"])
+        self.pending = None              # the bounce pending at the end (``close``)
         # what closing leaves in the file (status, bounces, ...)
         self.final: dict[str, Any] | None = None
+
+    def _read_impact(self, f, ev) -> None:
+        """The first-impact state of the rows up to the checkpoint, the run in contact then
+        (``ev``) if its first contact is open."""
+        n_ep = self.tables["episodes"].length
+        episodes = {c: f["episodes"][c][:n_ep] for c in ("t_start", "t_end")}
+        start = math.nan
+        if n_ep:
+            start = float(episodes["t_start"][0])
+        elif ev[L.IN_CONTACT] != 0.0:
+            start = float(ev[L.EP_START])
+        closed = {c: kept[0] for c, kept in zip(TABLES["bounces"], self._bounces)}
+        self.impact.read(f["diagnostics"], self.tables["diagnostics"].length, episodes,
+                         closed, len(closed["t_impact"]), start)
 
     # Sink interface: drained blocks of the compiled loop
     def snapshots(self, t, step, u, v):
@@ -83,11 +98,12 @@ class RunWriter(Sink):
     def diagnostics(self, rows):
         self.tables["diagnostics"].append(list(rows.T))
         self.extremes.update_rows(rows)
-        self.track.diagnostics(rows)
 
     def episodes(self, rows):
         self.tables["episodes"].append(list(rows.T))
-        self.track.episodes(rows)
+
+    def block(self, diagnostics, episodes, bounces, in_contact, contact_start):
+        self.impact.block(diagnostics, episodes, bounces, in_contact, contact_start)
 
     def bounces(self, rows, pending=None):
         """Closed bounce rows, or (``rows`` None) the ``pending`` bounce of the run."""
@@ -143,7 +159,7 @@ class RunWriter(Sink):
             raise ValueError(f"status {status!r} is not one of {STATUSES}")
         if run is not None:
             self.save(run)
-            pending = run.pending_bounce()
+            pending = self.pending = run.pending_bounce()
             if pending is not None:
                 self.bounces(None, pending)
                 self.tables["bounces"].flush()

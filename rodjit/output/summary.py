@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 from ..config import Config
 from ..records.extremes import Extremes
 from ..records.overview import RunFacts, energy_label
-from ..records.impact_track import ImpactTrack, impact_values
+from ..records.impact import run_impact
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
 from .h5files import open_file, writer_alive
@@ -48,7 +48,7 @@ class RunSummary:
     node_steps_per_second: float
     attrs: dict = field(default_factory=dict)
     impact: dict = field(default_factory=dict)   # the first macroscopic contact
-                                                 # (records.impact_track.IMPACT_COLUMNS)
+                                                 # (records.impact.IMPACT_COLUMNS)
     writer_alive: bool | None = None
 
     @property
@@ -95,13 +95,16 @@ def summarize(path) -> RunSummary:
                   for name, cols in TABLES.items()}      # older formats lack some columns
         extremes = Extremes()
         extremes.read(f["diagnostics"], counts["diagnostics"])
-        track = ImpactTrack()
-        track.read(f, counts["diagnostics"], counts["episodes"])
+        config, ck, bounces = read_config(f), read_checkpoint(f), read_table(f, "bounces")
+        n_ep = counts["episodes"]
+        impact = run_impact(config, float(ck["clock"][L.T]), ck["state"][0],
+                            f["diagnostics"], counts["diagnostics"],
+                            {c: f["episodes"][c][:n_ep] for c in ("t_start", "t_end")},
+                            bounces)
         status = str(f.attrs["status"])
         return _summary(
-            path, status, str(f.attrs["message"]), read_config(f), read_checkpoint(f),
-            counts, read_table(f, "bounces"), extremes, track,
-            {k: f.attrs[k] for k in SUMMARY_ATTRS if k in f.attrs},
+            path, status, str(f.attrs["message"]), config, ck, counts, bounces, extremes,
+            impact, {k: f.attrs[k] for k in SUMMARY_ATTRS if k in f.attrs},
             writer_alive(f) if status == "running" else None)
 
 
@@ -111,13 +114,15 @@ def closed_summary(writer: RunWriter) -> RunSummary:
     fin = writer.final
     if fin is None:
         raise ValueError(f"{writer.path!r} is not closed yet: no summary to take")
-    return _summary(writer.path, fin["status"], fin["message"], writer.config,
-                    writer.checkpoint, fin["counts"], fin["bounces"], writer.extremes,
-                    writer.track, fin["attrs"], None)
+    ck = writer.checkpoint
+    impact = writer.impact.values(float(ck["clock"][L.T]), ck["state"][0], writer.pending)
+    return _summary(writer.path, fin["status"], fin["message"], writer.config, ck,
+                    fin["counts"], fin["bounces"], writer.extremes, impact, fin["attrs"],
+                    None)
 
 
 def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes,
-             track: ImpactTrack, attrs, alive) -> RunSummary:
+             impact: dict, attrs, alive) -> RunSummary:
     clock, count = ck["clock"], ck["count"]
     e0 = float(clock[L.E0])
     ext = extremes.with_bounces(bounces)
@@ -134,5 +139,5 @@ def _summary(path, status, message, config, ck, counts, bounces, extremes: Extre
         compile_time=ck["compile_time"], run_time=run_time,
         node_steps_per_second=node_steps_per_second(steps, config.rod.N + 1, run_time),
         attrs=attrs, writer_alive=alive,
-        impact=impact_values(config, float(clock[L.T]), ck["state"][0], track, bounces),
+        impact=impact,
     )

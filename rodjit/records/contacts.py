@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from .impact import NO_SAMPLES
 from .physics import Physics
 
 __all__ = ["energy_vibration", "merge_episodes", "flight_groups", "macroscopic_contacts",
@@ -130,8 +131,7 @@ def _check_sampling(diag) -> float:
     """The largest spacing of the diagnostics samples (ValueError without samples)."""
     ts = np.asarray(diag["t"])
     if ts.size < 2:
-        raise ValueError("the macroscopic-contact observables need diagnostics samples "
-                         "(output.diagnostics_interval > 0)")
+        raise ValueError(NO_SAMPLES)
     return float(np.max(np.diff(ts)))
 
 

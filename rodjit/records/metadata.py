@@ -108,7 +108,7 @@ COLUMN_MEANINGS["summary"] = {
     "run_time": Meaning("wall time stepping in compiled code", "s"),
     "t_final": Meaning("simulated time reached", "s"),
     "run_file": Meaning("the point's run file", ""),
-    # the first bounce (records.impact_track.IMPACT_COLUMNS)
+    # the first bounce (records.impact.IMPACT_COLUMNS)
     "restitution_first": Meaning("restitution of the first bounce, the first physical "
                                  "impact (0: no lift-off)", "1"),
     "impact_status": Meaning("outcome of the first bounce (lift-off, no lift-off, open, no "

@@ -9,9 +9,10 @@ modules of one job each, and every public name of theirs is importable from here
 - ``records.contacts``: macroscopic contacts and the first impact from a run's arrays,
   ``energy_vibration``, ``merge_episodes``, ``flight_groups``, ``macroscopic_contacts``,
   ``FirstImpact``, ``first_impact``, ``STATUSES``;
-- ``records.impact_track``: the first-impact summary of a sweep row or a run file,
-  ``TRACK_COLUMNS``, ``ImpactTrack``, ``IMPACT_COLUMNS``, ``impact_values``,
-  ``impact_line``;
+- ``records.impact``: the first-impact columns of a sweep row, a run file's summary and a
+  Result, from the one implementation of them (``stepping.impact_stream``):
+  ``TRACK_COLUMNS``, ``IMPACT_COLUMNS``, ``NO_SAMPLES``, ``ImpactStream``, ``run_impact``,
+  ``impact_columns``, ``impact_values``, ``impact_line``;
 - here: ``observables``, ``OBSERVABLES``.
 """
 from __future__ import annotations
@@ -23,17 +24,18 @@ import numpy as np
 
 from .contacts import (STATUSES, FirstImpact, energy_vibration, first_impact, flight_groups,
                        macroscopic_contacts, merge_episodes)
-from .impact_track import (IMPACT_COLUMNS, TRACK_COLUMNS, ImpactTrack, impact_line,
-                           impact_values)
+from .impact import (IMPACT_COLUMNS, NO_SAMPLES, TRACK_COLUMNS, ImpactStream, impact_columns,
+                     impact_line, impact_values, run_impact)
 from .physics import Physics, flight_time, lift_energy, physics_for, physics_of, wave_speed
 
 if TYPE_CHECKING:
     from .result import Result
 
-__all__ = ["Physics", "physics_of", "physics_for", "ImpactTrack", "impact_values", "flight_time",
-           "IMPACT_COLUMNS", "impact_line", "wave_speed", "lift_energy", "energy_vibration",
-           "merge_episodes", "flight_groups", "macroscopic_contacts", "FirstImpact", "first_impact",
-           "observables", "OBSERVABLES", "STATUSES", "TRACK_COLUMNS"]
+__all__ = ["Physics", "physics_of", "physics_for", "ImpactStream", "run_impact",
+           "impact_columns", "impact_values", "flight_time", "IMPACT_COLUMNS", "NO_SAMPLES",
+           "impact_line", "wave_speed", "lift_energy", "energy_vibration",
+           "merge_episodes", "flight_groups", "macroscopic_contacts", "FirstImpact",
+           "first_impact", "observables", "OBSERVABLES", "STATUSES", "TRACK_COLUMNS"]
 
 # name -> description of the scalar observables ``observables`` returns
 OBSERVABLES: dict[str, str] = {

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from .._display import html_table, number, text
-from .impact_track import impact_line
+from .impact import impact_line
 
 __all__ = ["RunFacts", "energy_label"]
 
@@ -27,7 +27,7 @@ class RunFacts:
                  compile_time, run_time, node_steps_per_second, warnings=(), impact=None):
         self.name, self.status, self.message, self.config = name, status, message, config
         self.warnings = tuple(warnings)   # what the results do not mean (Config.warnings)
-        self.impact = impact or {}        # the first macroscopic contact (records.impact_track)
+        self.impact = impact or {}        # the first macroscopic contact (records.impact)
         self.t_start, self.t, self.t_end = t_start, t, t_end
         self.bounces, self.n_episodes = bounces, n_episodes
         self.energy_error, self.min_strain, self.min_u0 = energy_error, min_strain, min_u0

@@ -12,7 +12,7 @@ from .bounces import bounce_table
 from .columns import DIAG_COLUMNS, EPISODE_COLUMNS, columns_of
 from .datasets import run_dataset, strain_of
 from .extremes import Extremes
-from .impact_track import ImpactTrack, impact_values
+from .impact import run_impact
 from .overview import RunFacts
 from .sink import Sink
 
@@ -117,16 +117,10 @@ class Result:
             warnings=self.config.warnings(), impact=self.impact())
 
     def impact(self) -> dict:
-        """The first macroscopic contact (``records.impact_track.IMPACT_COLUMNS``), as a run
+        """The first macroscopic contact (``records.impact.IMPACT_COLUMNS``), as a run
         file's summary and a sweep row report it."""
-        track = ImpactTrack()
-        d = self.diagnostics
-        track.diagnostics(np.stack([d[c] for c in DIAG_COLUMNS], axis=1)
-                          if d["t"].size else np.zeros((0, len(DIAG_COLUMNS))))
-        e = self.episodes
-        track.episodes(np.stack([e[c] for c in EPISODE_COLUMNS], axis=1)
-                       if e["t_start"].size else np.zeros((0, len(EPISODE_COLUMNS))))
-        return impact_values(self.config, self.t_final, self.u_final, track, self.bounces)
+        return run_impact(self.config, self.t_final, self.u_final, self.diagnostics,
+                          int(self.diagnostics["t"].size), self.episodes, self.bounces)
 
     def report(self, max_bounces: int | None = 20) -> str:
         """The plain-text report ``rodjit run`` prints: bounces (at most ``max_bounces``

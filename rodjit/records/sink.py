@@ -22,3 +22,9 @@ class Sink:
 
     def bounces(self, rows):
         pass
+
+    def block(self, diagnostics, episodes, bounces, in_contact, contact_start):
+        """The block's rows once more, together, after the calls above, with whether the
+        bottom is on the floor at the block's end and since when (the loop's ``ev``): for
+        what takes a block's samples and events in the loop's order (the first-impact
+        observables, ``records.impact.ImpactStream``)."""

@@ -75,8 +75,8 @@ ENTRIES = {
                               ("count", _I1), ("ev", _F1), ("snap_t", _F1),
                               ("snap_step", _I1), ("snap_u", _F2), ("snap_v", _F2),
                               ("diag", _F2), ("episodes", _F2), ("bounces", _F2),
-                              ("fail", _F1), ("track", _F2), ("eps", _F2), ("bout", _F2),
-                              ("st", _F1), ("fout", _F2), ("iout", _I2),
+                              ("fail", _F1), ("imp", _F1), ("bout", _F2),
+                              ("fout", _F2), ("iout", _I2),
                               ("max_steps", "i8"))),
 }
 

@@ -16,17 +16,18 @@ kernels (``loop.start``, ``loop.advance``), so every step is the same:
 * after each call the buffers are consumed here, as ``Run.drain`` hands them to a sink: a
   block holding a non-finite diagnostic value is refused (the point fails), snapshots are
   dropped (they were only taken so that steps land on the same output times), the
-  diagnostics rows fold into the extremes (``records.extremes.Extremes``) and their
-  TRACK columns go to ``track``, episodes to ``eps``, bounce rows to the batch's ``bout``;
+  diagnostics rows fold into the extremes (``records.extremes.Extremes``), the block
+  goes to the first-impact state ``imp`` (``impact_stream.block``), bounce rows to the
+  batch's ``bout``;
 * at the end, the pending bounce (``events.write_bounce``), the extremes and the
-  first-impact observables (``impact.first_contact``).
+  first-impact observables (``impact_stream.finish``).
 
-A point whose track, episodes or bounce rows do not fit the arrays it was given is marked
-``R_OVERFLOW``: the caller runs it again on the per-point path.  Nothing here allocates.
+A point whose bounce rows do not fit the batch's ``bout`` is marked ``R_OVERFLOW``: the
+caller runs it again on the per-point path.  Nothing here allocates.
 """
 import numpy as np
 
-from . import impact as I
+from . import impact_stream as S
 from . import layout as L
 from .events import write_bounce
 from .loop import advance, start
@@ -42,8 +43,8 @@ F_ENERGY_ERROR = 3
 F_T_FINAL = 4
 F_E0 = 5
 F_FAIL = 6                       # the loop's ``fail`` row (FAIL_SIZE values)
-F_IMPACT = F_FAIL + L.FAIL_SIZE  # impact.first_contact's ``out`` (OUT_SIZE values)
-F_T_END = F_IMPACT + I.OUT_SIZE  # clock[T_END] (the failure message names it)
+F_IMPACT = F_FAIL + L.FAIL_SIZE  # impact_stream.finish's ``out`` (OUT_SIZE values)
+F_T_END = F_IMPACT + S.OUT_SIZE  # clock[T_END] (the failure message names it)
 F_SIZE = F_T_END + 1
 
 # per point, ``iout`` columns
@@ -51,7 +52,7 @@ I_RESULT = 0          # R_* below
 I_STEPS = 1
 I_REJECTED = 2
 I_BOUNCES = 3         # rows in ``bout``, the pending bounce included
-I_IMPACT = 4          # impact.first_contact's code
+I_IMPACT = 4          # impact_stream.finish's code
 I_BSTART = 5          # its first row in ``bout``
 I_SIZE = 6
 
@@ -59,6 +60,10 @@ R_COMPLETED = 0
 R_FAILED = 1          # ``fail`` says why
 R_NONFINITE = 2       # a diagnostics block held a non-finite value
 R_OVERFLOW = 3        # did not fit: run it on the per-point path
+
+# a row of ``bout``: the loop's bounce row (``layout.BOUNCE_ROW_COLUMNS``), then ``open``
+B_OPEN = len(L.BOUNCE_ROW_COLUMNS)
+BOUT_SIZE = B_OPEN + 1
 
 
 def _nscalar(proto):
@@ -146,13 +151,14 @@ def _rebuild_ov(proto, row, o):
 @kernel
 def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, flight,
               state, trial, work, interp, sstats, clock, count, ev, snap_t, snap_step,
-              snap_u, snap_v, diag, episodes, bounces, fail, track, eps, bout, st,
-              fout, iout, max_steps):
+              snap_u, snap_v, diag, episodes, bounces, fail, imp, bout, fout, iout,
+              max_steps):
     """Run every point (row) of ``params``; ``init[i]`` holds its u and v rows,
     ``clock0[i]`` its clock, ``flight[i]`` its flight time τ.  The other arrays are one
-    point's (reused: ``Run``'s arrays and buffers, ``track`` and ``eps`` rows, ``st`` 3
-    floats), ``bout`` the batch's bounce rows, ``fout`` and ``iout`` its summary values
-    (``F_*``, ``I_*``).  Returns the bounce rows written."""
+    point's (reused: ``Run``'s arrays and buffers, ``imp`` its first-impact state of
+    ``impact_stream.SIZE`` doubles), ``bout`` the batch's bounce rows (``BOUT_SIZE``
+    columns), ``fout`` and ``iout`` its summary values (``F_*``, ``I_*``).  Returns the
+    bounce rows written."""
     o1 = _nscalar(scheme0)
     o2 = o1 + _nscalar(ctrl0)
     o3 = o2 + _nscalar(system0)
@@ -167,15 +173,15 @@ def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, fligh
         floor = _rebuild(floor0, p, o4)
         nbo = _run_point(scheme, ctrl, system, rod, floor, init[i], clock0[i], flight[i],
                          state, trial, work, interp, sstats, clock, count, ev, snap_t,
-                         snap_step, snap_u, snap_v, diag, episodes, bounces, fail, track,
-                         eps, bout, nbo, st, fout[i], iout[i], max_steps)
+                         snap_step, snap_u, snap_v, diag, episodes, bounces, fail, imp,
+                         bout, nbo, fout[i], iout[i], max_steps)
     return nbo
 
 
 @kernel
 def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial, work,
                interp, sstats, clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag,
-               episodes, bounces, fail, track, eps, bout, nbo, st, fo, io, max_steps):
+               episodes, bounces, fail, imp, bout, nbo, fo, io, max_steps):
     """One point of ``run_batch``; returns the bounce rows of the batch after it."""
     n1 = state.shape[1]
     for r in range(state.shape[0]):
@@ -199,6 +205,7 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
     ev[L.FLIGHT_TIME] = tau
     for j in range(fail.size):
         fail[j] = 0.0
+    S.reset(imp)
     # the extremes (records.extremes.Extremes)
     samples = 0
     bal_max = -np.inf
@@ -207,8 +214,6 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
     strain_min = np.inf
     u0_min = np.inf
     force_max = -np.inf
-    nd = 0
-    ne = 0
     bstart = nbo
     outcome = R_COMPLETED
     code = start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev, snap_t,
@@ -252,20 +257,13 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
             strain_min = min(strain_min, row[L.D_MIN_STRAIN])
             u0_min = min(u0_min, row[L.D_U_BOTTOM])
             force_max = max(force_max, row[L.D_FLOOR_FORCE])
-            if nd < track.shape[0]:
-                for c in range(I.TRACK_SIZE):
-                    track[nd, c] = row[I.TRACK_FROM_DIAG[c]]
-            nd += 1
-        for r in range(count[L.N_EP]):
-            if ne < eps.shape[0]:
-                eps[ne, 0] = episodes[r, L.EC_T_START]
-                eps[ne, 1] = episodes[r, L.EC_T_END]
-            ne += 1
+        S.block(imp, diag, m, episodes, count[L.N_EP], bounces, count[L.N_BOUNCE],
+                ev[L.IN_CONTACT] != 0.0, ev[L.EP_START], system.g, tau)
         for r in range(count[L.N_BOUNCE]):
             if nbo < bout.shape[0]:
                 for c in range(bounces.shape[1]):
                     bout[nbo, c] = bounces[r, c]
-                bout[nbo, I.BR_OPEN] = 0.0
+                bout[nbo, B_OPEN] = 0.0
             nbo += 1
         count[L.N_SNAP] = 0
         count[L.N_DIAG] = 0
@@ -275,19 +273,20 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
             outcome = R_FAILED
         if code == L.DONE:
             break
-    if ev[L.B_NEP] > 0:     # the pending bounce (Run.pending_bounce, bounce_table)
-        is_open = ev[L.IN_CONTACT] != 0.0
+    pending = ev[L.B_NEP] > 0
+    is_open = ev[L.IN_CONTACT] != 0.0
+    if pending:     # the pending bounce (Run.pending_bounce, bounce_table)
         if nbo < bout.shape[0]:
             write_bounce(bout[nbo], ev, is_open)
             bout[nbo, L.BC_AMBIGUOUS] = 1.0
             bout[nbo, L.BC_RESTITUTION_ENERGY] = np.nan
-            bout[nbo, I.BR_OPEN] = 1.0 if is_open else 0.0
+            bout[nbo, B_OPEN] = 1.0 if is_open else 0.0
         nbo += 1
     io[I_STEPS] = count[L.STEP]
     io[I_REJECTED] = count[L.REJECTED]
     io[I_BSTART] = bstart
     io[I_BOUNCES] = nbo - bstart
-    if nd > track.shape[0] or ne > eps.shape[0] or nbo > bout.shape[0]:
+    if nbo > bout.shape[0]:
         io[I_RESULT] = R_OVERFLOW
         return bstart           # its rows are dropped: the point runs again alone
     io[I_RESULT] = outcome
@@ -316,7 +315,14 @@ def _run_point(scheme, ctrl, system, rod, floor, init, clock0, tau, state, trial
     fo[F_T_END] = clock[L.T_END]
     for j in range(L.FAIL_SIZE):
         fo[F_FAIL + j] = fail[j]
-    io[I_IMPACT] = I.first_contact(track, nd, eps, ne, bout[bstart:nbo], nbo - bstart,
-                                   system.g, tau, clock[L.T], state[0, 0] < 0.0,
-                                   fo[F_IMPACT:F_IMPACT + I.OUT_SIZE], st)
+    p_impact = 0.0          # the pending bounce's row, if there is one
+    p_release = 0.0
+    p_min_u0 = 0.0
+    if pending:
+        p_impact = bout[nbo - 1, L.BC_T_IMPACT]
+        p_release = bout[nbo - 1, L.BC_T_RELEASE]
+        p_min_u0 = bout[nbo - 1, L.BC_MIN_U0]
+    io[I_IMPACT] = S.finish(imp, pending, p_impact, p_release, pending and is_open, p_min_u0,
+                            system.g, tau, clock[L.T], state[0, 0] < 0.0,
+                            fo[F_IMPACT:F_IMPACT + S.OUT_SIZE], imp[S.ST:S.ST + 3])
     return nbo

@@ -13,8 +13,8 @@ for a point that needs text (a failure message, the reason of a first contact wi
 lift-off, whose lift-off energy is computed for those points only) and the means over each
 point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
 
-A point the batch could not hold (more diagnostics samples, episodes or bounce rows than
-its arrays, ``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
+A point the batch could not hold (more bounce rows than its share of the batch's,
+``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
 
 Threads: one per worker process (no ``prange`` over points): the sweep's workers are the
 parallelism, as for the per-point path.  Batches on threads of one process (the compiled
@@ -39,10 +39,11 @@ from ..driver.prepared import clock_row
 from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text, parameters
 from ..model.system import check_admissible, initial_state
 from ..records.columns import BOUNCE_COLUMNS
+from ..records.impact import impact_columns
 from ..records.observables import flight_time, lift_energy
 from ..stepping import aot
 from ..stepping import ensemble as E
-from ..stepping import impact as I
+from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping.schemes import SCHEME_STATS, work_rows
 from .batch import BatchResult
@@ -50,13 +51,10 @@ from .point import (SUMMARY_COLUMNS, PointResult, PointTask, died, empty_columns
                     run_point, worker_info)
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
-           "timed", "batches", "check_batch_size", "split_bounces", "as_batch", "EPISODE_ROWS",
-           "BATCH_SECONDS", "MAX_BATCH_SIZE", "impact_columns", "load_batch_kernel"]
+           "timed", "batches", "check_batch_size", "split_bounces", "as_batch",
+           "BATCH_SECONDS", "MAX_BATCH_SIZE", "point_lift_energy", "load_batch_kernel"]
 
-EPISODE_ROWS = 4096        # episodes a point keeps for its first-impact observables
 BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
-NO_SAMPLES = ("the macroscopic-contact observables need diagnostics samples "
-              "(output.diagnostics_interval > 0)")
 
 
 BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
@@ -248,9 +246,9 @@ def run_batch(task: BatchTask) -> BatchResult:
 _LOADED: set = set()      # the families whose batch kernel this process has loaded
 
 
-def _scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows) -> tuple:
-    """One point's arrays of ``run_batch``, from ``state`` to ``eps`` (reused by every
-    point of the call): a Run's arrays and buffers, and the track and episode rows."""
+def _scratch(n1, scheme, cap_s, cap_d, ev_cap) -> tuple:
+    """One point's arrays of ``run_batch``, from ``state`` to ``imp`` (reused by every
+    point of the call): a Run's arrays and buffers, and the first-impact state."""
     return (np.zeros((3, n1)), np.zeros((3, n1)), np.zeros((work_rows(scheme), n1)),
             np.zeros((2, n1)), np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64),
             np.zeros(L.CLOCK_SIZE), np.zeros(L.COUNT_SIZE, dtype=np.int64),
@@ -259,7 +257,7 @@ def _scratch(n1, scheme, cap_s, cap_d, ev_cap, track_rows) -> tuple:
             np.zeros((cap_d, len(L.DIAG_COLUMNS))),
             np.zeros((ev_cap, len(L.EPISODE_COLUMNS))),
             np.zeros((ev_cap, len(L.BOUNCE_ROW_COLUMNS))), np.zeros(L.FAIL_SIZE),
-            np.zeros((track_rows, I.TRACK_SIZE)), np.zeros((EPISODE_ROWS, 2)))
+            np.zeros(S.SIZE))
 
 
 EV_CAP = 1024    # event rows of a point's scratch
@@ -289,8 +287,8 @@ def _load_kernel(p: _Point) -> float:
     t0 = time.perf_counter()
     _batch_kernel(p)(np.zeros((0, len(p.row))), np.zeros((0, 2, n1)),
                      np.zeros((0, L.CLOCK_SIZE)), np.zeros(0),
-                     *_scratch(n1, scheme, cap_s, cap_d, EV_CAP, 1),
-                     np.zeros((BOUNCE_ROWS, I.BROW_SIZE)), np.zeros(3),
+                     *_scratch(n1, scheme, cap_s, cap_d, EV_CAP),
+                     np.zeros((BOUNCE_ROWS, E.BOUT_SIZE)),
                      np.zeros((0, E.F_SIZE)), np.zeros((0, E.I_SIZE), dtype=np.int64), 1)
     _LOADED.add(key)
     return time.perf_counter() - t0
@@ -321,17 +319,14 @@ def _run_group(members, values):
         clock0[j] = p.clock
         flight[j] = p.tau
     cap_s, cap_d = capacities(cfg, ctrl)
-    out = cfg.output
-    track_rows = (int(min(2**31, cfg.time.t_end / out.diagnostics_interval)) + 4
-                  if out.diagnostics_interval > 0 else 1)
     fout = np.zeros((m, E.F_SIZE))
     iout = np.zeros((m, E.I_SIZE), dtype=np.int64)
-    bout = np.zeros((BOUNCE_ROWS * m, I.BROW_SIZE))
+    bout = np.zeros((BOUNCE_ROWS * m, E.BOUT_SIZE))
     compile_time = _load_kernel(p0)
     t0 = time.perf_counter()
     _batch_kernel(p0)(params, init, clock0, flight,
-                      *_scratch(n1, scheme, cap_s, cap_d, EV_CAP, track_rows), bout,
-                      np.zeros(3), fout, iout, int(max(1, NODE_STEPS_PER_CALL // n1)))
+                      *_scratch(n1, scheme, cap_s, cap_d, EV_CAP), bout, fout, iout,
+                      int(max(1, NODE_STEPS_PER_CALL // n1)))
     elapsed = time.perf_counter() - t0
     pos = np.array([k for k, _ in members], dtype=np.int64)
     res = iout[:, E.I_RESULT]
@@ -343,8 +338,8 @@ def _run_group(members, values):
     values["energy_error"][pos] = fout[:, E.F_ENERGY_ERROR]
     values["t_final"][pos] = fout[:, E.F_T_FINAL]
     values["status"][pos] = np.where(res == E.R_COMPLETED, "completed", "failed")
-    impact_columns(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + I.OUT_SIZE],
-                   iout[:, E.I_IMPACT], [p for _, p in members])
+    impact_columns(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + S.OUT_SIZE],
+                   iout[:, E.I_IMPACT], lambda j: point_lift_energy(members[j][1]))
     for j, (k, p) in enumerate(members):
         if res[j] == E.R_FAILED:
             values["message"][k] = failure_text(fout[j, E.F_FAIL:E.F_FAIL + L.FAIL_SIZE],
@@ -362,9 +357,10 @@ def _run_group(members, values):
 _LIFT: dict = {}
 
 
-def _lift_energy(p: _Point) -> float:
+def point_lift_energy(p) -> float:
     """``lift_energy`` of a point (a bisection in Python), cached by what it depends on:
-    the rod law and its parameters, gravity and N."""
+    the rod law and its parameters, gravity and N; ``p`` has ``config`` and ``params``
+    (its parameter tuples)."""
     cfg = p.config
     key = (cfg.rod.law, p.params[3], float(cfg.gravity.g), cfg.rod.N)
     try:
@@ -376,57 +372,6 @@ def _lift_energy(p: _Point) -> float:
         except TypeError:
             pass
         return value
-
-
-def impact_columns(values, pos, out, code, points) -> None:
-    """The IMPACT_COLUMNS (``records.observables.impact_values``) of the points at rows
-    ``pos`` of ``values`` (their ``t_final`` already there) from the compiled
-    ``first_contact`` values ``out`` and codes; ``points`` have ``config`` and ``params``
-    (for the lift-off energy).  The GPU engine's streamed values go the same way."""
-    lift = code == I.LIFT_OFF
-    opened = code == I.OPEN_AT_END
-    w = out[:, I.O_W_IMPACT]
-    some = lift | opened
-    for name, col in (("w_impact", I.O_W_IMPACT), ("rebound_speed", I.O_REBOUND),
-                      ("min_u0_impact", I.O_MIN_U0)):
-        values[name][pos] = np.where(some, out[:, col], math.nan)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = out[:, I.O_EV_IMPACT] / (0.5 * w * w)
-    values["vibration_ratio"][pos] = np.where(some & (w != 0), ratio, math.nan)
-    for name, col in (("restitution_first", I.O_RESTITUTION),
-                      ("restitution_apex", I.O_APEX),
-                      ("contact_time_first", I.O_CONTACT_TIME)):
-        values[name][pos] = np.where(lift, out[:, col], math.nan)
-    status = values["impact_status"]
-    reason = values["impact_reason"]
-    status[pos[lift]] = "lift-off"
-    reason[pos[lift]] = ""
-    for j in np.flatnonzero(~lift):
-        k = pos[j]
-        t_final = float(values["t_final"][k])
-        if code[j] == I.UNDEFINED:
-            status[k], reason[k] = "undefined", NO_SAMPLES
-        elif code[j] == I.NO_IMPACT:
-            status[k] = "no impact"
-            reason[k] = f"the bottom never touched the floor before t = {t_final:g}"
-        else:
-            e_end, lift_e = float(out[j, I.O_E_END]), _lift_energy(points[j])
-            if e_end < lift_e:
-                wi, reb = float(w[j]), float(out[j, I.O_REBOUND])
-                r = reb / abs(wi) if wi else math.nan
-                status[k] = "no lift-off"
-                reason[k] = (f"the rod never leaves the floor: its energy {e_end:.6g} at "
-                             f"t = {float(out[j, I.O_T_LAST]):g} is below the {lift_e:.6g} "
-                             f"a lift-off needs; the centre of mass rebounds at "
-                             f"{reb:.3g} ({r:.3g} of the impact speed)")
-                values["restitution_first"][k] = 0.0
-                values["restitution_apex"][k] = 0.0
-                values["contact_time_first"][k] = math.inf
-            else:
-                status[k] = "open"
-                reason[k] = (f"the first contact is still running at t = {t_final:g} "
-                             f"with energy {e_end:.6g} above the {lift_e:.6g} a lift-off "
-                             f"needs: run longer (time.t_end)")
 
 
 def _assemble(n, pieces, per_point):

@@ -27,7 +27,7 @@ from ..output.lock import lock_path
 from ..records.bounces import bounce_table, empty_bounces
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.extremes import Extremes
-from ..records.observables import IMPACT_COLUMNS, ImpactTrack, impact_values
+from ..records.impact import IMPACT_COLUMNS, ImpactStream
 from ..records.sink import Sink
 from ..stepping import layout as L
 from .batch import BatchResult
@@ -124,23 +124,22 @@ def law_modules(config) -> tuple[str, ...]:
 
 
 class _PointSink(Sink):
-    """Keeps what a summary row needs: running extremes, the few diagnostics columns of
-    the first-impact observables (``ImpactTrack``), episodes and the bounce rows."""
+    """Keeps what a summary row needs: running extremes, the first-impact state
+    (``ImpactStream``) and the bounce rows."""
 
-    def __init__(self):
+    def __init__(self, config):
         self.extremes = Extremes()
-        self.track = ImpactTrack()
+        self.impact = ImpactStream(config)
         self.rows: list[np.ndarray] = []
 
     def diagnostics(self, rows):
         self.extremes.update_rows(rows)
-        self.track.diagnostics(rows)
-
-    def episodes(self, rows):
-        self.track.episodes(rows)
 
     def bounces(self, rows):
         self.rows.append(rows.copy())
+
+    def block(self, diagnostics, episodes, bounces, in_contact, contact_start):
+        self.impact.block(diagnostics, episodes, bounces, in_contact, contact_start)
 
 
 def bounce_values(values: dict, bounces: dict) -> dict:
@@ -168,7 +167,7 @@ def bounce_values(values: dict, bounces: dict) -> dict:
 
 def _run_in_memory(config) -> tuple[dict, dict]:
     run = Run(config)
-    sink = _PointSink()
+    sink = _PointSink(config)
     status, message = "completed", ""
     try:
         run.start(None)   # the outputs at t0 wait in the buffers for the first drain
@@ -176,14 +175,15 @@ def _run_in_memory(config) -> tuple[dict, dict]:
             pass
     except SimulationError as exc:
         status, message = "failed", str(exc)
-    bounces = bounce_table(sink.rows, run.pending_bounce())
+    pending = run.pending_bounce()
+    bounces = bounce_table(sink.rows, pending)
     ext = sink.extremes.with_bounces(bounces)
     values = {"status": status, "message": message, "min_u0": _finite(ext.u0_min),
               "max_floor_force": _finite(ext.force_max), "min_strain": _finite(ext.strain_min),
               "energy_error": ext.energy_error(run.energy0), "steps": run.steps,
               "rejected_steps": run.rejected, "compile_time": run.compile_time,
               "run_time": run.run_time, "t_final": run.t, "run_file": ""}
-    values.update(impact_values(config, run.t, run.u, sink.track, bounces))
+    values.update(sink.impact.values(run.t, run.u, pending))
     return values, bounces
 
 
