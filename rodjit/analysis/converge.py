@@ -32,7 +32,7 @@ __all__ = ["converge", "Convergence", "DEFAULT_OBSERVABLES", "load_convergence",
 DEFAULT_OBSERVABLES = ("restitution_first", "contact_time_first", "min_u0",
                        "max_floor_force")
 FORMAT_VERSION = 2     # 2: time_status, predictability_time, time_steps
-KIND = "convergence"   # root attribute rodjit_kind of a convergence file
+CONVERGENCE_KIND = "convergence"   # root attribute rodjit_kind of a convergence file
 # The status of a time study whose runs all took the same number of steps: the ladder did
 # not change the steps, so the spread of its values says nothing about the time error.
 NOT_MEASURED = "not measured"
@@ -210,11 +210,11 @@ class Convergence:
             rodjit_version = version("rodjit")
         except PackageNotFoundError:
             rodjit_version = "0.0.0+unknown"
-        check_output(path, overwrite, KIND)
+        check_output(path, overwrite, CONVERGENCE_KIND)
         target = os.path.realpath(path)      # a link is written through, as by every writer
         tmp = f"{target}.part"
         with h5py.File(tmp, "w") as f:
-            f.attrs.update({"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
+            f.attrs.update({"rodjit_kind": CONVERGENCE_KIND, "format_version": FORMAT_VERSION,
                             "rodjit_version": rodjit_version, "created": now(),
                             "command": command or f"rodjit.converge(...).save({str(path)!r})",
                             "key": self.key,
@@ -267,7 +267,7 @@ def load_convergence(path: str | os.PathLike[str]) -> dict[str, Any]:
     import h5py
 
     with h5py.File(path, "r") as f:
-        if f.attrs.get("rodjit_kind") != KIND:
+        if f.attrs.get("rodjit_kind") != CONVERGENCE_KIND:
             raise ValueError(f"{str(path)!r} is not a rodjit convergence file")
         out = {k: (v.item() if hasattr(v, "item") and np.ndim(v) == 0 else v)
                for k, v in f.attrs.items()}

@@ -51,7 +51,7 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
     Exit codes: 0 done, 2 usage or configuration error (a ladder over a key that does not
     set the integrator's steps names the key that does; nothing run or written).
     """
-    from ..analysis.converge import KIND, converge
+    from ..analysis.converge import CONVERGENCE_KIND, converge
     from ..output.estimate import parse_size
     from ..output.h5files import check_output
 
@@ -59,7 +59,7 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
         cfg = options.base_config(config, sets)
         limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
         if output:      # before the study runs: as every writer's output (run -o's rule)
-            check_output(output, overwrite, KIND)
+            check_output(output, overwrite, CONVERGENCE_KIND)
         names = [o.strip() for o in observables.split(",") if o.strip()]
         result = converge(cfg, key_values("--ladder", ladder),
                           also=(False if also is not None and also.strip() == "none"
