@@ -23,6 +23,7 @@ from ..config import MissingFile
 from .abandoned import abandon, abandoned, quiet_disk_errors
 from .cf import LIBVER
 from .errors import OutputNotRegular, OutputOtherKind, WriteFailed
+from .journal import recover
 from .lock import FileBusy, is_link, is_locked
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
@@ -31,7 +32,7 @@ __all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileBusy", "OutputExis
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
            "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
-           "abandoned", "reserve_space", "quiet_disk_errors", "damaged"]
+           "abandoned", "quiet_disk_errors", "damaged"]
 
 
 class NotARunFile(ValueError):
@@ -91,7 +92,8 @@ class OutputExists(ValueError):
 
 def open_file(path) -> h5py.File:
     """Open a rodjit file read-only: plainly if it was closed, in SWMR-read mode if a writer
-    has it open or was killed before closing it (both leave the SWMR flags set)."""
+    has it open or was killed before closing it (both leave the SWMR flags set).  A journaled
+    write its writer did not finish (a sweep file's, ``output.journal``) is undone first."""
     path = Path(path)
     mode = _mode(path)
     if mode is None:
@@ -102,6 +104,11 @@ def open_file(path) -> h5py.File:
         raise NotARunFile(f"{str(path)!r} is a {_special(mode)}, not a rodjit file")
     if not os.access(path, os.R_OK):
         raise NotARunFile(f"{str(path)!r} is not readable")
+    try:
+        recover(path)
+    except OSError as exc:
+        raise NotARunFile(f"{str(path)!r} was being written when its writer stopped, and "
+                          f"undoing that write failed: {exc.strerror or exc}") from None
     if not h5py.is_hdf5(path):
         raise NotARunFile(f"{str(path)!r} is not a rodjit file (not an HDF5 file)")
     try:
@@ -318,29 +325,6 @@ def disk_cause(exc: BaseException | None) -> str | None:
             return _CAUSES[int(m.group(1))]
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None
-
-
-def reserve_space(path, nbytes: int) -> int:
-    """Allocate ``nbytes`` of disk space at the end of the closed HDF5 file ``path`` before
-    it is opened for a write, so that the write cannot run out of space (ENOSPC) or past a
-    file-size limit (EFBIG) half-way, which would leave the file inconsistent; HDF5 gives
-    back what it did not use when it closes the file.  Returns the file's size before; a
-    refused reservation raises WriteFailed with the file as it was."""
-    size = os.path.getsize(path)
-    fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
-    try:
-        os.posix_fallocate(fd, size, max(int(nbytes), 1))
-    except OSError as exc:
-        try:
-            os.ftruncate(fd, size)        # give back what was allocated of it
-        except OSError:
-            pass
-        if exc.errno in _CAUSES:
-            raise WriteFailed(_CAUSES[exc.errno], _CAUSES[exc.errno]) from None
-        # a file system that cannot reserve (EINVAL, ...): write without the reservation
-    finally:
-        os.close(fd)
-    return size
 
 
 def truncation(path) -> tuple[int, int] | None:

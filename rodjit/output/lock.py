@@ -19,7 +19,10 @@ import fcntl
 import os
 from pathlib import Path
 
-__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked", "note_failure", "failure_note"]
+__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked", "held_here", "note_failure",
+           "failure_note"]
+
+_HELD: set[Path] = set()        # the lock files this process holds (``held_here``)
 
 
 class FileBusy(ValueError):
@@ -82,6 +85,7 @@ class WriterLock:
         except OSError:
             pass
         self.fd = fd
+        _HELD.add(lp)
         return self
 
     def release(self) -> None:
@@ -89,6 +93,7 @@ class WriterLock:
         the lock: a process that opened the file meanwhile sees it gone and starts over."""
         if self.fd is None:
             return
+        _HELD.discard(lock_path(self.path))
         try:
             if failure_note(self.path) is None:
                 lp = lock_path(self.path)
@@ -132,6 +137,11 @@ def is_locked(path) -> bool:
         return False
     finally:
         os.close(fd)
+
+
+def held_here(path) -> bool:
+    """True if this process holds the writer lock of ``path`` (a ``WriterLock``)."""
+    return lock_path(path) in _HELD
 
 
 def note_failure(path, message: str) -> None:

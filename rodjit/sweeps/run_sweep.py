@@ -240,11 +240,14 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                                   f"was: free space, then run the same command again",
                                   exc.cause) from None
         else:
+            created = False
             try:
                 with deferred_signals():  # a signal raised inside h5py would garble the layout
                     sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
-            except BaseException as exc:  # cut short (a signal, the disk): leave no part
-                Path(output).unlink(missing_ok=True)
+                    created = True
+            except BaseException as exc:  # cut short (a signal, the disk): no file is left
+                if created:               # (a signal that came while it was created)
+                    Path(output).unlink(missing_ok=True)
                 executor.close(cancel=True)
                 if isinstance(exc, WriteFailed):
                     raise WriteFailed(f"cannot create {str(output)!r}: {exc}; nothing was "
@@ -252,6 +255,11 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                 raise
     return _write_sweep(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start, batch_size)
+
+
+def _points(results) -> int:
+    """The points of a list of results (PointResults and BatchResults)."""
+    return sum(np.size(r.index) for r in results)
 
 
 def _remove_unreported(runs_dir: Path, grid: Grid, todo, cols) -> None:
@@ -275,7 +283,7 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
     if output is not None and not own:      # a run file failed: the sweep file may not
         try:
             sweep_file.write_results(output, batch)
-            kept += len(batch)
+            kept += _points(batch)
             sweep_file.finish(output, "failed", f"writing {what} failed: {cause}")
         except WriteFailed as exc:
             own, cause = True, f"{cause} (and writing {str(output)!r}: {exc})"
@@ -373,7 +381,7 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
                               or (len(batch) >= BATCH_ROWS and not busy)):
                     try:
                         sweep_file.write_results(output, batch, wait=BUSY_WAIT)
-                        written += len(batch)
+                        written += _points(batch)
                         batch = []
                         busy = False
                     except FileBusy:   # a reader holds the file: keep them, retry later
@@ -418,7 +426,7 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
         if output is not None:
             try:
                 sweep_file.write_results(output, batch)
-                written += len(batch)
+                written += _points(batch)
                 batch = []
                 sweep_file.finish(output, status, message if status != "interrupted" else
                                   resume_note(message, output))
