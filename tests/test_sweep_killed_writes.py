@@ -159,3 +159,42 @@ def test_sigkill_in_each_phase_of_the_sweep_file(tmp_path, reference, phase):
 def test_sigkill_at_20_moments_of_the_sweep_file(tmp_path, reference, draw):
     _killed_then_resumed(tmp_path, reference, _draw(reference[1], 20, False)[draw])
 
+
+def test_a_file_an_earlier_rodjit_left_open_is_named_so_and_overwritten(tmp_path):
+    """What an earlier rodjit left when killed while it wrote a sweep file (HDF5's "open
+    for writing" flag set, nothing to undo, its writer lock file naming it): ``info`` and
+    ``--resume`` say so in one line (exit 2), ``--overwrite`` replaces it; the same file
+    without a dead rodjit writer's lock file is not replaced."""
+    import h5py
+    from rodjit.output.lock import WriterLock
+
+    out = tmp_path / "s.h5"
+    with h5py.File(out, "w", libver=("v110", "v110")) as f:
+        f.attrs["rodjit_kind"] = "sweep"
+    pid = os.fork()
+    if pid == 0:                   # the writer of before: its lock, the file open, killed
+        try:
+            WriterLock(out).acquire()
+            f = h5py.File(out, "r+", libver=("v110", "v110"))
+            f.attrs["status"] = "running"
+            f.flush()
+            os.kill(os.getpid(), signal.SIGKILL)
+        finally:
+            os._exit(3)
+    assert os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1]) == -signal.SIGKILL
+    for args in (["info", out], ["sweep", "--resume", "-o", out]):
+        r = invoke(*args)
+        assert r.exit_code == 2, r.output
+        assert "was left open for writing by a process that stopped" in r.output, r.output
+        assert len(r.output.strip().splitlines()) == 1, r.output
+    keep = out.read_bytes()
+    lock = tmp_path / ".s.h5.lock"
+    held = lock.read_bytes()
+    lock.unlink()                  # no rodjit writer died on it: someone else's file
+    r = invoke(*ARGS[:-2], "-o", out, "--overwrite")
+    assert r.exit_code == 2 and "replaces only rodjit sweep files" in r.output, r.output
+    assert out.read_bytes() == keep
+    lock.write_bytes(held)
+    r = invoke(*ARGS[:-2], "-o", out, "--overwrite")
+    assert r.exit_code == 0, r.output
+    assert rodjit.load_sweep(out).status == "completed"

@@ -24,10 +24,11 @@ from .abandoned import abandon, abandoned, quiet_disk_errors
 from .cf import LIBVER
 from .errors import OutputNotRegular, OutputOtherKind, WriteFailed
 from .journal import recover
-from .lock import FileBusy, is_link, is_locked
+from .lock import FileBusy, held_here, is_link, is_locked, left_behind
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
-__all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileBusy", "OutputExists",
+__all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileLeftOpen", "FileBusy",
+           "OutputExists",
            "OutputNotRegular", "OutputOtherKind", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
@@ -69,6 +70,47 @@ class FileCutShort(NotARunFile):
 
     def __reduce__(self):
         return type(self), (self.path, self.size, self.stored)
+
+
+class FileLeftOpen(NotARunFile):
+    """An HDF5 file whose writer stopped (killed) while it had the file open for writing,
+    outside SWMR mode, and which nothing undoes: HDF5 refuses to open it ("already open
+    for write"), and what clearing that flag would show is not what was written.  rodjit's
+    own files are never left so (run files are written in SWMR mode, sweep files through
+    ``output.journal``); a sweep file of an earlier rodjit killed while it wrote is, and
+    ``check_output`` lets ``--overwrite`` replace it when its writer lock says a rodjit
+    writer died on it (``lock.left_behind``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (``path``, a str).
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = str(path)
+        super().__init__(f"{self.path!r} was left open for writing by a process that stopped "
+                         f"before closing it (killed while it wrote) and cannot be read; write "
+                         f"it again (with --overwrite, if rodjit wrote it)")
+
+    def __reduce__(self):
+        return type(self), (self.path,)
+
+
+_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def left_open(path) -> bool:
+    """Whether the file at ``path`` is HDF5 with a superblock (version 2 or 3, at the
+    start) that still says "open for writing", not in SWMR mode: its writer never closed
+    it (``FileLeftOpen``)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(12)
+    except OSError:
+        return False
+    return (len(head) == 12 and head[:8] == _SIGNATURE and head[8] in (2, 3)
+            and head[11] & 0x01 != 0 and head[11] & 0x04 == 0)
 
 
 class OutputExists(ValueError):
@@ -119,6 +161,8 @@ def open_file(path) -> h5py.File:
     try:
         return h5py.File(path, "r", swmr=True)
     except OSError as exc:
+        if left_open(path) and (held_here(path) or not is_locked(path)):   # its writer died
+            raise FileLeftOpen(path) from None
         raise _unopenable(path, exc) from None
 
 
@@ -257,7 +301,8 @@ def is_live(path, lock: bool = True) -> bool:
 def check_output(path, overwrite: bool, kind: str | None = None, held: bool = False) -> Path:
     """Raise ValueError (one line) unless ``path`` can be created or replaced: its directory
     exists and is writable, it is not the file of a live writer, and (given ``kind``) an
-    existing file is replaced only if it is a rodjit file of that kind (or empty): never a
+    existing file is replaced only if it is a rodjit file of that kind, or empty, or one a
+    rodjit writer died on before it could be read (``FileLeftOpen``): never a
     configuration, an image or anyone else's data.  ``held``: the caller holds the writer
     lock of ``path`` (``output.lock``)."""
     path = Path(path)
@@ -286,8 +331,11 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
             raise FileBusy(f"output file {str(path)!r} is being written by a running "
                            f"rodjit process; stop it before replacing the file")
         if kind is not None and path.stat().st_size > 0:
+            found: str | None
             try:
                 found = file_kind(path)
+            except FileLeftOpen:        # replaced only if a rodjit writer died on it
+                found = kind if left_behind(path) else None
             except (ValueError, OSError):
                 found = None
             if found != kind:
