@@ -100,10 +100,10 @@ def test_a_refused_write_keeps_exactly_the_points_written_before(
             super().__init__(path)
             opened.append(self)
 
-        def _save(self, start, end):
+        def _save(self, start, end, data=None):
             if len(opened) == 1 + fail_at:      # (the first: the file's creation)
                 raise OSError(errno.ENOSPC, "No space left on device")
-            super()._save(start, end)
+            super()._save(start, end, data)
 
     monkeypatch.setattr(sweep_file, "Journaled", Refusing)
     out = tmp_path / "s.h5"

@@ -226,3 +226,32 @@ def test_a_file_killed_while_it_is_created_is_not_there_or_is_the_old_one(tmp_pa
             else:
                 assert not path.exists()
             path.unlink(missing_ok=True)
+
+
+def test_the_journal_copies_the_pages_a_write_changes_not_the_chunks_it_rewrites(tmp_path):
+    """HDF5 writes whole chunks back for a few rows: a batch of 50 points into a file of
+    10⁴ rewrites every summary column's chunk (80 KB each), the journal keeps only the pages
+    that change, and records a page of zeros without its bytes."""
+    path = tmp_path / "s.h5"
+    sweep_file.create(path, rodjit.Config(), Grid.from_spec({"rod.mu": list(range(10_000))}),
+                      command="test", attrs=ATTRS)
+    sweep_file.write_batch(path, batch(range(50)))
+    written, kept = [], []
+    original = journal.Journaled.write, journal.Journaled.end
+
+    def write(self, data):
+        written.append(len(memoryview(data).cast("B")))
+        return original[0](self, data)
+
+    def end(self, ok):
+        kept.append(self.jpath.stat().st_size)
+        return original[1](self, ok)
+
+    journal.Journaled.write, journal.Journaled.end = write, end
+    try:
+        sweep_file.write_batch(path, batch(range(50, 100), rows=2000))
+    finally:
+        journal.Journaled.write, journal.Journaled.end = original
+    assert sum(written) > 2_000_000
+    assert kept[0] < sum(written) / 20, (kept, sum(written))
+    assert list(rodjit.load_sweep(path)["status"][:101]) == ["completed"] * 100 + ["pending"]
