@@ -40,7 +40,6 @@ pages it changes (the summary chunks of its points, a few HDF5 structures).
 from __future__ import annotations
 
 import hashlib
-import os
 import time
 from contextlib import contextmanager
 
@@ -147,12 +146,12 @@ def _writing(path, wait: float = LOCK_WAIT, mode: str = "r+"):
             raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
         try:
             yield f
-        finally:
-            try:
-                f.close()
-            except Exception as exc:    # HDF5 could not close it: keep its handles alive
-                abandon(f, exc.__traceback__)
-                raise
+        except BaseException:
+            _close(f)                   # (a failure to close is the lesser news)
+            raise
+        failed = _close(f)
+        if failed is not None:
+            raise failed
     except BaseException:
         j.end(ok=False)
         if j.failure is None:
@@ -163,7 +162,19 @@ def _writing(path, wait: float = LOCK_WAIT, mode: str = "r+"):
         _refused(j.failure)
 
 
+def _close(f: h5py.File) -> Exception | None:
+    """Close ``f``; what closing raised, its handles then kept alive (``abandon``: HDF5
+    could not close it, and trying again at exit would print or crash)."""
+    try:
+        f.close()
+    except Exception as exc:
+        abandon(f, exc.__traceback__)
+        return exc
+    return None
+
+
 def _refused(exc: OSError):
+    """Raise WriteFailed for the write the disk refused (``exc``), its cause the message."""
     cause = disk_cause(exc) or exc.strerror or str(exc)
     raise WriteFailed(cause, cause) from None
 
@@ -180,8 +191,9 @@ def header_digest(base_toml: str, grid_json: str, n_points: int) -> str:
 
 
 def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
-    """A new sweep file: attributes, every summary column with all rows pending.
-    WriteFailed if the disk refuses (the caller removes the partial file)."""
+    """A new sweep file: attributes, every summary column with all rows pending.  It takes
+    its name only once whole (``journal.creating``); WriteFailed if the disk refuses, and
+    nothing is left."""
     n = len(grid)
     with creating(path) as tmp, _writing(tmp, mode="w") as f:
         for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
