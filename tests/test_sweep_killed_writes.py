@@ -10,7 +10,8 @@ dataset, a new dataset, closing the file) inside a sweep file's ``create``,
 ``write_batch`` or ``finish``, killed from inside the process (SIGKILL to itself) so that
 it lands there and nowhere else.  Every point is its own write (batches of one point, a
 flush interval of 1 ms), so a small grid of quick points makes many writes.  The default
-suite kills once in each of the three phases; ``-m slow`` at 20 moments over all of them.
+suite kills once in each of the three phases; ``-m slow`` at 20 moments, the phases in
+turn.
 """
 from __future__ import annotations
 
@@ -140,25 +141,32 @@ def _killed_then_resumed(tmp_path, reference, k: int) -> None:
     same_table(table, ref)
 
 
-def _draw(phases, n: int, by_phase: bool) -> list[int]:
-    """The 1-based write calls to kill at: one per phase, or ``n`` over all of them."""
+PHASES = ("create", "write_batch", "finish")
+
+
+def _draw(phases, n: int) -> list[int]:
+    """``n`` distinct write calls to kill at (1-based), drawn from the phases in turn (a
+    phase's calls may be few: ``finish`` makes three), skipping a phase drawn out."""
     rng = np.random.default_rng(SEED)
-    if by_phase:
-        return [int(rng.choice([k + 1 for k, p in enumerate(phases) if p == phase]))
-                for phase in ("create", "write_batch", "finish")]
-    return sorted(int(k) + 1 for k in rng.choice(len(phases), n, replace=False))
+    calls = {p: rng.permutation([k + 1 for k, q in enumerate(phases) if q == p]).tolist()
+             for p in PHASES}
+    out: list[int] = []
+    while len(out) < n:
+        for p in PHASES:
+            if calls[p] and len(out) < n:
+                out.append(int(calls[p].pop(0)))
+    return out
 
 
-@pytest.mark.parametrize("phase", range(3), ids=["create", "write_batch", "finish"])
+@pytest.mark.parametrize("phase", range(3), ids=PHASES)
 def test_sigkill_in_each_phase_of_the_sweep_file(tmp_path, reference, phase):
-    _killed_then_resumed(tmp_path, reference, _draw(reference[1], 3, True)[phase])
+    _killed_then_resumed(tmp_path, reference, _draw(reference[1], 3)[phase])
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("draw", range(20))
 def test_sigkill_at_20_moments_of_the_sweep_file(tmp_path, reference, draw):
-    _killed_then_resumed(tmp_path, reference, _draw(reference[1], 20, False)[draw])
-
+    _killed_then_resumed(tmp_path, reference, _draw(reference[1], 20)[draw])
 
 def test_a_file_an_earlier_rodjit_left_open_is_named_so_and_overwritten(tmp_path):
     """What an earlier rodjit left when killed while it wrote a sweep file (HDF5's "open
