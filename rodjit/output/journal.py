@@ -28,8 +28,8 @@ whatever moment the writer died at.  Recovering is repeatable: killed while it c
 journal is still there, and the next recovery starts again.  Every reader of rodjit's files
 recovers first (``h5files.open_file``), and a writer before it writes (``Journaled``), so no
 command and no user needs to know about it.  Measured the same way as above: 120 kills,
-36 inside a write, every file read back exactly the points written before the write the
-kill cut.  The cost, a write at most once a second (``flush_interval``): a batch of 50
+40 inside a write, every file read back right (the points written before the write the
+kill cut, as the uninterrupted sweep has them).  The cost, a write at most once a second (``flush_interval``): a batch of 50
 points into a file of 10⁴ points takes 34 ms instead of 26 ms, into one of 10⁵ points 48 ms
 instead of 33 ms, a batch of one point into a file of 120 points 28 ms instead of 21 ms
 (medians of three, the same machine), and its journal holds 70 to 170 KB whatever the
