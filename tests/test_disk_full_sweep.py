@@ -5,19 +5,24 @@ the cause, no Traceback from the parent or the workers, the sweep file absent (i
 creation was cut) or readable by ``info`` with every point written before, no run file
 that is neither complete nor resumable, and ``sweep --resume`` with space finishing the
 sweep with the results of an uncut one.  The fill levels the timing of batches decides
-are checked in-process with a reservation refused at the k-th write."""
+are checked in-process with the k-th write refused half-way; and a resume needs no more
+space than the points it writes take."""
 from __future__ import annotations
+
+import errno
+import shutil
 
 import pytest
 
 import rodjit
 from conftest import one_line, rodjit_cli
 from rodjit.output.h5files import WriteFailed
+from rodjit.output import journal
 from rodjit.output.lock import lock_path
 from rodjit.output.summary import summarize
 from rodjit.reports import info
 from rodjit.sweeps import sweep_file
-from test_sweep_driver import TIMINGS, same_values
+from test_sweep_driver import TIMINGS, _interrupt_after, same_values
 
 ARGS = ["--grid", "rod.mu=5,10", "--grid", "floor.beta=0.01,0.05", "--set", "time.t_end=0.1",
         "-q"]
@@ -59,15 +64,14 @@ def _resume_matches(out, reference, skip=TIMINGS):
     same_values(table, reference, skip)
 
 
-@pytest.mark.parametrize("level", ["creation", "layout", "a point", "last write"])
+@pytest.mark.parametrize("level", ["creation", "layout", "the points"])
 def test_a_sweep_file_at_the_size_limit_keeps_its_points_and_resumes(tmp_path, reference,
                                                                     level):
     ref, full, layout = reference
     limit = {"creation": 1000, "layout": layout // 2,
-             # room for the layout and one reservation of a point (not of several)
-             "a point": layout + sweep_file.RESERVE_BASE + sweep_file.RESERVE_POINT + 20_000,
-             # every row fits, the reservation of the last write does not
-             "last write": full + sweep_file.RESERVE_BASE // 2}[level]
+             # room for the layout, not for its first write of points (which batches the
+             # timing decides: the k-th write refused is checked in-process below)
+             "the points": layout + 1000}[level]
     out = tmp_path / "s.h5"
     r = rodjit_cli("sweep", *INLINE, "-o", out, cwd=tmp_path, limit=limit)
     table = _check_cut(r, out, "the file size limit was reached")
@@ -82,48 +86,61 @@ def test_a_sweep_file_at_the_size_limit_keeps_its_points_and_resumes(tmp_path, r
     _resume_matches(out, ref)
 
 
-def test_a_write_that_fails_despite_the_reservation_ends_in_one_line(tmp_path, reference):
-    """No reservation (as on a device that fails a write it had room for): the write fails
-    half-way through HDF5; its handles are abandoned, not closed (closing them crashed the
-    process), and the command still ends with one line and exit 1."""
-    _, _, layout = reference
-    out = tmp_path / "s.h5"
-    r = rodjit_cli("sweep", *INLINE, "-o", out, cwd=tmp_path, limit=layout + 4000,
-                   code="import rodjit.sweeps.sweep_file as s\n"
-                        "s.reserve_space = lambda path, nbytes: 0")
-    assert r.returncode == 1, r.stderr
-    assert "the file size limit was reached" in one_line(r.stderr)
-
-
 @pytest.mark.parametrize("fail_at", [1, 3, N + 1])
-def test_a_refused_reservation_keeps_exactly_the_points_written_before(
+def test_a_refused_write_keeps_exactly_the_points_written_before(
         tmp_path, reference, monkeypatch, fail_at):
-    """Each point its own write (batches of one point, flush_interval tiny): the k-th
-    reservation refused (write k <= N: the rows of point k; N + 1: closing the file) leaves
-    k - 1 points."""
+    """Each point its own write (batches of one point, flush_interval tiny): the k-th write
+    refused by the disk half-way (write k <= N: the rows of point k; N + 1: closing the
+    file) is undone and leaves k - 1 points."""
     ref = reference[0]
-    calls = []
-    reserve = sweep_file.reserve_space
+    opened = []
 
-    def refuse(path, nbytes):
-        calls.append(nbytes)
-        if len(calls) == fail_at:
-            raise WriteFailed("no space left on the device", "no space left on the device")
-        return reserve(path, nbytes)
+    class Refusing(journal.Journaled):
+        def __init__(self, path):
+            super().__init__(path)
+            opened.append(self)
 
-    monkeypatch.setattr(sweep_file, "reserve_space", refuse)
+        def _save(self, start, end, data=None):
+            if len(opened) == 1 + fail_at:      # (the first: the file's creation)
+                raise OSError(errno.ENOSPC, "No space left on device")
+            super()._save(start, end, data)
+
+    monkeypatch.setattr(sweep_file, "Journaled", Refusing)
     out = tmp_path / "s.h5"
     with pytest.raises(WriteFailed, match=rf"keeps the points written \({fail_at - 1} of "
                                           rf"{N}\).*continue with resume=True") as caught:
         rodjit.sweep(ref.base, {k: list(v) for k, v in zip(ref.grid.keys, ref.grid.values)},
                      output=out, scheduler="inline", flush_interval=1e-9, batch_size=1)
     assert caught.value.table.status == "failed"
+    assert opened[fail_at].failure is not None
     kept = rodjit.load_sweep(out)
     assert kept.counts["completed"] == fail_at - 1 and kept.status == "running"
     assert "no space left" in info(out)
-    monkeypatch.setattr(sweep_file, "reserve_space", reserve)
+    monkeypatch.undo()
     table = rodjit.sweep(output=out, resume=True, scheduler="inline")
     same_values(table, ref)
+
+
+def test_a_resume_needs_only_the_space_its_points_take(tmp_path, reference):
+    """A sweep stopped after 2 of its 4 points, continued with its file allowed to grow to
+    the size that finishing it gives (measured by finishing a copy) and no further: the
+    resume completes, asking no space beyond what it writes."""
+    ref = reference[0]
+    cut = tmp_path / "cut.h5"
+    with pytest.raises(rodjit.SweepInterrupted):
+        rodjit.sweep(ref.base, {k: list(v) for k, v in zip(ref.grid.keys, ref.grid.values)},
+                     output=cut, scheduler="inline", batch_size=1, progress=_interrupt_after(2))
+    assert rodjit.load_sweep(cut).counts["completed"] == 2
+    copy = tmp_path / "copy.h5"
+    shutil.copy(cut, copy)
+    resume = ["sweep", "--resume", "--scheduler", "inline", "--batch-size", "1", "-q", "-o"]
+    r = rodjit_cli(*resume, copy, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    finished = copy.stat().st_size
+    assert finished > cut.stat().st_size
+    r = rodjit_cli(*resume, cut, cwd=tmp_path, limit=finished)
+    assert r.returncode == 0, r.stderr
+    same_values(rodjit.load_sweep(cut), ref)
 
 
 def test_save_runs_past_the_size_limit_stops_the_sweep_cleanly(tmp_path, reference):

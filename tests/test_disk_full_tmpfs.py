@@ -109,7 +109,10 @@ def test_a_run_onto_a_disk_that_fills_keeps_its_checkpoint_and_resumes_elsewhere
 def test_a_sweep_onto_a_full_disk_resumes_once_there_is_space(tmp_path, disk):
     cfg = rodjit.Config().override({"time.t_end": 0.1})
     ref = rodjit.sweep(cfg, parse_grid_option(GRIDS), scheduler="inline")
-    filler = _fill(disk, 120_000)
+    # just the space the sweep is estimated to take (less is refused up front): not
+    # enough for its file and, while it writes its points, their journal
+    need = rodjit.plan_sweep(cfg, parse_grid_option(GRIDS), output=disk / "x.h5").sweep_bytes
+    filler = _fill(disk, int(need) + 4096)
     out = disk / "s.h5"
     r = rodjit_cli("sweep", *SWEEP, "--scheduler", "inline", "-o", out, cwd=tmp_path)
     assert r.returncode == 1, r.stderr

@@ -107,8 +107,8 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
                 grid = make_grid(grids, max_points)
             from ..sweeps import load_sweep
 
-            done = load_sweep(output)
-            if done.counts["completed"] == len(done.grid):
+            done = load_sweep(output)       # (a file whose writer was killed: recovered)
+            if done.counts["completed"] == len(done.grid) and done.status == "completed":
                 raise ValueError(f"{output!r} is already complete ({len(done.grid)} points); "
                                  f"nothing to resume")
         else:

@@ -71,16 +71,19 @@ class StopFlag:
     """While active (main thread only), SIGINT and SIGTERM record the signal instead of
     killing the process; the run stops cleanly at the next return from compiled code.
     A second signal aborts at once (KeyboardInterrupt), unless ``abort`` was set False
-    (a teardown that must not be cut).  Inside ``hold_on_exit`` the signals stay recorded
-    when it ends."""
+    (a teardown that must not be cut; ``count`` still counts it, for a teardown that waits
+    and gives up on a signal).  Inside ``hold_on_exit`` the signals stay recorded when it
+    ends."""
 
     def __init__(self, install: bool):
         self.install = install and threading.current_thread() is threading.main_thread()
         self.signum: int | None = None
+        self.count = 0          # signals received
         self.abort = True
         self._old: dict[int, Any] = {}
 
     def _handler(self, signum, frame):
+        self.count += 1
         if self.signum is not None and self.abort:
             raise KeyboardInterrupt
         if self.signum is None:

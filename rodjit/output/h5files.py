@@ -23,15 +23,17 @@ from ..config import MissingFile
 from .abandoned import abandon, abandoned, quiet_disk_errors
 from .cf import LIBVER
 from .errors import OutputNotRegular, OutputOtherKind, WriteFailed
-from .lock import FileBusy, is_link, is_locked
+from .journal import recover
+from .lock import FileBusy, held_here, is_link, is_locked, left_behind
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
-__all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileBusy", "OutputExists",
+__all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileLeftOpen", "FileBusy",
+           "OutputExists",
            "OutputNotRegular", "OutputOtherKind", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
            "WriteFailed", "disk_cause", "truncation", "repair_truncated", "abandon",
-           "abandoned", "reserve_space", "quiet_disk_errors", "damaged"]
+           "abandoned", "quiet_disk_errors", "damaged"]
 
 
 class NotARunFile(ValueError):
@@ -70,6 +72,47 @@ class FileCutShort(NotARunFile):
         return type(self), (self.path, self.size, self.stored)
 
 
+class FileLeftOpen(NotARunFile):
+    """An HDF5 file whose writer stopped (killed) while it had the file open for writing,
+    outside SWMR mode, and which nothing undoes: HDF5 refuses to open it ("already open
+    for write"), and what clearing that flag would show is not what was written.  rodjit's
+    own files are never left so (run files are written in SWMR mode, sweep files through
+    ``output.journal``); a sweep file of an earlier rodjit killed while it wrote is, and
+    ``check_output`` lets ``--overwrite`` replace it when its writer lock says a rodjit
+    writer died on it (``lock.left_behind``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file (``path``, a str).
+    """
+
+    def __init__(self, path: str | os.PathLike[str]) -> None:
+        self.path = str(path)
+        super().__init__(f"{self.path!r} was left open for writing by a process that stopped "
+                         f"before closing it (killed while it wrote) and cannot be read; write "
+                         f"it again (with --overwrite, if rodjit wrote it)")
+
+    def __reduce__(self):
+        return type(self), (self.path,)
+
+
+_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def left_open(path) -> bool:
+    """Whether the file at ``path`` is HDF5 with a superblock (version 2 or 3, at the
+    start) that still says "open for writing", not in SWMR mode: its writer never closed
+    it (``FileLeftOpen``)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(12)
+    except OSError:
+        return False
+    return (len(head) == 12 and head[:8] == _SIGNATURE and head[8] in (2, 3)
+            and head[11] & 0x01 != 0 and head[11] & 0x04 == 0)
+
+
 class OutputExists(ValueError):
     """The output file exists and overwriting was not asked for.
 
@@ -91,7 +134,8 @@ class OutputExists(ValueError):
 
 def open_file(path) -> h5py.File:
     """Open a rodjit file read-only: plainly if it was closed, in SWMR-read mode if a writer
-    has it open or was killed before closing it (both leave the SWMR flags set)."""
+    has it open or was killed before closing it (both leave the SWMR flags set).  A journaled
+    write its writer did not finish (a sweep file's, ``output.journal``) is undone first."""
     path = Path(path)
     mode = _mode(path)
     if mode is None:
@@ -102,6 +146,11 @@ def open_file(path) -> h5py.File:
         raise NotARunFile(f"{str(path)!r} is a {_special(mode)}, not a rodjit file")
     if not os.access(path, os.R_OK):
         raise NotARunFile(f"{str(path)!r} is not readable")
+    try:
+        recover(path)
+    except OSError as exc:
+        raise NotARunFile(f"{str(path)!r} was being written when its writer stopped, and "
+                          f"undoing that write failed: {exc.strerror or exc}") from None
     if not h5py.is_hdf5(path):
         raise NotARunFile(f"{str(path)!r} is not a rodjit file (not an HDF5 file)")
     try:
@@ -112,6 +161,8 @@ def open_file(path) -> h5py.File:
     try:
         return h5py.File(path, "r", swmr=True)
     except OSError as exc:
+        if left_open(path) and (held_here(path) or not is_locked(path)):   # its writer died
+            raise FileLeftOpen(path) from None
         raise _unopenable(path, exc) from None
 
 
@@ -250,7 +301,8 @@ def is_live(path, lock: bool = True) -> bool:
 def check_output(path, overwrite: bool, kind: str | None = None, held: bool = False) -> Path:
     """Raise ValueError (one line) unless ``path`` can be created or replaced: its directory
     exists and is writable, it is not the file of a live writer, and (given ``kind``) an
-    existing file is replaced only if it is a rodjit file of that kind (or empty): never a
+    existing file is replaced only if it is a rodjit file of that kind, or empty, or one a
+    rodjit writer died on before it could be read (``FileLeftOpen``): never a
     configuration, an image or anyone else's data.  ``held``: the caller holds the writer
     lock of ``path`` (``output.lock``)."""
     path = Path(path)
@@ -279,8 +331,11 @@ def check_output(path, overwrite: bool, kind: str | None = None, held: bool = Fa
             raise FileBusy(f"output file {str(path)!r} is being written by a running "
                            f"rodjit process; stop it before replacing the file")
         if kind is not None and path.stat().st_size > 0:
+            found: str | None
             try:
                 found = file_kind(path)
+            except FileLeftOpen:        # replaced only if a rodjit writer died on it
+                found = kind if left_behind(path) else None
             except (ValueError, OSError):
                 found = None
             if found != kind:
@@ -318,29 +373,6 @@ def disk_cause(exc: BaseException | None) -> str | None:
             return _CAUSES[int(m.group(1))]
         exc, seen = exc.__cause__ or exc.__context__, seen + 1
     return None
-
-
-def reserve_space(path, nbytes: int) -> int:
-    """Allocate ``nbytes`` of disk space at the end of the closed HDF5 file ``path`` before
-    it is opened for a write, so that the write cannot run out of space (ENOSPC) or past a
-    file-size limit (EFBIG) half-way, which would leave the file inconsistent; HDF5 gives
-    back what it did not use when it closes the file.  Returns the file's size before; a
-    refused reservation raises WriteFailed with the file as it was."""
-    size = os.path.getsize(path)
-    fd = os.open(path, os.O_RDWR | os.O_CLOEXEC)
-    try:
-        os.posix_fallocate(fd, size, max(int(nbytes), 1))
-    except OSError as exc:
-        try:
-            os.ftruncate(fd, size)        # give back what was allocated of it
-        except OSError:
-            pass
-        if exc.errno in _CAUSES:
-            raise WriteFailed(_CAUSES[exc.errno], _CAUSES[exc.errno]) from None
-        # a file system that cannot reserve (EINVAL, ...): write without the reservation
-    finally:
-        os.close(fd)
-    return size
 
 
 def truncation(path) -> tuple[int, int] | None:

@@ -11,7 +11,8 @@ The lock file holds the writer's process id.  The writer removes it before it le
 (a process that opened it meanwhile finds, once it has the lock, that the path no longer
 names its file, and starts over), except when it records why a write failed
 (``note_failure``, for ``info``).  The kernel drops the lock when the process dies, whatever
-the way (SIGKILL included), so a lock file left behind never blocks anyone.
+the way (SIGKILL included), so a lock file left behind never blocks anyone; it says that
+a writer died holding it (``left_behind``).
 """
 from __future__ import annotations
 
@@ -19,7 +20,12 @@ import fcntl
 import os
 from pathlib import Path
 
-__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked", "note_failure", "failure_note"]
+__all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked", "held_here", "left_behind",
+           "note_failure", "failure_note"]
+
+# the lock files this process holds (``held_here``) -> the process id a writer that died
+# left in it, found when it was taken ("" if none: ``left_behind``)
+_HELD: dict[Path, str] = {}
 
 
 class FileBusy(ValueError):
@@ -76,12 +82,14 @@ class WriterLock:
             except FileNotFoundError:
                 pass
             os.close(fd)
+        left = _holder(fd)         # a writer that died holding it (the lock is ours now)
         try:                       # who holds it, for the message a second writer gets
             os.ftruncate(fd, 0)
             os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
         except OSError:
             pass
         self.fd = fd
+        _HELD[lp] = left
         return self
 
     def release(self) -> None:
@@ -89,6 +97,7 @@ class WriterLock:
         the lock: a process that opened the file meanwhile sees it gone and starts over."""
         if self.fd is None:
             return
+        _HELD.pop(lock_path(self.path), None)
         try:
             if failure_note(self.path) is None:
                 lp = lock_path(self.path)
@@ -130,6 +139,30 @@ def is_locked(path) -> bool:
         return True
     except OSError:
         return False
+    finally:
+        os.close(fd)
+
+
+def held_here(path) -> bool:
+    """True if this process holds the writer lock of ``path`` (a ``WriterLock``)."""
+    return lock_path(path) in _HELD
+
+
+def left_behind(path) -> bool:
+    """True if a rodjit writer of ``path`` died holding its lock: the lock file, which a
+    writer removes when it lets go, names a process (found so when this process took the
+    lock, or now, with no process holding it)."""
+    lp = lock_path(path)
+    if lp in _HELD:
+        return bool(_HELD[lp])
+    if is_locked(path):
+        return False
+    try:
+        fd = os.open(lp, os.O_RDONLY | os.O_CLOEXEC)
+    except OSError:
+        return False
+    try:
+        return bool(_holder(fd))
     finally:
         os.close(fd)
 

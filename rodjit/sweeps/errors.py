@@ -18,13 +18,19 @@ from ..output.errors import WriteFailed
 
 __all__ = ["TooManyPoints", "BadGridItem", "SweepFileTooLarge", "RunsDirUnusable",
            "ResumeMismatch", "SweepWriteFailed", "DaskMissing", "FormatNotContinued",
-           "resume_note"]
+           "FileHeldOpen", "resume_note"]
 
 
 def resume_note(message: str, output) -> str:
     """The status message an interrupted sweep file keeps: ``message`` and the command that
     continues it (as every sweep file written since format 1 says)."""
     return f"{message}; continue with: rodjit sweep --resume -o {output}"
+
+
+class FileHeldOpen(UserWarning):
+    """Another process holds the sweep file open (a reader: h5py in a notebook, a viewer),
+    which keeps the sweep from writing to it: the sweep goes on, holds its finished points
+    and writes them once the file is let go (waiting for that at its end)."""
 
 
 class TooManyPoints(ValueError):

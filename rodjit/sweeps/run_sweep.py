@@ -4,13 +4,16 @@ Everything is validated before anything is written or started.  Results stream b
 the executor in the order points finish; the parent is the only writer of the sweep file,
 which it updates in batches (at least every ``flush_interval`` seconds, and every
 BATCH_ROWS results).  SIGINT/SIGTERM stop the workers, and the file keeps every finished
-point; ``resume=True`` runs only the points that are still pending or failed.
+point; ``resume=True`` runs only the points that are still pending or failed.  Another
+process holding the file open (a reader) delays the writes, never the points: they are
+held until the file is let go, and the sweep waits for that at its end (``_when_free``).
 """
 from __future__ import annotations
 
 import os
 import signal
 import time
+import warnings
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -32,14 +35,14 @@ from .plan import check_runs_dir, plan_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
-from .errors import ResumeMismatch, SweepWriteFailed, resume_note
+from .errors import FileHeldOpen, ResumeMismatch, SweepWriteFailed, resume_note
 from .outcome import SweepFailed, SweepInterrupted, SweepProgress, sweep_stats
 from .sweep_table import SweepTable
 
 __all__ = ["sweep", "SweepInterrupted", "SweepFailed", "SweepProgress"]
 
 SWEEP_FLUSH_INTERVAL = 1.0   # seconds of wall time between writes of finished points
-BUSY_WAIT = 1.0        # while points run, a write waits this long for readers, then retries
+BUSY_WAIT = 1.0        # a write waits this long for a reader to let go, then tries again later
 BATCH_ROWS = 256       # results held before a write at most (unless a reader holds the file)
 ENGINE = True          # False: every point alone through ``point.run_point`` (benchmarks)
 
@@ -240,11 +243,14 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                                   f"was: free space, then run the same command again",
                                   exc.cause) from None
         else:
+            created = False
             try:
                 with deferred_signals():  # a signal raised inside h5py would garble the layout
                     sweep_file.create(output, base, grid, command=command, attrs=run_attrs)
-            except BaseException as exc:  # cut short (a signal, the disk): leave no part
-                Path(output).unlink(missing_ok=True)
+                    created = True
+            except BaseException as exc:  # cut short (a signal, the disk): no file is left
+                if created:               # (a signal that came while it was created)
+                    Path(output).unlink(missing_ok=True)
                 executor.close(cancel=True)
                 if isinstance(exc, WriteFailed):
                     raise WriteFailed(f"cannot create {str(output)!r}: {exc}; nothing was "
@@ -252,6 +258,11 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
                 raise
     return _write_sweep(table, executor, todo, runs_dir, progress, command, handle_signals,
                   flush_interval, t_start, batch_size)
+
+
+def _points(results) -> int:
+    """The points of a list of results (PointResults and BatchResults)."""
+    return sum(np.size(r.index) for r in results)
 
 
 def _remove_unreported(runs_dir: Path, grid: Grid, todo, cols) -> None:
@@ -275,7 +286,7 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
     if output is not None and not own:      # a run file failed: the sweep file may not
         try:
             sweep_file.write_results(output, batch)
-            kept += len(batch)
+            kept += _points(batch)
             sweep_file.finish(output, "failed", f"writing {what} failed: {cause}")
         except WriteFailed as exc:
             own, cause = True, f"{cause} (and writing {str(output)!r}: {exc})"
@@ -292,6 +303,39 @@ def _disk_failed(table: SweepTable, output, batch, kept: int, disk) -> None:
     table.message = str(failure)
     failure.table = table
     raise failure
+
+
+def _say_held(output) -> None:
+    warnings.warn(FileHeldOpen(
+        f"{str(output)!r} is held open by another process (close it there: h5py, a "
+        f"notebook, a viewer); the sweep goes on and writes its finished points once the "
+        f"file is let go"), stacklevel=2)
+
+
+def _when_free(write: Callable[[], object], table: SweepTable, points: int, stop,
+               said: bool) -> bool:
+    """Run ``write`` (a write of the sweep file at the sweep's end), waiting as long as
+    another process holds the file open (said once, FileHeldOpen, unless ``said``
+    already; returns whether it is said).  A SIGINT or SIGTERM while it waits ends the
+    wait: SweepInterrupted, the ``points`` finished points held for the file not written
+    (``resume=True`` runs them again)."""
+    seen = stop.count
+    while True:
+        try:
+            write()
+            return said
+        except FileBusy:
+            if not said:
+                _say_held(table.path)
+                said = True
+            if stop.count != seen:
+                signum = stop.signum
+                table.status = "interrupted"
+                table.message = (f"interrupted by {signal.Signals(signum).name} while "
+                                 f"waiting for another process to let go of {table.path!r}; "
+                                 + (f"{points} finished points were not written" if points
+                                    else "its status was not written"))
+                raise SweepInterrupted(table.message, signum, table, table.path) from None
 
 
 def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
@@ -371,12 +415,15 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
                     break
                 if batch and (time.monotonic() - last >= flush_interval
                               or (len(batch) >= BATCH_ROWS and not busy)):
-                    try:
-                        sweep_file.write_results(output, batch, wait=BUSY_WAIT)
-                        written += len(batch)
+                    try:      # held by a reader: one try each interval, the points go on
+                        sweep_file.write_results(output, batch,
+                                                 wait=0.0 if busy else BUSY_WAIT)
+                        written += _points(batch)
                         batch = []
                         busy = False
                     except FileBusy:   # a reader holds the file: keep them, retry later
+                        if not busy:
+                            _say_held(output)
                         busy = True
                     except WriteFailed as exc:
                         status, disk = "failed", (repr(str(output)), str(exc), True)
@@ -417,11 +464,14 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
         table.status, table.message = status, message
         if output is not None:
             try:
-                sweep_file.write_results(output, batch)
-                written += len(batch)
+                busy = _when_free(lambda: sweep_file.write_results(output, batch,
+                                                                   wait=BUSY_WAIT),
+                                  table, _points(batch), stop, busy)
+                written += _points(batch)
                 batch = []
-                sweep_file.finish(output, status, message if status != "interrupted" else
-                                  resume_note(message, output))
+                _when_free(lambda: sweep_file.finish(
+                    output, status, message if status != "interrupted" else
+                    resume_note(message, output), wait=BUSY_WAIT), table, 0, stop, busy)
             except WriteFailed as exc:
                 _disk_failed(table, output, batch, written + done0,
                              (repr(str(output)), str(exc), True))

@@ -26,17 +26,20 @@ Every row exists from the start, ``status = "pending"`` until its point reports.
 process is the only writer; it opens the file for each batch of results and closes it
 again, so between batches the file is complete on disk and other processes can read it.
 
-The disk refusing a write (full, a file-size limit) must not cut a batch half-way: HDF5
-would leave the file's structures inconsistent.  Each write therefore first reserves more
-disk space at the end of the file than it can use (``h5files.reserve_space``); if the disk
-refuses that, WriteFailed is raised with the file exactly as it was, every point written
-before kept.  A write that fails anyway (an I/O error) leaves its handles open
-(``output.abandoned``): closing a file HDF5 cannot write only makes matters worse.
+Whatever moment the writer dies at, the file keeps what it held before the write it was
+in: a new file is written beside its name and renamed into place once whole
+(``journal.creating``), and every later write (a batch, reopening, finishing) goes through
+an undo journal (``journal.Journaled``), which a reader or the next writer plays back
+(``journal.recover``) if the writer died in the middle.  The superblock's "open for
+writing" flag that a killed HDF5 writer leaves set is part of what is undone, so no tool
+is needed.  The same holds when the disk refuses a write (full, a file-size limit): the
+write is rolled back, WriteFailed raised, and every point written before is kept.  The
+only disk space a write needs beyond what the file grows by is its journal: a copy of the
+pages it changes (the summary chunks of its points, a few HDF5 structures).
 """
 from __future__ import annotations
 
 import hashlib
-import os
 import time
 from contextlib import contextmanager
 
@@ -46,8 +49,9 @@ import numpy as np
 from ..config import Config, field_spec
 from ..output import cf
 from ..output.h5files import (FileBusy, NotARunFile, WriteFailed, abandon, check_kind,
-                              damaged, disk_cause, history_with, now, open_file, reserve_space,
-                              stamp_writer, writer_attrs)
+                              damaged, disk_cause, history_with, now, open_file, stamp_writer,
+                              writer_attrs)
+from ..output.journal import Journaled, creating
 from ..output.run_layout import OLD_BOUNCE_FILL
 from ..records.bounces import empty_bounces
 from ..records.columns import BOOL_COLUMNS, BOUNCE_COLUMNS
@@ -84,10 +88,6 @@ RAGGED = {"bounce_start": "first row of the point's bounces in /bounces (-1: non
 BOUNCE_CHUNK = 4096     # rows per chunk of the bounce table
 STATUSES = ("running", "completed", "interrupted", "failed")
 LOCK_WAIT = 30.0        # seconds to wait for a reader to release the file before failing
-# disk space reserved before a write (bytes): the file grows by less, measured at ~11 KiB a
-# point with a short bounce table (its arrays are counted twice on top)
-RESERVE_BASE = 64 * 1024
-RESERVE_POINT = 32 * 1024
 
 # the root attributes without which a sweep file is not complete
 REQUIRED_ATTRS = ("base_config_toml", "grid", "n_points", "status")
@@ -112,51 +112,71 @@ def key_columns(grid: Grid) -> dict[str, np.ndarray]:
     return out
 
 
-def _open(path, mode: str, wait: float = LOCK_WAIT) -> h5py.File:
-    """Open for writing, waiting up to ``wait`` seconds for a reader to let go."""
+def _journaled(path, wait: float) -> Journaled:
+    """The file open for a journaled write, waiting up to ``wait`` seconds for a reader to
+    let go (FileBusy after that)."""
     deadline = time.monotonic() + wait
     while True:
         try:
-            return h5py.File(path, mode, libver=cf.LIBVER)
+            return Journaled(path)
+        except FileBusy:
+            if time.monotonic() > deadline:
+                raise FileBusy(f"{str(path)!r} is held open by another process; close it "
+                               f"there and retry") from None
+            time.sleep(0.05)
         except OSError as exc:
             cause = disk_cause(exc)
             if cause is not None:
                 raise WriteFailed(cause, cause) from None
-            if "lock" not in str(exc) or time.monotonic() > deadline:
-                if "lock" in str(exc):
-                    raise FileBusy(f"{str(path)!r} is held open by another process; "
-                                   f"close it there and retry") from None
-                raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
-            time.sleep(0.05)
+            raise ValueError(f"cannot open {str(path)!r} for writing: "
+                             f"{exc.strerror or exc}") from None
 
 
 @contextmanager
-def _writing(path, mode: str, wait: float = LOCK_WAIT, reserve: int = 0):
-    """``with _writing(path, mode) as f:`` the file open for writing, closed at the end;
-    ``reserve`` bytes of disk space are reserved first (not for a new file).  A write the
-    disk refuses raises WriteFailed (its message: the cause), and the file's handles are
-    abandoned rather than closed."""
-    size = reserve_space(path, reserve) if reserve else None
+def _writing(path, wait: float = LOCK_WAIT, mode: str = "r+"):
+    """``with _writing(path) as f:`` the sweep file open for writing (``mode="w"``: laid
+    out anew), closed at the end: all of the write or, if anything fails (an exception, a
+    write the disk refuses), none of it (``journal.Journaled``).  A refused write raises
+    WriteFailed (its message: the cause)."""
+    j = _journaled(path, wait)
     try:
-        f = _open(path, mode, wait)
-    except BaseException:
-        if size is not None:          # give the reservation back
-            try:
-                os.truncate(path, size)
-            except OSError:
-                pass
-        raise
-    try:
-        yield f
-        f.close()
-    except BaseException as exc:
-        cause = disk_cause(exc)
-        if cause is None:
-            if f.id.valid:
-                f.close()
+        try:
+            f = h5py.File(j, mode, libver=cf.LIBVER)
+        except OSError as exc:
+            raise ValueError(f"cannot open {str(path)!r} for writing: {exc}") from None
+        try:
+            yield f
+        except BaseException:
+            _close(f)                   # (a failure to close is the lesser news)
             raise
-        abandon(f, exc.__traceback__)      # every frame's h5py objects with it
-        raise WriteFailed(cause, cause) from None
+        failed = _close(f)
+        if failed is not None:
+            raise failed
+    except BaseException:
+        j.end(ok=False)
+        if j.failure is None:
+            raise
+        _refused(j.failure)
+    j.end(ok=True)
+    if j.failure is not None:           # refused at the last moment: rolled back
+        _refused(j.failure)
+
+
+def _close(f: h5py.File) -> Exception | None:
+    """Close ``f``; what closing raised, its handles then kept alive (``abandon``: HDF5
+    could not close it, and trying again at exit would print or crash)."""
+    try:
+        f.close()
+    except Exception as exc:
+        abandon(f, exc.__traceback__)
+        return exc
+    return None
+
+
+def _refused(exc: OSError):
+    """Raise WriteFailed for the write the disk refused (``exc``), its cause the message."""
+    cause = disk_cause(exc) or exc.strerror or str(exc)
+    raise WriteFailed(cause, cause) from None
 
 
 def header_digest(base_toml: str, grid_json: str, n_points: int) -> str:
@@ -171,10 +191,11 @@ def header_digest(base_toml: str, grid_json: str, n_points: int) -> str:
 
 
 def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
-    """A new sweep file: attributes, every summary column with all rows pending.
-    WriteFailed if the disk refuses (the caller removes the partial file)."""
+    """A new sweep file: attributes, every summary column with all rows pending.  It takes
+    its name only once whole (``journal.creating``); WriteFailed if the disk refuses, and
+    nothing is left."""
     n = len(grid)
-    with _writing(path, "w") as f:
+    with creating(path) as tmp, _writing(tmp, mode="w") as f:
         for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
                            "rodjit_version": __version__, "created": now(),
                            "command": command, "base_config_toml": base.to_toml(),
@@ -253,7 +274,7 @@ def check_continuable(f: h5py.File, path=None) -> None:
 
 def reopen(path, *, history: str) -> None:
     """Mark a sweep file running again (resume), recording who continues it."""
-    with _writing(path, "r+", reserve=RESERVE_BASE) as f:
+    with _writing(path) as f:
         if _format(f) >= 3:
             _cut_bounces(f)
         f.attrs["status"] = "running"
@@ -277,11 +298,7 @@ def write_batch(path, result, wait: float = LOCK_WAIT) -> None:
     if idx.size == 0:
         return
     v = result.values
-    reserve = (RESERVE_BASE + RESERVE_POINT * idx.size
-               + 4 * sum(len(str(x)) for name, (kind, _) in SUMMARY_COLUMNS.items()
-                         if kind == "str" for x in v[name])
-               + 2 * sum(np.asarray(c).nbytes for c in result.bounces.values()))
-    with _writing(path, "r+", wait, reserve=reserve) as f:
+    with _writing(path, wait) as f:
         s = f["summary"]
         for name, (kind, _) in SUMMARY_COLUMNS.items():
             if name == "status":
@@ -327,10 +344,13 @@ def _cut_bounces(f: h5py.File) -> None:
     g.attrs["rows"] = rows
 
 
-def finish(path, status: str, message: str = "", attrs: dict | None = None) -> None:
+def finish(path, status: str, message: str = "", attrs: dict | None = None,
+           wait: float = LOCK_WAIT) -> None:
+    """Record the sweep's ``status`` and ``message`` (and ``attrs``).  FileBusy if another
+    process holds the file open for longer than ``wait`` seconds."""
     if status not in STATUSES:
         raise ValueError(f"status {status!r} is not one of {STATUSES}")
-    with _writing(path, "r+", reserve=RESERVE_BASE + 4 * len(message)) as f:
+    with _writing(path, wait) as f:
         f.attrs["status"] = status
         f.attrs["message"] = message
         for key, value in (attrs or {}).items():
