@@ -33,8 +33,7 @@ from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, work_rows
-from .prepared import (model_warnings, parameters, prepare, rows_needed, snapshot_bound,
-                       tolerance)
+from .prepared import body, clock_row, parameters, rows_needed, snapshot_bound, tolerance
 
 __all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
 
@@ -118,9 +117,8 @@ def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tupl
 
 
 def warn_config(config, stacklevel: int = 3) -> None:
-    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller;
-    the texts kept by ``prepared.prepare`` once the config has run)."""
-    for text in model_warnings(config):
+    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller)."""
+    for text in config.warnings():
         warnings.warn(text, ModelWarning, stacklevel=stacklevel)
 
 
@@ -176,11 +174,12 @@ class Run:
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
         self.config = config
-        prep = prepare(config)      # the checks and the values of config alone, once
-        self.scheme, self.ctrl, self.system, self.rod, self.floor = prep.args
+        config.check_runnable()     # a tolerance the integrator cannot honour: one line
+        self.scheme, self.ctrl, self.system, self.rod, self.floor = parameters(config)
+        shared = body(config)       # the values of its rod, floor, gravity, initial sections
         n1 = config.rod.N + 1
         if u0 is None and v0 is None:
-            self.state = prep.initial()
+            self.state = shared.initial(config)
         else:
             u, v = initial_state(config, u0, v0)
             check_admissible(u, self.rod, self.floor,
@@ -192,15 +191,13 @@ class Run:
         self.work = np.zeros((work_rows(self.scheme), n1))
         self.interp = np.zeros((2, n1))   # a dense output's interpolated (u, v)
         self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
-        self.clock = prep.clock.copy()    # t_end, the output intervals and tolerance set
+        self.clock = clock_row(config)    # t_end, the output intervals and tolerance set
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
-        self.ev = prep.ev.copy()          # the flight time set
+        self.ev = np.zeros(L.EV_SIZE)
+        self.ev[L.FLIGHT_TIME] = shared.flight_time
         self.fail = np.zeros(L.FAIL_SIZE)
-        if snapshot_capacity is None and diag_capacity is None:
-            snapshot_capacity, diag_capacity = prep.capacities
-        else:
-            snapshot_capacity, diag_capacity = capacities(config, self.ctrl,
-                                                          snapshot_capacity, diag_capacity)
+        snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
+                                                      diag_capacity)
         cap = snapshot_capacity
         self.snap_t = np.zeros(cap)
         self.snap_step = np.zeros(cap, dtype=np.int64)
@@ -215,10 +212,10 @@ class Run:
         self.run_time = 0.0
         self._warm = False
         self._advance = None        # the compiled entry of ``advance`` (``warm_up``)
-        self.x = prep.x             # reference positions x_i = i/N (shared: read only)
-        self._key = prep.key
+        self.x = shared.x           # reference positions x_i = i/N (shared: read only)
+        self._key = aot.key(self._args())
         # the loop compiled at install for the default run's types, or None: the JIT
-        self._aot = aot.loop_for(prep.args, self._key)
+        self._aot = aot.loop_for(self._args(), self._key)
 
     # ---- properties --------------------------------------------------------------------
     @property
