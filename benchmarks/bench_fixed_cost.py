@@ -29,7 +29,8 @@ diagnostics every 5 ms) with the integrators that are rodjit's best there (μ = 
 1e-3), and a tiny run (t_end = 1 ms) where the fixed cost is nearly all of the call.
 The ``new-config/`` cases make a new Config for every call, as ``bench_peers.py`` does
 (``override`` of the setting's Config with the integrator and tolerance, outside the
-timed call): what a run derives from the Config object itself is then derived again.
+timed call); both share the values of the rod, floor, gravity and initial sections
+(``driver.prepared.Body``) and derive the rest at every call.
 """
 from __future__ import annotations
 

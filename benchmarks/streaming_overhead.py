@@ -3,15 +3,12 @@ the same run with no output at all (target: under 10% extra wall time).
 
 All are measured here, in this process, after a warm-up that loads the compiled kernels;
 each figure is the best of ``--repeat`` runs taken in turns.  The breakdown separates the
-extra steps taken to land exactly on the output times from the cost of writing the file,
-and shows ``run_to_file`` both as it runs (compiled calls in a worker thread while the main
-thread writes the previous block and, first, the file's layout) and with serial calls
-(``rodjit.driver.files.OVERLAP = False``), so what the overlap hides is measured too.
+extra steps taken to land exactly on the output times from the cost of writing the file.
 
     python benchmarks/streaming_overhead.py [--N 200] [--t-end 30] [--repeat 5]
 
 The time inside the writer (creating the file, appending, checkpointing, closing, the
-summary) is wall and CPU time of the writing thread.  A file also has a fixed cost
+summary) is wall and CPU time of the process's thread.  A file also has a fixed cost
 (creating ~50 datasets with their dimension scales, two checkpoints, closing): measured
 apart on a run of 1e-3 s, it is what dominates very short runs, and the default t_end (a
 run of a few seconds) is where the per-snapshot cost of streaming shows.
@@ -41,23 +38,18 @@ def run_bare(config) -> tuple[float, float, int]:
     return time.perf_counter() - t0, time.process_time() - c0, run.steps
 
 
-def run_file(config, path, overlap=True) -> tuple[float, float, int]:
+def run_file(config, path) -> tuple[float, float, int]:
     """The same for ``run_to_file`` into a new file (replacing a file costs the filesystem
     its own time, which is not the streaming's)."""
     path.unlink(missing_ok=True)
-    files.OVERLAP = overlap
-    try:
-        t0, c0 = time.perf_counter(), time.process_time()
-        s = rodjit.run_to_file(config, path)
-        return time.perf_counter() - t0, time.process_time() - c0, s.steps
-    finally:
-        files.OVERLAP = True
+    t0, c0 = time.perf_counter(), time.process_time()
+    s = rodjit.run_to_file(config, path)
+    return time.perf_counter() - t0, time.process_time() - c0, s.steps
 
 
 class WriterClock:
-    """Wall and CPU time of the writing thread inside the HDF5 writer (creating, appending,
-    checkpointing, closing, summarising), outermost calls only: the cost of streaming
-    itself, whether or not it overlaps the compiled loop."""
+    """Wall and CPU time inside the HDF5 writer (creating, appending, checkpointing,
+    closing, summarising), outermost calls only: the cost of streaming itself."""
 
     def __init__(self):
         self.wall = self.cpu = 0.0
@@ -82,7 +74,7 @@ class WriterClock:
         return wrapper
 
     def measure(self, config, path) -> tuple[float, float]:
-        """(wall, CPU) inside the writer for one pipelined run of ``config``."""
+        """(wall, CPU) inside the writer for one run of ``config``."""
         wall, cpu = self.wall, self.cpu
         run_file(config, path)
         return self.wall - wall, self.cpu - cpu
@@ -116,7 +108,6 @@ def main():
         path = Path(tmp) / "bench.h5"
         run_file(snaps, path)                       # warm-up: kernels from the cache
         measured = best_interleaved([lambda: run_bare(none), lambda: run_bare(snaps),
-                                     lambda: run_file(snaps, path, overlap=False),
                                      lambda: run_file(snaps, path)], args.repeat)
         size = path.stat().st_size / 2**20
         clock = WriterClock()
@@ -124,14 +115,12 @@ def main():
                   zip(*(clock.measure(snaps, path) for _ in range(args.repeat)))]
         tiny = snaps.override({"time.t_end": 1e-3})
         fixed = min(clock.measure(tiny, path)[1] for _ in range(args.repeat))
-    (t_none, c_none, s_none), (t_land, c_land, s_land), (t_ser, c_ser, _), \
-        (t_file, c_file, s_file) = measured
+    (t_none, c_none, s_none), (t_land, c_land, s_land), (t_file, c_file, s_file) = measured
     n_snap = int(round(args.t_end / 1e-3)) + 1
     print(f"N = {args.N}, t_end = {args.t_end:g}, {n_snap} snapshots of {args.N + 1} nodes "
           f"({size:.1f} MiB file); best of {args.repeat}; wall and CPU time")
     rows = (("no output (compiled loop only)", t_none, c_none, s_none),
             ("snapshots every 1e-3, discarded", t_land, c_land, s_land),
-            ("streamed to HDF5, serial calls", t_ser, c_ser, s_file),
             ("streamed to HDF5 (run_to_file)", t_file, c_file, s_file))
     for label, t, c, n in rows:
         print(f"  {label:<40}{t:8.3f} s {c:8.3f} s  {n:9d} steps  "
@@ -142,10 +131,8 @@ def main():
           f"per snapshot beyond it: {1e6 * (writer[1] - fixed) / n_snap:.2f} µs")
     print(f"streaming overhead (wall): {100 * (t_file / t_none - 1):+.1f}% (target < +10%), "
           f"of which landing on output times {100 * (t_land / t_none - 1):+.1f}% and writing "
-          f"the file {100 * (t_file - t_land) / t_none:+.1f}% (serial calls: "
-          f"{100 * (t_ser - t_land) / t_none:+.1f}%)")
-    print(f"CPU time of the whole process: {100 * (c_file / c_none - 1):+.1f}% (both threads; "
-          f"serial calls {100 * (c_ser / c_none - 1):+.1f}%)")
+          f"the file {100 * (t_file - t_land) / t_none:+.1f}%")
+    print(f"CPU time of the whole process: {100 * (c_file / c_none - 1):+.1f}%")
 
 
 if __name__ == "__main__":

@@ -30,9 +30,9 @@ rodjit's kernels never allocate and never keep an array beyond the call: they wo
 in arrays their caller owns for the whole call, so there is nothing to count.  Numba
 refuses to compile an allocation, or the return of a new array, under this option, so
 that guarantee is checked at compile time.
-``nogil=True``: a compiled call releases the GIL, so the run file is written by another
-thread while the loop computes (``driver.pipeline``); it changes only the Python entry
-wrapper, not the compiled loop.
+``nogil=True``: a compiled call releases the GIL, so the process's other Python threads
+keep running while the loop computes (a sweep worker's watch on its parent,
+``sweeps.pool``); it changes only the Python entry wrapper, not the compiled loop.
 ``no_cfunc_wrapper=True``: Numba would give every compiled kernel, beside the Python entry
 wrapper, a C-ABI wrapper (for a kernel used as a first-class function value or a ctypes
 address), which rodjit never uses; skipping it saves lowering, optimising and

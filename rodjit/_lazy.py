@@ -2,10 +2,9 @@
 costs almost nothing, and each name costs its own module's import when first read.  A
 sweep's every worker process and every command-line verb import rodjit, and most need a
 small part of it (a worker that runs batches never loads the plotting, analysis or
-run-file modules).  ``rodjit`` and ``rodjit.sweeps`` load their public names so; every
-subpackage loads its submodules so (``submodules``), so that ``rodjit.output.hdf5`` or
-``rodjit.model.laws.Law`` read after ``import rodjit`` as when the package imported all of
-them."""
+run-file modules).  ``rodjit`` and ``rodjit.sweeps`` load their public names so, and
+``rodjit``'s subpackages (``rodjit.analysis``) too; a subpackage's own submodules are
+imported by name (``import rodjit.output.hdf5``)."""
 from __future__ import annotations
 
 import importlib
@@ -13,7 +12,7 @@ import sys
 from collections.abc import Callable, Mapping
 from typing import Any
 
-__all__ = ["attribute", "public_names", "submodules"]
+__all__ = ["attribute", "public_names"]
 
 
 def attribute(package: str, where: Mapping[str, str], name: str) -> Any:
@@ -48,9 +47,3 @@ def public_names(package: str, where: Mapping[str, str]
         return sorted(set(vars(sys.modules[package])) | set(where))
 
     return __getattr__, __dir__
-
-
-def submodules(package: str) -> Callable[[str], Any]:
-    """A ``__getattr__`` for the package ``package`` that imports its submodules on first
-    use (``attribute`` with no other names)."""
-    return public_names(package, {})[0]

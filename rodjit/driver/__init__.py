@@ -1,9 +1,3 @@
-"""Running one simulation: a run in progress (``run``), its compiled calls overlapped with
-writing (``pipeline``), streaming it to a run file (``files``: ``run_to_file``,
-``resume_file``), the in-memory ``simulate``, and the clean stop on SIGINT/SIGTERM
-(``signals``)."""
-
-from .. import _lazy
-
-# ``rodjit.driver.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)
+"""Running one simulation: a run in progress (``run``), streaming it to a run file
+(``files``: ``run_to_file``, ``resume_file``), the in-memory ``simulate``, and the clean
+stop on SIGINT/SIGTERM (``signals``)."""

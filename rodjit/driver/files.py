@@ -3,9 +3,8 @@
 The command line is a thin layer over these two functions (so is ``sweep --save-runs``).
 They validate everything before touching the disk, checkpoint at least every
 ``flush_interval`` seconds of wall time and at every stop, and turn SIGINT/SIGTERM into a
-clean stop between two compiled calls.  With ``OVERLAP`` the compiled calls run in a worker
-thread (``driver.pipeline``): each block is written while the next one computes, and a new
-file's layout is created while the first one does.
+clean stop between two compiled calls.  The compiled calls and the writing of their
+blocks take turns in the calling thread.
 """
 from __future__ import annotations
 
@@ -29,7 +28,6 @@ from ..output.run_reader import check_not_lost, check_run_file, read_checkpoint,
 from ..output.summary import RunSummary, closed_summary
 from ..stepping import layout as L
 from .errors import RunWriteFailed, resume_command
-from .pipeline import InlineCalls, Pipeline
 from .progress import close as close_progress
 from .progress import run_progress
 from .run import Run, SimulationError, warn_config
@@ -39,8 +37,6 @@ __all__ = ["run_to_file", "plan_run", "RunPlan", "resume_file", "RunInterrupted"
            "check_output"]
 
 RUN_FLUSH_INTERVAL = 2.0   # seconds of wall time between checkpoints of a run file
-OVERLAP = True         # compute the next block in a worker thread while writing the last
-
 
 
 class RunInterrupted(RuntimeError):
@@ -75,8 +71,7 @@ def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
                 overwrite: bool = False, command: str | None = None,
                 progress: bool | Callable[[Any], object] | None = None, t_end: float | None = None,
                 flush_interval: float = RUN_FLUSH_INTERVAL, handle_signals: bool = True,
-                overlap: bool | None = None, max_output: float = MAX_OUTPUT,
-                max_steps: float = MAX_STEPS) -> RunSummary:
+                max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS) -> RunSummary:
     """Run ``config`` (None: the built-in run), streaming everything to the HDF5 file
     ``path``; return its summary.
 
@@ -99,9 +94,6 @@ def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
         Wall-clock seconds between saves of data and checkpoint.
     handle_signals : bool
         Catch SIGINT/SIGTERM, stop between two compiled calls and checkpoint.
-    overlap : bool, optional
-        Compute in a worker thread while writing (default ``OVERLAP``); False keeps to one
-        thread.  The file is the same bit for bit.
     max_output : float, optional
         Refuse (ValueError) a run whose file is estimated above this many bytes, or above
         the free space of its disk (``output.estimate.check_run``).
@@ -140,7 +132,7 @@ def run_to_file(config: Config | None, path: str | os.PathLike[str], *,
         check_output(out, overwrite, "run", held=True)   # again, now that no one else can write it
         return _write_run(run, lambda: run_writer.create_run_file(out, config, first,
                                                                   command=command),
-                          out, progress, flush_interval, stop, overlap)
+                          out, progress, flush_interval, stop)
 
 
 @dataclass
@@ -245,8 +237,8 @@ def plan_run(config: Config | None = None, path: str | os.PathLike[str] | None =
 
 def resume_file(path: str | os.PathLike[str], *, t_end: float | None = None,
                 command: str | None = None, progress: bool | Callable[[Any], object] | None = None, flush_interval: float = RUN_FLUSH_INTERVAL,
-                handle_signals: bool = True, overlap: bool | None = None,
-                max_output: float = MAX_OUTPUT, max_steps: float = MAX_STEPS) -> RunSummary:
+                handle_signals: bool = True, max_output: float = MAX_OUTPUT,
+                max_steps: float = MAX_STEPS) -> RunSummary:
     """Continue the run in ``path`` from its checkpoint (to ``t_end`` if given, which also
     extends a completed run); the result equals an uninterrupted run bit for bit.
 
@@ -259,7 +251,7 @@ def resume_file(path: str | os.PathLike[str], *, t_end: float | None = None,
         The run file to continue.
     t_end : float, optional
         The new end time (default: the file's ``time.t_end``).
-    command, progress, flush_interval, handle_signals, overlap
+    command, progress, flush_interval, handle_signals
         As in ``run_to_file``.
     max_output, max_steps : float, optional
         As in ``run_to_file``, for the file the continued run makes (its estimate to the
@@ -271,11 +263,11 @@ def resume_file(path: str | os.PathLike[str], *, t_end: float | None = None,
         open_file(path).close()      # the one-line reason: missing, a directory, ...
     with WriterLock(path):
         return _resume_locked(path, t_end, command, progress, flush_interval,
-                              handle_signals, overlap, max_output, max_steps)
+                              handle_signals, max_output, max_steps)
 
 
 def _resume_locked(path: Path, t_end, command, progress, flush_interval,
-                   handle_signals, overlap, max_output=MAX_OUTPUT,
+                   handle_signals, max_output=MAX_OUTPUT,
                    max_steps=MAX_STEPS) -> RunSummary:
     """``resume_file`` once this process holds the writer lock of ``path``."""
     cut = repair_truncated(path)   # cut short by a full disk: its checkpoint is still there
@@ -330,7 +322,7 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         if finish_only:
             writer.close(run, "completed")
             return closed_summary(writer)
-        return _write_run(run, lambda: writer, path, progress, flush_interval, stop, overlap)
+        return _write_run(run, lambda: writer, path, progress, flush_interval, stop)
 
 
 def _write_failed(path: Path, writer, cause: str) -> WriteFailed:
@@ -353,9 +345,9 @@ def _check_interval(flush_interval) -> None:
 
 
 def _write_run(run: Run, open_writer, path: Path, progress, flush_interval: float,
-               stop: StopFlag, overlap: bool | None = None) -> RunSummary:
+               stop: StopFlag) -> RunSummary:
     """Advance ``run`` until done, failed or stopped, into the writer ``open_writer()``
-    returns (called once the first compiled call is under way); close the file.  A write
+    returns (called once the run has started); close the file.  A write
     the disk refuses, at any point (layout, rows, checkpoints, closing), raises
     WriteFailed."""
     opened = []
@@ -365,7 +357,7 @@ def _write_run(run: Run, open_writer, path: Path, progress, flush_interval: floa
         return opened[-1]
 
     try:
-        return _write_run_blocks(run, open_and_keep, path, progress, flush_interval, stop, overlap)
+        return _write_run_blocks(run, open_and_keep, path, progress, flush_interval, stop)
     except BaseException as exc:
         if isinstance(exc, WriteFailed) and not opened:
             raise
@@ -377,12 +369,11 @@ def _write_run(run: Run, open_writer, path: Path, progress, flush_interval: floa
 
 
 def _write_run_blocks(run: Run, open_writer, path: Path, progress, flush_interval: float,
-                      stop: StopFlag, overlap: bool | None = None) -> RunSummary:
+                      stop: StopFlag) -> RunSummary:
     """``_write_run`` without the translation of disk errors: the loop that alternates the
     run's compiled calls with writing their blocks, and checkpoints every
     ``flush_interval`` seconds (a sweep's loop, ``sweeps.run_sweep._write_sweep``, collects
     finished points from an executor instead: it has no blocks, calls nor checkpoints)."""
-    calls = (Pipeline if (OVERLAP if overlap is None else overlap) else InlineCalls)(run)
     progress = run_progress(progress)
     writer = None
     opened = False
@@ -397,23 +388,21 @@ def _write_run_blocks(run: Run, open_writer, path: Path, progress, flush_interva
     try:
         try:
             run.start(None)               # compile; the outputs at t0 wait in the buffers
-            if stop.signum is None:
-                calls.launch()
+            call = stop.signum is None    # no call if stopped while compiling
             writer = open_once()
             last = time.monotonic()
             while True:
-                if calls.busy:
-                    block = calls.wait()
+                if call:
+                    block = run.take(run.compute())
                     if progress is not None:
                         progress(run)
                 else:                     # stopped before the first call
                     block = run.take()
+                call = True
                 more = (block.code in (L.PAUSED, L.FULL) and block.finite
                         and stop.signum is None)
                 save = more and time.monotonic() - last >= flush_interval
-                if more and not save:
-                    calls.launch()        # the next block computes while this one is written
-                calls.drain(block, writer)
+                run.drain(block, writer)
                 if block.code == L.FAILED:
                     raise SimulationError(run.failure_message())
                 if block.code == L.DONE:
@@ -422,12 +411,10 @@ def _write_run_blocks(run: Run, open_writer, path: Path, progress, flush_interva
                 if not more:
                     status = "interrupted"
                     break
-                if save:                  # nothing in flight: every computed row is written
-                    writer.save(run)
+                if save:
+                    writer.save(run)      # every computed row is written
                     last = time.monotonic()
-                    calls.launch()
         finally:
-            calls.close()
             close_progress(progress, run)
     except SimulationError as exc:
         failed = open_once()

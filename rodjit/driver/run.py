@@ -5,10 +5,9 @@
 ``checkpoint``/``from_checkpoint`` save and restore everything the stepper needs, so a
 resumed run continues bit for bit.
 
-``advance`` is one call and its drain.  The two halves exist apart for ``driver.pipeline``:
-``compute`` (the compiled call), ``take`` (the filled rows as a ``Block``, switching the
-loop to a spare set of buffers) and ``drain`` (the block into a sink), so a block can drain
-while the next one computes.
+``advance`` is one call and its drain.  Its parts exist apart for ``driver.files``, which
+looks at a block before writing it: ``compute`` (the compiled call), ``take`` (the filled
+rows as a ``Block``) and ``drain`` (the block into a sink).
 """
 from __future__ import annotations
 
@@ -34,8 +33,7 @@ from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, work_rows
-from .prepared import (model_warnings, parameters, prepare, rows_needed, snapshot_bound,
-                       tolerance)
+from .prepared import body, clock_row, parameters, rows_needed, snapshot_bound, tolerance
 
 __all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
 
@@ -73,7 +71,6 @@ class SimulationError(RuntimeError):
 
 _WRITE_BOUNCE = python_function(write_bounce)
 
-_BUFFERS = ("snap_t", "snap_step", "snap_u", "snap_v", "diag", "episodes", "bounces")
 # the counters of rows filled since the last drain, next to each other in ``count``: read
 # and reset as one slice
 _ROWS = slice(L.N_SNAP, L.N_BOUNCE + 1)
@@ -123,9 +120,8 @@ def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tupl
 
 
 def warn_config(config, stacklevel: int = 3) -> None:
-    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller;
-    the texts kept by ``prepared.prepare`` once the config has run)."""
-    for text in model_warnings(config):
+    """Issue the configuration's ``warnings()`` as ModelWarning (from the caller's caller)."""
+    for text in config.warnings():
         warnings.warn(text, ModelWarning, stacklevel=stacklevel)
 
 
@@ -181,11 +177,12 @@ class Run:
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
         self.config = config
-        prep = prepare(config)      # the checks and the values of config alone, once
-        self.scheme, self.ctrl, self.system, self.rod, self.floor = prep.args
+        config.check_runnable()     # a tolerance the integrator cannot honour: one line
+        self.scheme, self.ctrl, self.system, self.rod, self.floor = parameters(config)
+        shared = body(config)       # the values of its rod, floor, gravity, initial sections
         n1 = config.rod.N + 1
         if u0 is None and v0 is None:
-            self.state = prep.initial()
+            self.state = shared.initial(config)
         else:
             u, v = initial_state(config, u0, v0)
             check_admissible(u, self.rod, self.floor,
@@ -197,43 +194,31 @@ class Run:
         self.work = np.zeros((work_rows(self.scheme), n1))
         self.interp = np.zeros((2, n1))   # a dense output's interpolated (u, v)
         self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
-        self.clock = prep.clock.copy()    # t_end, the output intervals and tolerance set
+        self.clock = clock_row(config)    # t_end, the output intervals and tolerance set
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
-        self.ev = prep.ev.copy()          # the flight time set
+        self.ev = np.zeros(L.EV_SIZE)
+        self.ev[L.FLIGHT_TIME] = shared.flight_time
         self.fail = np.zeros(L.FAIL_SIZE)
-        if snapshot_capacity is None and diag_capacity is None:
-            snapshot_capacity, diag_capacity = prep.capacities
-        else:
-            snapshot_capacity, diag_capacity = capacities(config, self.ctrl,
-                                                          snapshot_capacity, diag_capacity)
-        self._shapes = (snapshot_capacity, n1, diag_capacity, event_capacity)
-        (self.snap_t, self.snap_step, self.snap_u, self.snap_v, self.diag, self.episodes,
-         self.bounces) = self._buffers()
-        self._spare = None          # a second set of buffers (``double_buffer``)
+        snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
+                                                      diag_capacity)
+        cap = snapshot_capacity
+        self.snap_t = np.zeros(cap)
+        self.snap_step = np.zeros(cap, dtype=np.int64)
+        self.snap_u = np.zeros((cap, n1))
+        self.snap_v = np.zeros((cap, n1))
+        self.diag = np.zeros((diag_capacity, len(L.DIAG_COLUMNS)))
+        self.episodes = np.zeros((event_capacity, len(L.EPISODE_COLUMNS)))
+        self.bounces = np.zeros((event_capacity, len(L.BOUNCE_ROW_COLUMNS)))
         self._undrained = 0         # blocks taken but not drained yet
         self.max_steps = max(1, NODE_STEPS_PER_CALL // n1)
         self.compile_time = 0.0
         self.run_time = 0.0
         self._warm = False
         self._advance = None        # the compiled entry of ``advance`` (``warm_up``)
-        self.x = prep.x             # reference positions x_i = i/N (shared: read only)
-        self._key = prep.key
+        self.x = shared.x           # reference positions x_i = i/N (shared: read only)
+        self._key = aot.key(self._args())
         # the loop compiled at install for the default run's types, or None: the JIT
-        self._aot = aot.loop_for(prep.args, self._key)
-
-    def _buffers(self) -> tuple[np.ndarray, ...]:
-        """A set of empty output buffers, in the order of ``_BUFFERS``."""
-        cap, n1, diag_capacity, event_capacity = self._shapes
-        return (np.zeros(cap), np.zeros(cap, dtype=np.int64), np.zeros((cap, n1)),
-                np.zeros((cap, n1)), np.zeros((diag_capacity, len(L.DIAG_COLUMNS))),
-                np.zeros((event_capacity, len(L.EPISODE_COLUMNS))),
-                np.zeros((event_capacity, len(L.BOUNCE_ROW_COLUMNS))))
-
-    def double_buffer(self) -> None:
-        """Give the loop a second set of output buffers: ``take`` then switches to the other
-        set, so the block it returns stays intact while the next call fills the other."""
-        if self._spare is None:
-            self._spare = self._buffers()
+        self._aot = aot.loop_for(self._args(), self._key)
 
     # ---- properties --------------------------------------------------------------------
     @property
@@ -349,8 +334,8 @@ class Run:
 
     def _advance_arrays(self, max_steps: int) -> tuple:
         """The arguments of ``advance`` after the parameter tuples.  Always arrays the run
-        allocated itself (``_buffers``; the state, work and counter arrays of ``__init__``)
-        and an int: the compiled entry point relies on these types."""
+        allocated itself (``__init__``) and an int: the compiled entry point relies on
+        these types."""
         return (self.state, self.trial, self.work, self.interp, self.sstats, self.clock,
                 self.count, self.ev, self.snap_t, self.snap_step, self.snap_u, self.snap_v,
                 self.diag, self.episodes, self.bounces, self.fail, int(max_steps))
@@ -395,14 +380,9 @@ class Run:
 
     def take(self, code: int = L.PAUSED) -> Block:
         """The rows in the buffers as a Block (``code``: that of the call that filled them);
-        the loop starts the next block empty, in the spare buffers if there are any."""
+        the loop starts the next block empty, in the same buffers (drain the block first)."""
         block = Block(self, code)
         self.count[_ROWS] = 0
-        if self._spare is not None:
-            current = tuple(getattr(self, name) for name in _BUFFERS)
-            for name, array in zip(_BUFFERS, self._spare):
-                setattr(self, name, array)
-            self._spare = current
         self._undrained += 1
         return block
 

@@ -57,12 +57,6 @@ def simulate(config: Config | None = None, *, u0: ArrayLike | None = None,
     -----
     ModelWarning
         A configuration with known limits (``Config.warnings``).
-
-    Notes
-    -----
-    A run of the same Config object again (a benchmark, repeats) reuses what the first
-    derived from it (``driver.prepared``: the checks, the parameter tuples, the initial
-    state): the same results, tens of µs sooner.
     """
     if config is None:
         config = Config()

@@ -6,8 +6,3 @@ This floor sits above ``stepping`` (whose ``layout`` names the columns) and belo
 ``output``, ``driver`` and ``sweeps``, which all build on it: a writer, the run driver and a
 sweep point share one definition of each record instead of rebuilding it.
 """
-
-from .. import _lazy
-
-# ``rodjit.records.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)

@@ -24,8 +24,8 @@ for the host CPU as the JIT does, so both paths give the same bits
 (tests/test_stepping_aot.py).  Its exported functions take arrays and scalars only, so a
 run's five parameter tuples travel as one float64 and one int64 array (``pack``) and the
 generated wrappers (``wrapper_source``) rebuild them inside compiled code; the wrappers
-release the GIL around the loop, as a JIT call does (``nogil``), so a writer thread and
-signal handlers keep running while it computes.
+release the GIL around the loop, as a JIT call does (``nogil``), so the process's other
+threads keep running while it computes.
 
 It is used only where its record (``_aot_loop.json``, beside it) matches the process:
 the digest of the compiled sources (``_jit.SOURCES_DIGEST``: an edited checkout falls

@@ -53,7 +53,7 @@ from . import control as C
 from . import layout as L
 from . import registry
 from .events import crossing, hermite_exit, open_contact, track, vibration_energy
-from .extremes import cannot_beat, step_extremes
+from .extremes import step_extremes
 from .outputs import dense_target, emit, emit_dense, grid_time, next_target
 from .schemes import dense_setup, has_dense, initial, step
 from .._jit import kernel, overload
@@ -259,10 +259,6 @@ def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         # a bounce open or opening: its extremes come from inside the step (``extremes``),
         # by the dense output of a scheme that has one (set up here if no output needed it)
         extremes = ev[L.B_NEP] > 0.0 or u2[0] < 0.0
-        if (extremes and ev[L.B_NEP] > 0.0
-                and cannot_beat(scheme, cur, nxt, dt, system.h, ev[L.CUR_MIN_U0],
-                                ev[L.CUR_MIN_EPS])):
-            extremes = False     # the open bounce's extremes stand (``extremes``)
         if status == OK and has_dense(scheme) and extremes and not (interpolate and inside):
             status, val = dense_setup(scheme, system, rod, tfloor, u, v, cur[2], u2, v2, nxt[2],
                                       work, dt)

@@ -200,8 +200,7 @@ def _run_to_file(config, path: str) -> tuple[dict, dict]:
     if os.path.exists(path) and truncation(path):
         os.unlink(path)     # this point's file, cut short by a full disk: nothing to keep
     try:
-        # one thread: the sweep's workers already occupy every core
-        s = run_to_file(config, path, overwrite=True, handle_signals=False, overlap=False,
+        s = run_to_file(config, path, overwrite=True, handle_signals=False,
                         command=f"rodjit sweep point -> {path}")
         status, message = "completed", ""
     except SimulationError as exc:

@@ -8,7 +8,6 @@ before the run) and select it with ``rod.law`` / ``floor.law``.  No kernel chang
 import all of this from the public ``rodjit.laws``.
 """
 
-from ... import _lazy
 from .base import (Law, deriv, get_law, law_for_numba_type, law_names, law_of, lower,
                    max_deriv, primitive, register, value)
 from . import aiki_kosugi
@@ -19,6 +18,3 @@ __all__ = [
     "value", "deriv", "primitive", "lower", "max_deriv",
     "AikiKosugiRod", "AikiKosugiFloor", "aiki_kosugi",
 ]
-
-# ``rodjit.model.laws.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)

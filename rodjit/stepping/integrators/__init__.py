@@ -7,8 +7,3 @@ of the second-order schemes, ``stepping.control``; the viscous and beam sub-step
 ``stepping.viscous`` and ``stepping.beam``) lives below them.  ``erk_tableau`` and
 ``radau_linear`` are parts of one integrator each (its coefficients, its linear algebra).
 """
-
-from ... import _lazy
-
-# ``rodjit.stepping.integrators.NAME`` imports that submodule on first use (``rodjit._lazy``)
-__getattr__ = _lazy.submodules(__name__)
