@@ -1,5 +1,5 @@
 """What a verb says besides its result: warnings as one ``warning:`` line each, once; none
-under ``--quiet``."""
+under ``--quiet`` but a wait the user must end (``said_when_quiet``)."""
 from __future__ import annotations
 
 import contextlib
@@ -16,15 +16,18 @@ _said: set[str] | None = None     # the warnings said by the running command
 _quiet = False                    # --quiet: the running command says no warning
 
 
-def say_warning(text: str) -> None:
+def say_warning(text: str, *, even_quiet: bool = False) -> None:
     """One line ``warning: TEXT`` on stderr, once per text while a command runs.
 
     Parameters
     ----------
     text : str
         The warning (put on one line).
+    even_quiet : bool, optional
+        Said under ``--quiet`` too: a wait the user must act on (another process holding
+        the output open), which a quiet command would otherwise spend without a word.
     """
-    if _quiet:
+    if _quiet and not even_quiet:
         return
     text = one_line(text)
     if _said is not None:
@@ -44,7 +47,7 @@ def warnings_as_lines() -> Iterator[None]:
     _said, _quiet = set(), False
 
     def show(message: Any, *_args: Any, **_kw: Any) -> None:
-        say_warning(str(message))
+        say_warning(str(message), even_quiet=getattr(message, "said_when_quiet", False))
 
     with warnings.catch_warnings():
         warnings.showwarning = show

@@ -30,7 +30,11 @@ def resume_note(message: str, output) -> str:
 class FileHeldOpen(UserWarning):
     """Another process holds the sweep file open (a reader: h5py in a notebook, a viewer),
     which keeps the sweep from writing to it: the sweep goes on, holds its finished points
-    and writes them once the file is let go (waiting for that at its end)."""
+    and writes them once the file is let go (waiting for that at its end).  Said under
+    ``--quiet`` too (``said_when_quiet``): without it a quiet sweep could wait without a
+    word for as long as the reader holds the file."""
+
+    said_when_quiet = True
 
 
 class TooManyPoints(ValueError):
