@@ -91,7 +91,7 @@ class FileLeftOpen(NotARunFile):
         self.path = str(path)
         super().__init__(f"{self.path!r} was left open for writing by a process that stopped "
                          f"before closing it (killed while it wrote) and cannot be read; write "
-                         f"it again (with --overwrite, if rodjit wrote it)")
+                         f"it again, replacing it (if rodjit wrote it)")
 
     def __reduce__(self):
         return type(self), (self.path,)
