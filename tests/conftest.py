@@ -182,6 +182,28 @@ def assert_same_files(a, b) -> None:
         assert np.array_equal(sa[name], sb[name], equal_nan=True), name
 
 
+# the columns of a sweep table that time a point rather than compute it
+SWEEP_TIMINGS = ("wall_time", "compile_time", "run_time")
+
+
+def same_table(a, b) -> None:
+    """Two sweep tables have the same points and results, timings apart, and the same
+    bounce rows (NaN equal to NaN)."""
+    assert list(a.columns) == list(b.columns)
+    for name in a.columns:
+        if name in SWEEP_TIMINGS:
+            continue
+        x, y = np.asarray(a.columns[name]), np.asarray(b.columns[name])
+        if x.dtype.kind == "f":
+            assert np.array_equal(x, y, equal_nan=True), name
+        else:
+            assert list(x) == list(y), name
+    ra, rb = a.bounce_rows(), b.bounce_rows()
+    assert list(ra) == list(rb)
+    for name in ra:
+        assert np.array_equal(ra[name], rb[name], equal_nan=ra[name].dtype.kind == "f"), name
+
+
 def one_line(err: str) -> str:
     """The one line of a command's stderr (asserting there is one, and no Traceback)."""
     lines = err.strip().splitlines()

@@ -35,7 +35,7 @@ from click.testing import CliRunner
 
 import rodjit
 from rodjit.output.summary import summarize
-from conftest import assert_same_files
+from conftest import assert_same_files, same_table
 from rodjit import cli
 
 SEED = int(os.environ.get("RODJIT_HOSTILE_SEED", "20261205"))
@@ -45,7 +45,6 @@ RUN = ["--set", "rod.N=200", "--set", "time.t_end=30", "--set", "rod.mu=1", "--s
 GRID = ["--grid", "rod.mu=1,2,3,4,5,6", "--set", "time.t_end=4", "-q"]
 POOL = ["-j", "2"]
 DASK = ["--scheduler", "local", "-j", "2"]
-TIMINGS = ("wall_time", "compile_time", "run_time")
 SIGNALS = {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM, "SIGKILL": signal.SIGKILL}
 
 
@@ -225,21 +224,6 @@ def sweep_ref(tmp_path_factory):
     return rodjit.load_sweep(d / "ref.h5"), wall
 
 
-def same_table(a, b) -> None:
-    """The same points and results, timings apart, and the same bounce rows."""
-    assert list(a.columns) == list(b.columns)
-    for name in a.columns:
-        if name in TIMINGS:
-            continue
-        x, y = np.asarray(a.columns[name]), np.asarray(b.columns[name])
-        if x.dtype.kind == "f":
-            assert np.array_equal(x, y, equal_nan=True), name
-        else:
-            assert list(x) == list(y), name
-    ra, rb = a.bounce_rows(), b.bounce_rows()
-    assert list(ra) == list(rb)
-    for name in ra:
-        assert np.array_equal(ra[name], rb[name], equal_nan=ra[name].dtype.kind == "f"), name
 
 
 def _complete_sweep(path, ref) -> None:

@@ -14,8 +14,7 @@ import time
 import pytest
 
 import rodjit
-from conftest import rodjit_cli
-from test_sweep_killed_writes import same_table
+from conftest import rodjit_cli, same_table
 
 ARGS = ["sweep", "--grid", "floor.beta=linspace(0.01,0.05,12)", "--set", "time.t_end=3",
         "--set", "rod.N=40", "--set", "time.integrator=verlet", "--set",

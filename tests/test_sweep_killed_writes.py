@@ -23,14 +23,13 @@ import pytest
 from click.testing import CliRunner
 
 import rodjit
-from conftest import rodjit_cli
+from conftest import rodjit_cli, same_table
 from rodjit import cli
 
 SEED = int(os.environ.get("RODJIT_HOSTILE_SEED", "20261207"))
 ARGS = ["sweep", "--grid", "floor.beta=linspace(0.01,0.05,6)", "--set", "time.t_end=0.8",
         "--set", "rod.N=40", "--set", "time.integrator=verlet", "--set",
         "time.control=cfl", "--scheduler", "inline", "--batch-size", "1", "-q", "-o", "s.h5"]
-TIMINGS = ("wall_time", "compile_time", "run_time")
 
 # run first in the command's interpreter: a write for every point, and the k-th write call
 # into h5py made by a sweep file's create, write_batch or finish (KILL_AT, 0: none) SIGKILLs
@@ -102,21 +101,6 @@ def reference(tmp_path_factory):
     return rodjit.load_sweep(d / "s.h5"), phases
 
 
-def same_table(a, b) -> None:
-    """The same points and results, timings apart, and the same bounce rows."""
-    assert list(a.columns) == list(b.columns)
-    for name in a.columns:
-        if name in TIMINGS:
-            continue
-        x, y = np.asarray(a.columns[name]), np.asarray(b.columns[name])
-        if x.dtype.kind == "f":
-            assert np.array_equal(x, y, equal_nan=True), name
-        else:
-            assert list(x) == list(y), name
-    ra, rb = a.bounce_rows(), b.bounce_rows()
-    assert list(ra) == list(rb)
-    for name in ra:
-        assert np.array_equal(ra[name], rb[name], equal_nan=ra[name].dtype.kind == "f"), name
 
 
 def _killed_then_resumed(tmp_path, reference, k: int) -> None:

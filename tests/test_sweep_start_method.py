@@ -15,7 +15,7 @@ import pytest
 import rodjit
 from rodjit.presets import load_preset
 from rodjit.sweeps import start_method
-from test_hostile_signals import same_table
+from conftest import same_table
 
 LINUX = sys.platform.startswith("linux")
 
