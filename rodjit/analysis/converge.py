@@ -37,9 +37,10 @@ CONVERGENCE_KIND = "convergence"   # root attribute rodjit_kind of a convergence
 # not change the steps, so the spread of its values says nothing about the time error.
 NOT_MEASURED = "not measured"
 # The status of a first-bounce observable on a rod.N ladder of a rod whose model warns of
-# no continuum limit (``config.checks.SHOCK_WARNING``: μ = γ = 0), unless the ladder itself
-# confirms an order (four levels whose orders agree, as in the linear limit of a slow
-# impact): its values along the ladder are printed, not an extrapolation with a bar.
+# no continuum limit (``config.checks.SHOCK_WARNING``: μ = γ = 0) where three levels would
+# have given a value and a bar that no fourth level checks: its values along the ladder are
+# printed, not an extrapolation with a bar (four levels whose orders agree, as in the
+# linear limit of a slow impact, are extrapolated; a ladder that does not settle says so).
 NO_LIMIT = "no limit"
 @dataclass
 class ObservableConvergence:
@@ -435,10 +436,11 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
                 ", ".join(f"{v}: {st}" for v, st in zip(values, statuses)) + ")")
             if s.status == "converged":
                 s.status = "pre-asymptotic"
-        checked = s.status == "exact" or (s.status == "converged" and len(s.orders) >= 2)
-        if no_limit and name in OBSERVABLES and not checked:
-            # the model warns of no limit and no fourth level confirms an order: an
-            # extrapolation here would print a bar that nothing supports
+        unchecked = (len(s.orders) < 2 and s.status in ("converged", "oscillating",
+                                                         "pre-asymptotic"))
+        if no_limit and name in OBSERVABLES and unchecked:
+            # the model warns of no limit and no fourth level checks what three levels
+            # seem to show: a bar here would rest on nothing
             s.status, s.order = NO_LIMIT, math.nan
             s.extrapolated, s.error = math.nan, math.nan
             s.message = ("the model has no continuum limit as rod.N grows (rod.mu = "

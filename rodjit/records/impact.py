@@ -138,8 +138,9 @@ class ImpactStream:
             out = np.zeros(S.OUT_SIZE)
             code = S.finish(s, *args, out, s[S.ST:S.ST + 3])
         else:
-            out = [0.0] * S.OUT_SIZE
-            code = _PYTHON.finish(self.state.tolist(), *args, out, [0.0] * 3)
+            values = [0.0] * S.OUT_SIZE
+            code = _PYTHON.finish(self.state.tolist(), *args, values, [0.0] * 3)
+            out = np.asarray(values)
         return impact_values(self.config, t_final, out, code)
 
 
