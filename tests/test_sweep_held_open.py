@@ -43,13 +43,20 @@ def reference(tmp_path_factory):
     return rodjit.load_sweep(d / "s.h5")
 
 
-def _held(tmp_path, reference, seconds: float) -> None:
-    out = tmp_path / "s.h5"
+def _start(out, seconds: float):
+    """The reader holding ``out`` for ``seconds`` once it exists, and the sweep writing it
+    (in ``out``'s folder; its stderr piped)."""
     reader = subprocess.Popen([sys.executable, "-c", HOLD, str(out), str(seconds)],
                               stdout=subprocess.PIPE, text=True)
     sweep = subprocess.Popen([sys.executable, "-m", "rodjit", *ARGS, "-o", out.name],
-                             cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                             text=True)
+                             cwd=out.parent, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.PIPE, text=True)
+    return reader, sweep
+
+
+def _held(tmp_path, reference, seconds: float) -> None:
+    out = tmp_path / "s.h5"
+    reader, sweep = _start(out, seconds)
     try:
         assert reader.stdout.readline().strip() == "open"
         held = time.monotonic()
@@ -85,11 +92,7 @@ def test_a_signal_while_the_sweep_waits_for_a_reader_ends_the_wait(tmp_path, ref
     line naming the points not written and how to continue; ``--resume`` (the reader gone)
     then completes the table."""
     out = tmp_path / "s.h5"
-    reader = subprocess.Popen([sys.executable, "-c", HOLD, str(out), "600"],
-                              stdout=subprocess.PIPE, text=True)
-    sweep = subprocess.Popen([sys.executable, "-m", "rodjit", *ARGS, "-o", out.name],
-                             cwd=tmp_path, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                             text=True)
+    reader, sweep = _start(out, 600)
     try:
         assert reader.stdout.readline().strip() == "open"
         err = ""
