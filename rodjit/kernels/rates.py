@@ -18,7 +18,7 @@ def full_accel(system, rod, floor, u, v, a, s, k, bound):
     """a = M⁻¹(−∇V(u) − μKv): ``accel`` with bending plus the viscous force.  Returns
     ``accel``'s ``(status, value, min_strain, floor_force, omega2)`` (omega2 = 0 unless
     ``bound``: only the first step's proposal uses it)."""
-    res = accel(u, a, s, k, system, rod, floor, True, bound)
+    res = accel(u, a, s, k, system, rod, floor, bool(True), bound)
     if res[0] == OK:
         add_viscous(system, v, a)
     return res

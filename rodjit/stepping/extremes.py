@@ -76,7 +76,7 @@ def _min_strain(u, h):
 def _quantity(scheme, old, new, work, interp, h, dt, theta, which):
     """u_0 (``which`` 0) or the smallest strain (1) inside the step at θ."""
     if which == 0 and not has_dense(scheme):
-        return _hermite(old, new, dt, theta, 0)     # the bottom node alone
+        return _hermite(old, new, dt, theta, int(0))    # the bottom node alone
     state_at(scheme, old, new, work, interp, dt, theta)
     if which == 0:
         return interp[0][0]
@@ -121,7 +121,7 @@ def step_extremes(scheme, old, new, work, interp, system, floor, dt, ff_end, emi
         u_best = min(old[0][0], new[0][0])
         ff = max(ff_end, value(u_best, floor))
         for k in range(1, SAMPLES):
-            ff = max(ff, value(_hermite(old, new, dt, k / SAMPLES, 0), floor))
+            ff = max(ff, value(_hermite(old, new, dt, k / SAMPLES, int(0)), floor))
         return u_best, ff, min(emin_end, _min_strain(old[0], system.h))
     return search_extremes(scheme, old, new, work, interp, system, floor, dt, ff_end,
                            emin_end)

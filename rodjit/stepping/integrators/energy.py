@@ -390,7 +390,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         v2[i] = idt2 * d[i] - v[i]
     # the full acceleration of the new state from the stresses of Newton's last evaluation,
     # which was at this state (``full_accel`` without evaluating the laws again)
-    assemble(u2, a2, work[S], work[K], fl, system, True)
+    assemble(u2, a2, work[S], work[K], fl, system, bool(True))
     add_viscous(system, v2, a2)
     # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
     # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node

@@ -143,7 +143,7 @@ def initial(scheme, system, rod, floor, u, v, a, work):
     control the first trial is the cap; its error ratio shortens it if it must)."""
     st = stages(scheme)
     status, val, emin, fl, om2 = accel(u, a, work[W.S], work[W.K], system, rod, floor,
-                                       st.kick_bending)
+                                       st.kick_bending, bool(True))
     return StepResult(status, val, emin, fl,
                       _suggest(scheme, st, system, floor, om2, u[0], v[0]), 0.0, 0.0)
 
@@ -269,7 +269,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         for i in range(n + 1):
             u2[i] = u[i] + dt * v2[i]
     status, val, emin, fl, om2 = accel(u2, a2, work[W.S], work[W.K], system, rod, floor,
-                                       st.kick_bending)
+                                       st.kick_bending, bool(True))
     if status != OK:
         return StepResult(status, val, emin, fl, 0.0, 0.0, diss)
     if imex:
