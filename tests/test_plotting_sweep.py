@@ -21,7 +21,7 @@ def sweep_path(tmp_path_factory):
 def test_restitution_against_mu_one_line_per_floor(sweep_path):
     table = rodjit.load_sweep(sweep_path)
     ax = sweep_figure(sweep_path).axes[0]
-    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith(("_", "no value"))]
     assert [ln.get_label() for ln in lines] == [
         "κ_b = 1000, β = 0.01", "κ_b = 1000, β = 0.05", "κ_b = 10000, β = 0.01",
         "κ_b = 10000, β = 0.05"]
@@ -90,3 +90,19 @@ def test_titles_fit_and_every_axis_has_its_unit(sweep_path, kind, options):
     else:
         assert ax.get_xlabel() == "μ (rod.mu) [N s]"
         assert ax.get_ylabel() == "restitution_first [1]"
+
+
+def test_a_point_without_a_value_is_marked_not_dropped(tmp_path):
+    """The rod dropped from 3 m has not reached the floor by t_end: its restitution is NaN,
+    drawn as a marker at the foot of the axes with a legend entry saying so."""
+    path = tmp_path / "nan.h5"
+    rodjit.sweep(rodjit.Config().override({"time.t_end": 0.6}),
+                 {"initial.height": [0.2, 0.5, 3.0]}, output=path, scheduler="inline")
+    table = rodjit.load_sweep(path)
+    assert np.isnan(table["restitution_first"]).sum() == 1
+    ax = sweep_figure(path).axes[0]
+    marks = [ln for ln in ax.get_lines() if ln.get_label().startswith("no value")]
+    assert len(marks) == 1
+    assert list(marks[0].get_xdata()) == [3.0]
+    assert ax.get_legend() is not None
+    assert "no value" in [t.get_text() for t in ax.get_legend().get_texts()][0]

@@ -87,6 +87,11 @@ def test_no_readme_command_writes_into_the_repository():
             assert path not in files and not path.startswith("docs/"), line
 
 
+# RMS difference of the README's pictures and a new drawing, in grey levels (0-255): a
+# line moved by a pixel or a font's hinting stays under it, a curve that differs does not
+PNG_TOL = 3.0
+
+
 @pytest.mark.slow
 def test_the_python_block_runs_as_a_script_then_every_command_in_order(shell):
     """One directory, the README's order: the first command, the Python block saved as
@@ -113,6 +118,12 @@ def test_the_python_block_runs_as_a_script_then_every_command_in_order(shell):
             assert re.search(r"n50\.h5: completed at t = (\S+) of \1", r.stdout), r.stdout
     for png in ("n50.png", "paper_mu0.png", "paper_mu100.png"):
         assert (shell.cwd / png).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", png
+    # the README's pictures are what its commands draw (regenerate them with those commands)
+    from matplotlib.testing.compare import compare_images
+
+    for png in ("paper_mu0.png", "paper_mu100.png"):
+        diff = compare_images(str(ROOT / "docs" / png), str(shell.cwd / png), tol=PNG_TOL)
+        assert diff is None, f"docs/{png} is not what the README's commands draw: {diff}"
 
 
 def test_the_python_block_piped_to_python_says_why_the_workers_cannot_run(shell):

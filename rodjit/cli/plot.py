@@ -11,7 +11,7 @@ from .files import (CONVERGENCE_KINDS, PLOT_KINDS, RUN_KINDS, SWEEP_KINDS, draw,
                     is_convergence)
 from .options import overrides
 
-__all__ = ["plot_command", "plot_run", "plot_sweep", "parse_figsize"]
+__all__ = ["plot_command", "plot_run", "plot_sweep", "parse_figsize", "parse_t_range"]
 
 
 def parse_figsize(text: str | None) -> tuple[float, float] | None:
@@ -25,6 +25,19 @@ def parse_figsize(text: str | None) -> tuple[float, float] | None:
     if not (0 < w <= 100 and 0 < h <= 100):
         raise UsageError(f"--figsize {text!r} is out of range (inches > 0 and <= 100)")
     return (w, h)
+
+
+def parse_t_range(text: str) -> tuple[float, float] | str:
+    """``--t-range T0,T1`` (seconds) as a tuple, or ``"impact"``."""
+    if text.strip() == "impact":
+        return "impact"
+    from ..plotting.run import check_t_range
+
+    try:
+        return check_t_range(text.split(","))
+    except ValueError:
+        raise UsageError(f"--t-range {text!r} is out of range (T0,T1 in seconds with "
+                         f"T0 < T1, e.g. 0.4,0.5, or 'impact')") from None
 
 
 @click.command("plot")
@@ -52,20 +65,25 @@ def parse_figsize(text: str | None) -> tuple[float, float] | None:
                    "the first value of each other key].")
 @click.option("--panels", "panels", metavar="KEY", help="Sweep files (restitution): one "
               "panel per value of this swept key.")
+@click.option("--t-range", "t_range", metavar="T0,T1|impact",
+              help="Run files: the time window drawn, in seconds (e.g. 0.4,0.5), or "
+                   "'impact' for the first impact [default: the whole run; heights adds a "
+                   "panel with the first impact].")
 @click.option("--dpi", type=click.IntRange(10, 2400), default=150, show_default=True,
               help="Resolution of PNG images.")
 @click.option("--figsize", metavar="W,H", help="Figure size in inches, e.g. 8,5.")
 @options.overwrite_option("Replace an existing image.")
 def plot_command(file: str, output: str | None, kind: str | None, quantity: str | None,
                  x_key: str | None, y_key: str | None, at: tuple[str, ...],
-                 panels: str | None, dpi: int, figsize: str | None,
+                 panels: str | None, t_range: str | None, dpi: int, figsize: str | None,
                  overwrite: bool) -> None:
     """Draw a figure of a rodjit file (a run or a sweep) as PNG, PDF or SVG (by the suffix
     of -o)."""
     if is_convergence(file):
-        if kind not in (None, *CONVERGENCE_KINDS) or quantity or x_key or y_key or at:
+        if (kind not in (None, *CONVERGENCE_KINDS) or quantity or x_key or y_key or at
+                or t_range):
             raise UsageError("a convergence file takes no --kind but 'convergence' and no "
-                             "--quantity, --x, --y or --at")
+                             "--quantity, --x, --y, --at or --t-range")
         from ..plotting.convergence import plot_convergence_file
 
         draw(plot_convergence_file, file, output, "convergence", overwrite)
@@ -80,9 +98,13 @@ def plot_command(file: str, output: str | None, kind: str | None, quantity: str 
             raise UsageError("--x, --y, --at and --panels are for sweep files")
         if quantity and kind != "spacetime":
             raise UsageError("--quantity is for --kind spacetime on a run file")
+        window = {} if t_range is None else {"t_range": parse_t_range(t_range)}
         plot_run(file, output, kind or "heights",
-                 dict(style, **({"quantity": quantity} if quantity else {})), overwrite)
+                 dict(style, **window, **({"quantity": quantity} if quantity else {})),
+                 overwrite)
         return
+    if t_range is not None:
+        raise UsageError("--t-range is for run files")
     if kind is not None and kind not in SWEEP_KINDS:
         raise UsageError(f"--kind {kind} is for run files; a sweep file takes one of "
                          f"{', '.join(SWEEP_KINDS)}")

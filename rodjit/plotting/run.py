@@ -12,11 +12,13 @@ import numpy as np
 
 from ..records.datasets import strain_of
 from ..records.metadata import meaning
+from .dense import contacts
 from .dense import samples as sample
 from .mpl import MissingMatplotlib, NothingToDraw, new_figure, save
 from .source import MAX_POINTS, RunSource
 
-__all__ = ["KINDS", "QUANTITIES", "figure", "plot_file", "MissingMatplotlib"]
+__all__ = ["KINDS", "QUANTITIES", "figure", "plot_file", "impact_window", "check_t_range",
+           "MissingMatplotlib"]
 
 KINDS = ("heights", "energy", "bounces", "spacetime", "contact")
 QUANTITIES = ("strain", "u", "v")      # what a space-time map colours
@@ -55,10 +57,14 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
         Draw into this axes (its figure is returned) instead of a new figure.
     quantity : str
         What ``spacetime`` colours, one of ``QUANTITIES`` (``"strain"``, ``"u"``, ``"v"``).
-    t_range : tuple of float, optional
-        ``(t0, t1)`` [s]: the part of the time axis drawn.
+    t_range : tuple of float or "impact", optional
+        ``(t0, t1)`` [s]: the part of the time axis drawn; ``"impact"``: the first
+        impact, from half its duration before the floor is reached to half after the
+        release (``impact_window``).  By default the whole run, and ``heights`` in a new
+        figure adds a second panel with the first impact (an impact of 12 ms is a
+        vertical line at the scale of a 5 s run).
     figsize : tuple of float, optional
-        Size of a new figure in inches (default 7.5 × 4.5).
+        Size of a new figure in inches (default 7.5 × 4.5; 11 × 4.5 with the impact panel).
     dense : bool
         ``spacetime``: where the snapshots are too sparse for a contact or for the window
         (fewer than ``dense.MIN_SAMPLES``), draw the solution re-simulated there from the
@@ -72,9 +78,11 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
     Raises
     ------
     ValueError
-        An unknown ``kind`` or ``quantity``.
+        An unknown ``kind`` or ``quantity``, or a ``t_range`` that is not two finite
+        times in increasing order or ``"impact"``.
     NothingToDraw
-        The run has no data for ``kind`` (e.g. snapshots switched off).
+        The run has no data for ``kind`` (e.g. snapshots switched off), or
+        ``t_range = "impact"`` and the rod never reached the floor.
     MissingMatplotlib
         matplotlib is not installed (the ``[plot]`` extra).
 
@@ -89,16 +97,74 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
     if kind == "spacetime" and quantity not in QUANTITIES:
         raise ValueError(f"quantity = {quantity!r} is not allowed (one of "
                          f"{', '.join(QUANTITIES)})")
+    t_range = check_t_range(t_range)
     with RunSource(source) as src:
+        if t_range == "impact":
+            t_range = impact_window(src)
+        # the default heights figure: the whole run and its first impact side by side
+        zoom = (kind == "heights" and ax is None and t_range is None
+                and src.n_snapshots() > 0 and first_impact(src) is not None)
         if ax is None:
-            fig = new_figure(figsize=figsize or (7.5, 4.5), layout="constrained")
+            size = figsize or ((11.0, 4.5) if zoom else (7.5, 4.5))
+            fig = new_figure(figsize=size, layout="constrained")
         else:
             fig = ax.figure
+        if zoom:
+            ax, ax_impact = fig.subplots(1, 2, width_ratios=(2, 1))
         draw = {"heights": _heights, "energy": _energy, "bounces": _bounces,
                 "spacetime": _spacetime, "contact": _contact}[kind]
-        axes = draw(src, fig, ax, quantity=quantity, t_range=t_range, dense=dense)
+        axes = draw(src, fig, ax, quantity=quantity, t_range=t_range, dense=dense,
+                    legend=not zoom)
         axes[0].set_title(_title(src.config), fontsize=10)
+        if zoom:
+            _impact_panel(src, fig, ax_impact, dense)
     return fig
+
+
+def check_t_range(t_range):
+    """``t_range`` as ``figure`` takes it: None, ``"impact"`` or ``(t0, t1)`` of finite
+    floats with t0 < t1 (a ``ValueError`` naming ``t_range`` otherwise)."""
+    if t_range is None or (isinstance(t_range, str) and t_range == "impact"):
+        return t_range
+    try:
+        t0, t1 = (float(x) for x in t_range)
+    except (TypeError, ValueError):
+        raise ValueError(f"t_range = {t_range!r} is not allowed (two times (t0, t1) in "
+                         f"seconds, or 'impact')") from None
+    if not (np.isfinite(t0) and np.isfinite(t1) and t0 < t1):
+        raise ValueError(f"t_range = {t_range!r} is out of range (finite times with "
+                         f"t0 < t1, in seconds)")
+    return (t0, t1)
+
+
+def first_impact(src):
+    """``(t_impact, t_release)`` of the run's first impact (one still in contact at the
+    end: until the last snapshot), or None where the rod never reached the floor."""
+    found = contacts(src, -np.inf, np.inf)
+    return found[0] if found else None
+
+
+def impact_window(src) -> tuple[float, float]:
+    """The time window of the first impact: half its duration before the rod reaches the
+    floor to half after it leaves (the approach and the release), inside the run."""
+    hit = first_impact(src)
+    if hit is None:
+        raise NothingToDraw("the rod never reached the floor: no impact to draw "
+                            "(t_range = 'impact'); give the times instead")
+    a, b = hit
+    t = src.snapshot_times()
+    lo, hi = a - (b - a) / 2, b + (b - a) / 2
+    if t.size:
+        lo, hi = max(lo, float(t[0])), min(hi, float(t[-1]))
+    return (lo, hi)
+
+
+def _impact_panel(src, fig, ax, dense: bool) -> None:
+    """The first impact's node heights beside the whole run (re-simulated where the
+    snapshots are too sparse for it, ``plotting.dense``), with the nodes' legend."""
+    lo, hi = impact_window(src)
+    _heights(src, fig, ax, t_range=(lo, hi), dense=dense, legend=True)
+    ax.set_title(f"first impact: t = {lo:.4g} to {hi:.4g} s", fontsize=10)
 
 
 def plot_file(path, output, kind: str = "heights", *, dpi: int = 150, figsize=None,
@@ -141,7 +207,7 @@ def _window(ax, t, t_range):
     ax.set_xlim(*(t_range if t_range is not None else (t[0], t[-1])))
 
 
-def _heights(src, fig, ax, *, t_range, **_):
+def _heights(src, fig, ax, *, t_range, dense=True, legend=True, **_):
     n = src.n_snapshots()
     if n == 0:
         raise NothingToDraw("the run has no snapshots (output.snapshot_interval = 0); "
@@ -149,8 +215,17 @@ def _heights(src, fig, ax, *, t_range, **_):
     N = src.config.rod.N
     nodes = list(np.unique(np.round(np.linspace(0, N, min(MAX_CURVES, N + 1))).astype(int)))
     rows = src.strided_rows(MAX_POINTS, t_range)
-    t = src.snapshot_times()[rows]
-    u = src.snapshots("u", rows, nodes)
+    if t_range is None:
+        t = src.snapshot_times()[rows]
+        u = src.snapshots("u", rows, nodes)
+    else:   # a window: its contacts drawn from enough samples (plotting.dense)
+        s = sample(src, np.arange(n)[rows], t_range[0], t_range[1], dense=dense,
+                   window=True, what="heights")
+        t = s.t
+        if t.size < 2:
+            raise NothingToDraw(f"fewer than two snapshots in t_range = {t_range}; "
+                                f"nothing to draw for kind 'heights'")
+        u = s.states(src, "u")[:, nodes]
     import matplotlib
 
     ax = _one_axes(fig, ax)
@@ -161,8 +236,9 @@ def _heights(src, fig, ax, *, t_range, **_):
     ax.set_xlabel(_label("time t", "snapshots", "t"))
     ax.set_ylabel(_label("height u(t, x)", "snapshots", "u"))
     _window(ax, t, t_range)
-    ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8,
-              title="node at", title_fontsize=8)
+    if legend:
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8,
+                  title="node at", title_fontsize=8)
     return [ax]
 
 

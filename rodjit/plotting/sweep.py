@@ -167,6 +167,7 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     import matplotlib
 
     colors = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.85, max(1, len(combos))))
+    marked = False
     for j, combo in enumerate(combos):
         mask = base & _select(table, dict(zip(others, combo)))
         order = np.argsort(table[x][mask])
@@ -175,6 +176,12 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
         label = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in zip(others, combo))
         ax.plot(xv, yv, MARKERS[j % len(MARKERS)] + "-", ms=5, lw=1.0, color=colors[j],
                 label=label or None)
+        missing = ~np.isfinite(yv)
+        if missing.any():   # a point without a value is marked at the foot of the axes
+            ax.plot(xv[missing], np.full(int(missing.sum()), 0.03), "x", ms=7, mew=1.5,
+                    color=colors[j], transform=ax.get_xaxis_transform(), clip_on=False,
+                    label=None if marked else "no value (NaN: failed, not run or undefined)")
+            marked = True
     _scale(ax.set_xscale, xs)
     ax.set_xlabel(_key_label(x))
     ax.set_ylabel(_quantity_label(quantity))
@@ -182,7 +189,7 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     _title(ax, _label(quantity) + (f"\n{title}" if title else ""))
     if quantity.startswith("restitution"):
         ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
-    if others:
+    if others or marked:
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
 
 
