@@ -221,3 +221,33 @@ def test_an_older_format_file_with_hard_links_is_not_rebuilt(tmp_path, monkeypat
     assert r.exit_code == 2, r.output
     assert "has 2 hard links" in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert open("old.h5", "rb").read() == before == open("other.h5", "rb").read()
+
+
+@pytest.mark.parametrize("verb", ["plot", "animate"])
+@pytest.mark.parametrize("onto", ["itself", "itself through a link", "another run file"])
+def test_a_picture_never_replaces_its_input_or_any_hdf5_file(tmp_path, monkeypatch, verb,
+                                                             onto):
+    """``-o`` naming the file drawn (under a picture's suffix, or through a link) or another
+    HDF5 file is refused in one line even with --overwrite, the file unchanged; before,
+    ``rodjit plot r.png -o r.png --overwrite`` replaced a run file named r.png by its own
+    picture."""
+    pytest.importorskip("matplotlib")
+    monkeypatch.chdir(tmp_path)
+    suffix = ".png" if verb == "plot" else ".gif"
+    run = tmp_path / f"r{suffix}"
+    r = invoke("run", "-o", "r.h5", *TINY)
+    assert r.exit_code == 0, r.output
+    shutil.copy("r.h5", run)
+    target = run
+    if onto == "itself through a link":
+        target = tmp_path / f"link{suffix}"
+        target.symlink_to(run)
+    elif onto == "another run file":
+        run = tmp_path / "r.h5"
+        target = tmp_path / f"other{suffix}"
+        shutil.copy("r.h5", target)
+    before = {p: p.read_bytes() for p in (run, target)}
+    r = invoke(verb, run, "-o", target, "--overwrite")
+    refused(r, "is the file being drawn" if onto != "another run file" else
+            "is an HDF5 file, not a picture")
+    assert {p: p.read_bytes() for p in before} == before

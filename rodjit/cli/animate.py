@@ -36,7 +36,7 @@ def animate_command(file: str, output: str | None, fps: int, duration: float, qu
     from ..plotting.animation import MissingWriter, animate
 
     out = output or str(Path(file).with_suffix(".gif"))
-    check_picture(out, overwrite)
+    check_picture(out, overwrite, file)
     try:
         written = animate(file, out, fps=fps, duration=duration, quantity=quantity, dpi=dpi)
     except MissingMatplotlib as exc:    # the plot extra: a usage error (install it), exit 2

@@ -3,6 +3,7 @@ sweep, convergence), the figure kinds of each, and drawing a figure into an imag
 command line's errors."""
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Any, Callable
 
@@ -39,7 +40,7 @@ def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
     from ..plotting import MissingMatplotlib, NothingToDraw
 
     out = output or str(Path(path).with_suffix("")) + f"_{kind}.png"
-    check_picture(out, overwrite)
+    check_picture(out, overwrite, path)
     from ..output.h5files import WriteFailed
 
     try:
@@ -55,16 +56,34 @@ def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
     click.echo(f"wrote {written}")
 
 
-def check_picture(output: str, overwrite: bool) -> None:
+def check_picture(output: str, overwrite: bool, source: str | None = None) -> None:
     """UsageError (one line) unless the picture ``output`` can be written: its directory,
     a special file, and an existing file only with --overwrite
-    (``output.h5files.check_output``)."""
+    (``output.h5files.check_output``); never the file drawn (``source``) nor any HDF5
+    file, whatever its name: a picture replaces only a picture."""
     from ..output.h5files import check_output
 
+    if source is not None and _same_file(output, source):
+        raise UsageError(f"-o {output!r} is the file being drawn; choose another name")
+    try:
+        with open(output, "rb") as f:
+            hdf5 = f.read(8) == b"\x89HDF\r\n\x1a\n"
+    except OSError:
+        hdf5 = False
+    if hdf5:
+        raise UsageError(f"-o {output!r} is an HDF5 file, not a picture; rodjit does not "
+                         f"replace it with one (choose another name)")
     try:
         check_output(output, overwrite=overwrite)
     except ValueError as exc:
         raise UsageError(exc) from None
+
+
+def _same_file(a: str, b: str) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return os.path.abspath(a) == os.path.abspath(b)
 
 
 def is_convergence(path: str) -> bool:
