@@ -97,12 +97,24 @@ def test_run_report_and_info_show_the_first_impact(tmp_path):
     line = next(ln for ln in text.splitlines() if "first impact" in ln)
     ratio = s.impact["rebound_speed"] / -s.impact["w_impact"]
     assert "no lift-off" in line and f"{ratio:.3g} of impact" in line
+    # one meaning of "no lift-off": the bounce table's open row says it too, not "open"
+    row = [ln for ln in text.splitlines() if ln.split()[:2] == ["1", "0.4515"]][0]
+    assert "no lift-off" in row and "open" not in row
+    assert "(restitution no lift-off)" in str(rodjit.load_file(path))
     path2 = tmp_path / "l.h5"
     rodjit.run_to_file(PAPER.override({"time.t_end": 1.0}), path2)
     s2 = summarize(path2)
     line = next(ln for ln in s2.report().splitlines() if "first impact" in ln)
     assert f"e = {s2.impact['restitution_first']:.4g} (lift-off)" in line
     assert f"contact {s2.impact['contact_time_first']:.4g} s" in line
+    # the apex ratio named as such, and never a bare "e = 0" beside the restitution
+    assert s2.impact["restitution_apex"] == 0.0 and "apex e" not in line
+    assert "centre-of-mass apex restitution 0 (the centre of mass rises no higher" in line
+    # an open bounce that may still end reads "open"
+    path3 = tmp_path / "o.h5"
+    rodjit.run_to_file(PAPER.override({"time.t_end": 0.455}), path3)
+    r3 = rodjit.load_file(path3)
+    assert r3.bounces["open"][-1] and "(restitution open" in str(r3)
 
 
 def test_sweep_plot_draws_a_no_lift_off_point(tmp_path):

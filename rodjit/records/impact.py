@@ -38,7 +38,8 @@ IMPACT_COLUMNS: dict[str, tuple[str, str]] = {
                              "undefined"),
     "impact_reason": ("str", "why restitution_first is 0 or missing ('' for lift-off)"),
     "restitution_apex": ("float", "sqrt of rebound over drop apex height of the centre of "
-                                  "mass above 1/2 for the first bounce"),
+                                  "mass above 1/2 for the first bounce (0 where it rises no "
+                                  "higher than 1/2; not the restitution: restitution_first)"),
     "contact_time_first": ("float", "t_release - t_impact of the first bounce (inf: no "
                                     "lift-off)"),
     "w_impact": ("float", "centre-of-mass velocity at the first impact"),
@@ -253,10 +254,14 @@ def impact_line(values: dict) -> str:
     or 'first impact: no lift-off (rebound speed 0.17 of impact)'."""
     st = values["impact_status"]
     if st == "lift-off":
+        apex = values["restitution_apex"]
+        # the apex ratio is no restitution of its own where the centre of mass does not
+        # rise above its height at rest after the impact: it is 0 there by definition
+        said = (f"{apex:.4g}" if apex > 0 else
+                "0 (the centre of mass rises no higher than half the rod's length)")
         return (f"e = {values['restitution_first']:.4g} (lift-off), contact "
-                f"{values['contact_time_first']:.4g} s, apex e = "
-                f"{values['restitution_apex']:.4g}, penetration "
-                f"{-values['min_u0_impact']:.4g}")
+                f"{values['contact_time_first']:.4g} s, penetration "
+                f"{-values['min_u0_impact']:.4g}; centre-of-mass apex restitution {said}")
     if st == "no lift-off":
         ratio = values["rebound_speed"] / abs(values["w_impact"])
         return (f"e = 0 (no lift-off: rebound speed of the centre of mass {ratio:.3g} of "

@@ -44,7 +44,7 @@ class RunFacts:
     def rows(self) -> list[tuple[str, str]]:
         b = self.bounces
         n = int(b["t_impact"].size)
-        e = [("open" if b["open"][i] else number(b["restitution"][i], ".4f")
+        e = [(self._open(i) if b["open"][i] else number(b["restitution"][i], ".4f")
               + ("?" if b["ambiguous"][i] else ""))
              for i in range(min(n, SHOWN_RESTITUTIONS))]
         bounces = f"{n}" + (f" (restitution {', '.join(e)}{', ...' if n > len(e) else ''})"
@@ -59,6 +59,16 @@ class RunFacts:
             rows.insert(0, ("message", self.message))
         rows.extend(("warning", w) for w in self.warnings)
         return rows
+
+    def _open(self, i: int) -> str:
+        """What the restitution of the open bounce ``i`` (in contact at the end) reads: "no
+        lift-off" where that bounce is the first impact and its energy is below the
+        lift-off energy (it can never end: ``impact_status``, restitution_first 0), else
+        "open" (it may still end)."""
+        b = self.bounces
+        no_lift = (bool(self.impact) and self.impact.get("impact_status") == "no lift-off"
+                   and i == int(b["t_impact"].size) - 1)
+        return "no lift-off" if no_lift else "open"
 
     def text(self) -> str:
         return text(self.title(), self.rows())
@@ -91,7 +101,7 @@ class RunFacts:
                 if i < 0:
                     lines.append("    ...")
                     continue
-                e = "open" if b["open"][i] else _num(b["restitution"][i], ".4f")
+                e = self._open(i) if b["open"][i] else _num(b["restitution"][i], ".4f")
                 lines.append(f"  {i + 1:5d} {_num(b['t_impact'][i], '10.4f')} "
                              f"{_num(b['t_release'][i], '10.4f')} {int(b['n_episodes'][i]):9d} "
                              f"{_num(b['w_impact'][i], '10.4f')} {_num(b['w_release'][i], '10.4f')}"
