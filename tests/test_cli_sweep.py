@@ -278,3 +278,34 @@ def test_jobs_on_this_machine_are_capped_at_its_cores(monkeypatch, tmp_path, sch
     assert r.exit_code == 2 and "stopped before any worker starts" in r.stderr, r.output
     assert asked["jobs"] == (2 if capped else 6)
     assert ("--jobs 6 is more than the 2 cores; using 2" in r.stderr) == capped
+
+
+@pytest.mark.parametrize("verb,target", [
+    ("fit", ("rod.mu", "--target", "restitution_first=0.5", "--bracket", "1,100")),
+    ("fit", ("rod.mu", "--table", "t.csv")),
+    ("converge", ("--ladder", "rod.N=5,10,20"))])
+@pytest.mark.parametrize("force", [False, True])
+def test_fit_and_converge_cap_their_jobs_as_sweep_does(monkeypatch, tmp_path, verb, target,
+                                                       force):
+    """fit and converge run their points on the same pool: --jobs beyond the cores is cut
+    to the cores with the sweep's note, unless --force-jobs."""
+    import importlib
+
+    import rodjit.sweeps.executors
+
+    asked = {}
+
+    def recorder(*args, jobs=None, **kwargs):
+        asked["jobs"] = jobs
+        raise ValueError("stopped before any worker starts")
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "t.csv").write_text("initial.height,restitution_first\n1,0.5\n2,0.4\n")
+    monkeypatch.setattr(rodjit.sweeps.executors, "default_jobs", lambda: 2)
+    for name in ("fit", "fit_table", "converge"):
+        monkeypatch.setattr(importlib.import_module(f"rodjit.analysis.{name}"), name, recorder)
+    r = CliRunner().invoke(main, [verb, *target, "-j", "6",
+                                  *(["--force-jobs"] if force else [])])
+    assert "stopped before any worker starts" in r.stderr, r.output
+    assert asked["jobs"] == (6 if force else 2)
+    assert ("--jobs 6 is more than the 2 cores; using 2" in r.stderr) == (not force)

@@ -31,12 +31,13 @@ __all__ = ["converge_command"]
 @options.overwrite_option("Replace an existing convergence file (never another kind of "
                           "file).")
 @options.jobs_option()
+@options.force_jobs_option()
 @options.scheduler_option()
 @options.set_option()
 @options.max_output_option("a run whose output")
 @options.max_steps_option("a fixed time.dt that")
 def converge_command(config: str | None, ladder: str, also: str | None, observables: str,
-                     output: str | None, overwrite: bool, jobs: int | None,
+                     output: str | None, overwrite: bool, jobs: int | None, force_jobs: bool,
                      scheduler: str | None, sets: tuple[str, ...], max_output: str,
                      max_steps: float) -> None:
     """Run CONFIG.toml, a preset or the default along a resolution ladder and report, per
@@ -57,6 +58,7 @@ def converge_command(config: str | None, ladder: str, also: str | None, observab
 
     try:
         cfg = options.base_config(config, sets)
+        jobs = options.cap_jobs(jobs, scheduler, None, force_jobs)
         limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
         if output:      # before the study runs: as every writer's output (run -o's rule)
             check_output(output, overwrite, CONVERGENCE_KIND)

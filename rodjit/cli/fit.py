@@ -32,13 +32,14 @@ __all__ = ["fit_command"]
                    "(a drop condition per row, e.g. initial.height, and measured "
                    "restitution_first and/or contact_time_first, optional sigma_<name>).")
 @options.jobs_option()
+@options.force_jobs_option()
 @options.scheduler_option()
 @options.set_option()
 @options.max_output_option("a run whose output")
 @options.max_steps_option("a fixed time.dt that")
 def fit_command(key: str, config: str | None, target: str | None, bracket: str,
                 points: int | None, ftol: float, converged: bool, ladder: str | None,
-                table: str | None, jobs: int | None, scheduler: str | None,
+                table: str | None, jobs: int | None, force_jobs: bool, scheduler: str | None,
                 sets: tuple[str, ...], max_output: str, max_steps: float) -> None:
     """Find the value of KEY for which an observable takes a target (--target), or fit
     several KEYs to a table of measurements (--table).
@@ -53,6 +54,7 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     result: Any
     try:
         cfg = options.base_config(config, sets)
+        jobs = options.cap_jobs(jobs, scheduler, None, force_jobs)
         limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
         keys = [k.strip() for k in key.split(",") if k.strip()]
         if table:

@@ -107,6 +107,35 @@ def jobs_option() -> Callable[[F], F]:
                         help="Worker processes [default: every core].")
 
 
+def force_jobs_option() -> Callable[[F], F]:
+    """``--force-jobs``: start --jobs workers beyond the cores (``cap_jobs``)."""
+    return click.option("--force-jobs", is_flag=True, help="Start --jobs workers even if "
+                                                           "that is more than the cores.")
+
+
+def cap_jobs(jobs: int | None, scheduler: str | None, grid: Any = None, force: bool = False,
+             quiet: bool = False) -> int | None:
+    """--jobs for workers on this machine (the local pool, or Dask's ``local`` cluster, which
+    starts --jobs worker processes here too): at most the cores (unless forced, with a note
+    when cut) and never more than the points.  A remote cluster's workers are its own."""
+    from ..sweeps.start_method import POOL_SCHEDULERS
+
+    if (jobs is None or isinstance(jobs, bool) or jobs < 1
+            or scheduler not in (*POOL_SCHEDULERS, "local")):
+        return jobs
+    from ..sweeps.executors import default_jobs
+
+    cores = default_jobs()
+    if jobs > cores and not force:
+        if not quiet:
+            click.echo(f"note: --jobs {jobs} is more than the {cores} cores; using {cores} "
+                       f"(--force-jobs to insist)", err=True)
+        jobs = cores
+    if grid is not None:
+        jobs = max(1, min(jobs, len(grid)))
+    return jobs
+
+
 def scheduler_option(help: str = SCHEDULER_AS_SWEEP) -> Callable[[F], F]:
     """``--scheduler local|tcp://HOST:PORT``."""
     return click.option("--scheduler", metavar=SCHEDULER_METAVAR, help=help)

@@ -34,10 +34,11 @@ def parse_t_range(text: str) -> tuple[float, float] | str:
     from ..plotting.run import check_t_range
 
     try:
-        return check_t_range(text.split(","))
+        t0, t1 = check_t_range(text.split(","))
     except ValueError:
         raise UsageError(f"--t-range {text!r} is out of range (T0,T1 in seconds with "
                          f"T0 < T1, e.g. 0.4,0.5, or 'impact')") from None
+    return (float(t0), float(t1))
 
 
 @click.command("plot")

@@ -34,8 +34,7 @@ __all__ = ["sweep_command", "failed_points"]
 @click.option("--resume", is_flag=True, help="Run only the points of the sweep file that are "
                                              "missing or failed.")
 @options.overwrite_option("Replace an existing sweep file (and run files in --save-runs).")
-@click.option("--force-jobs", is_flag=True, help="Start --jobs workers even if that is more "
-                                                 "than the cores.")
+@options.force_jobs_option()
 @options.quiet_option()
 @options.progress_option()
 @options.max_output_option("a sweep whose sweep file, or (with --save-runs) any run file,")
@@ -135,7 +134,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
                               overwrite=overwrite, **limits)
             click.echo(plan.report())
             return
-        jobs = cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
+        jobs = options.cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
         with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
             table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                           save_runs=save_runs, resume=resume, overwrite=overwrite,
@@ -216,26 +215,3 @@ def make_grid(grid_options: tuple[str, ...], max_points: float) -> Any:
     from ..sweeps.grid import Grid, parse_grid_option
 
     return Grid.from_spec(parse_grid_option(grid_options), max_points=max_points)
-
-
-def cap_jobs(jobs: int | None, scheduler: str | None, grid: Any, force: bool,
-             quiet: bool) -> int | None:
-    """--jobs for workers on this machine (the local pool, or Dask's ``local`` cluster, which
-    starts --jobs worker processes here too): at most the cores (unless forced, with a note
-    when cut) and never more than the points.  A remote cluster's workers are its own."""
-    from ..sweeps.start_method import POOL_SCHEDULERS
-
-    if (jobs is None or isinstance(jobs, bool) or jobs < 1
-            or scheduler not in (*POOL_SCHEDULERS, "local")):
-        return jobs
-    from ..sweeps.executors import default_jobs
-
-    cores = default_jobs()
-    if jobs > cores and not force:
-        if not quiet:
-            click.echo(f"note: --jobs {jobs} is more than the {cores} cores; using {cores} "
-                       f"(--force-jobs to insist)", err=True)
-        jobs = cores
-    if grid is not None:
-        jobs = max(1, min(jobs, len(grid)))
-    return jobs
