@@ -109,3 +109,22 @@ def test_the_exact_callers_refuse_other_types_and_ints_a_double_cannot_hold():
     for big in (2**53, -(2**53), 2**63):
         with pytest.raises(ValueError, match="2\\*\\*53"):
             P.pack((scheme._replace(**{ints[0]: big}), *rest))
+
+
+def test_the_compiled_rebuild_reads_the_same_values():
+    """The overload the CPU batch kernel compiles (kinds from Numba's types, the same
+    generator) gives the Python version's values: the default run's tuples, and a tuple
+    with NumPy scalars and a value taken from the prototype."""
+    from numba import njit
+
+    @njit
+    def compiled(protos, row):
+        return P.rebuild(protos, row)
+
+    for params in (_params("energy"), (Mixed(np.float64(-0.0), np.int32(-7), np.bool_(True),
+                                              (1, 2), 2.5),)):
+        row = np.array(P.pack(params))
+        for a, b in zip(compiled(params, row), P.rebuild(params, row)):
+            assert type(a) is type(b)
+            for x, y in zip(a, b):
+                assert _same(x.item() if isinstance(x, np.generic) else x, y), (x, y)
