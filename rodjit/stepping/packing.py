@@ -24,9 +24,9 @@ take exact Python floats, ints and bools only (``exact``): their kernels are com
 those types, and a field of another type (a ``float32``) would be read back as a float64,
 a run on other types than the JIT's.
 
-The extension takes the same single row as the other two (it took its floats and its ints
-in two arrays before): ints fit a double exactly (checked at ``pack``), and one row means
-one layout and one generator of the rebuilding code for the three callers.
+The extension takes the same single row as the other two rather than its floats and its
+ints in two arrays: the ints of the tuples fit a double exactly (checked at ``pack``), and
+one row means one layout and one generator of the rebuilding code for all three callers.
 """
 from __future__ import annotations
 
