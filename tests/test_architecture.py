@@ -387,3 +387,76 @@ def test_the_first_impact_observables_have_one_implementation(graph):
     callers = {name for name, path in known.items()
                if _calls_of(ast.parse(path.read_text(), str(path)), "first_impact")}
     assert callers == {"rodjit.records.observables"}, sorted(callers)
+
+
+# ---- one implementation of the packing of parameter tuples ------------------------------
+PACKING = "rodjit.stepping.packing"
+# the modules that move a point's parameter tuples into compiled code as a row of doubles,
+# each through the packing: the CPU engine's batch kernel, the ahead-of-time extension's
+# wrappers, the GPU kernel's source and the GPU engine's rows
+PACKING_CALLERS = ("rodjit.stepping.ensemble", "rodjit.stepping.aot", "rodjit.gpu.kernel",
+                   "rodjit.gpu.engine")
+
+
+def field_walkers(known: dict[str, Path]) -> set[str]:
+    """Modules that walk the fields of each of several tuples: a loop (or comprehension)
+    over the items of the enclosing loop's item (``for t in params: for x in t``), the
+    shape of every packing of parameter tuples into a row."""
+    out = set()
+    for name, path in known.items():
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            pairs = []
+            if isinstance(node, (ast.ListComp, ast.GeneratorExp, ast.SetComp, ast.DictComp)):
+                pairs = [(a.target, b.iter) for a, b in zip(node.generators,
+                                                            node.generators[1:])]
+            elif isinstance(node, ast.For):
+                pairs = [(node.target, inner.iter) for inner in ast.walk(node)
+                         if isinstance(inner, ast.For) and inner is not node]
+            if any(isinstance(t, ast.Name) and isinstance(i, ast.Name) and i.id == t.id
+                   for t, i in pairs):
+                out.add(name)
+    return out
+
+
+def rebuild_writers(known: dict[str, Path]) -> set[str]:
+    """Modules that write source reading a bool back from a row of doubles: a string
+    (or the text of an f-string) holding ``!= 0``, as every generated rebuilding does."""
+    out = set()
+    for name, path in known.items():
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.JoinedStr):
+                text = "".join(v.value for v in node.values if isinstance(v, ast.Constant))
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+                text = node.value
+            else:
+                continue
+            if re.search(r"!=\s*0", text):
+                out.add(name)
+    return out
+
+
+def test_the_packing_of_parameter_tuples_has_one_implementation(graph):
+    """One module packs a point's parameter tuples into a row of doubles and writes the
+    source that rebuilds them in compiled code (``stepping.packing``); the CPU batch
+    kernel, the ahead-of-time wrappers and the GPU kernel all take it from there, and no
+    other module walks tuples' fields or writes a rebuilding."""
+    known = modules()
+    assert field_walkers(known) == {PACKING}, sorted(field_walkers(known))
+    assert rebuild_writers(known) == {PACKING}, sorted(rebuild_writers(known))
+    for caller in PACKING_CALLERS:
+        assert PACKING in graph[caller], f"{caller} does not import {PACKING}"
+
+
+def test_the_packing_walks_see_the_forms_they_look_for(tmp_path):
+    (tmp_path / "a.py").write_text(
+        "def pack(params):\n    return [float(x) for t in params for x in t]\n")
+    (tmp_path / "b.py").write_text(
+        "def pack(args):\n    out = []\n    for p in args:\n        for x in p:\n"
+        "            out.append(x)\n    return out\n")
+    (tmp_path / "c.py").write_text("def src(k):\n    return f'ip[{k}] != 0'\n")
+    (tmp_path / "d.py").write_text("X = 'row[o + 3] != 0.0'\n"
+                                   "rows = [[0.0] * 3 for _ in range(2)]\n"
+                                   "for r in rows:\n    for j in range(3):\n        pass\n")
+    known = {f"rodjit.{n}": tmp_path / f"{n}.py" for n in "abcd"}
+    assert field_walkers(known) == {"rodjit.a", "rodjit.b"}
+    assert rebuild_writers(known) == {"rodjit.c", "rodjit.d"}

@@ -32,12 +32,13 @@ from ..records.extremes import Extremes
 from ..records.impact import impact_columns
 from ..stepping import impact_stream as S
 from ..stepping import layout as L
+from ..stepping.packing import pack
 from ..sweeps.batch import BatchResult
 from ..sweeps.ensemble import point_lift_energy
 from ..sweeps.point import bounce_values, empty_columns
 from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
-from .kernel import N_MAX, deep_call, family_of, make_kernel, pack, signature, simulated
+from .kernel import N_MAX, deep_call, family_of, make_kernel, signature, simulated
 from .starts import starts
 
 __all__ = ["run_batch", "check_device", "check_point", "prepare", "resolve_device",
@@ -123,7 +124,7 @@ def _launch(runs, cuda):
         for t in r.params():
             got = packed.get(id(t))
             if got is None:
-                got = packed[id(t)] = pack((t,))
+                got = packed[id(t)] = pack((t,), exact=True)
             row.extend(got)
         rows.append(row)
     params = np.array(rows, dtype=np.float64).reshape(n, -1)

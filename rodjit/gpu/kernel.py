@@ -5,8 +5,8 @@ A kernel is made per *family*: the classes of the five parameter tuples of the c
 (scheme, control, system, rod law, floor law, ``driver.run.parameters``), the kinds of
 their fields, and the node count N + 1 (local arrays need compile-time shapes).  Every
 point's tuples travel as one row of a float64 array; the kernel rebuilds them field by
-field (an int or bool field is stored exactly as a double), so the values of a sweep's
-parameters stay run-time values and one compile serves the whole grid.
+field (``stepping.packing``: an int or bool field is stored exactly as a double), so the
+values of a sweep's parameters stay run-time values and one compile serves the whole grid.
 
 The kernel's source is made here (``_source``) because the tuples' classes and field counts
 are the family's; the model in it is the CPU's own code, retargeted (``retarget``).  Under
@@ -24,11 +24,12 @@ from typing import NamedTuple
 
 from ..stepping import impact_stream as S
 from ..stepping import layout as L
+from ..stepping import packing as P
 from ..stepping.schemes import SCHEME_STATS, work_rows
 from . import trajectory as T
 from ._cuda import import_cuda
 
-__all__ = ["Family", "family_of", "pack", "make_kernel", "compile_ptx", "simulated",
+__all__ = ["Family", "family_of", "make_kernel", "compile_ptx", "simulated",
            "deep_call", "N_MAX"]
 
 # the largest rod (segments N) a thread runs: its state, trial states, integrator scratch
@@ -36,9 +37,6 @@ __all__ = ["Family", "family_of", "pack", "make_kernel", "compile_ptx", "simulat
 # energy integrator at N = 32, 7 kB at N = 64), beyond which one thread per trajectory
 # spills more than it computes
 N_MAX = 64
-
-_KINDS = {float: "f", int: "i", bool: "b"}
-
 
 class Family(NamedTuple):
     """What a compiled kernel depends on (module docstring)."""
@@ -50,16 +48,10 @@ class Family(NamedTuple):
 
 
 def family_of(params) -> Family:
-    """The family of a point's parameter tuples ``params`` (``driver.run.parameters``)."""
-    kinds = tuple("".join(_KINDS[type(x)] for x in t) for t in params)
-    return Family(tuple(type(t) for t in params), kinds, int(params[2].n) + 1,
-                  int(work_rows(params[0])))
-
-
-def pack(params) -> list[float]:
-    """A point's parameter tuples as one row of doubles (``Family.kinds`` says how each
-    field is read back)."""
-    return [float(x) for t in params for x in t]
+    """The family of a point's parameter tuples ``params`` (``driver.run.parameters``);
+    a TypeError for a field that is not a Python float, int or bool (``packing.kinds``)."""
+    return Family(tuple(type(t) for t in params), P.kinds(params, exact=True),
+                  int(params[2].n) + 1, int(work_rows(params[0])))
 
 
 def simulated() -> bool:
@@ -70,15 +62,9 @@ def simulated() -> bool:
 
 
 def _source(family: Family) -> str:
-    fields = []
-    o = 0
-    for k, kinds in enumerate(family.kinds):
-        args = []
-        for kind in kinds:
-            x = f"p[{o}]"
-            args.append({"f": x, "i": f"int({x})", "b": f"{x} != 0.0"}[kind])
-            o += 1
-        fields.append(f"    t{k} = C{k}({', '.join(args)})")
+    names = [f"C{k}" for k in range(len(family.classes))]
+    fields = [f"    t{k} = {x}"
+              for k, x in enumerate(P.rebuild_source(family.kinds, "p", names))]
     n1 = family.n1
     zero = "\n".join(f"    for j in range({size}):\n        {name}[j] = 0"
                      for name, size in (("sstats", max(1, len(SCHEME_STATS))),

@@ -22,8 +22,8 @@ ahead-of-time compiler of Numba code, and it compiles the same kernels with the 
 options as the JIT (``_jit.JIT_OPTIONS``: fused multiply-adds, no reference counting),
 for the host CPU as the JIT does, so both paths give the same bits
 (tests/test_stepping_aot.py).  Its exported functions take arrays and scalars only, so a
-run's five parameter tuples travel as one float64 and one int64 array (``pack``) and the
-generated wrappers (``wrapper_source``) rebuild them inside compiled code; the wrappers
+run's five parameter tuples travel as one float64 row (``pack``, ``stepping.packing``) and
+the generated wrappers (``wrapper_source``) rebuild them inside compiled code; the wrappers
 release the GIL around the loop, as a JIT call does (``nogil``), so the process's other
 threads keep running while it computes.
 
@@ -45,6 +45,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import packing as P
 from .._jit import SOURCES_DIGEST
 from .ensemble import run_batch
 from .loop import advance, start
@@ -81,19 +82,6 @@ ENTRIES = {
 }
 
 
-def _kind(value) -> str:
-    """How a parameter field travels: in the float array (f), the int array (i) or as an
-    int that is a bool (b)."""
-    t = type(value)
-    if t is bool:
-        return "b"
-    if t is int:
-        return "i"
-    if t is float:
-        return "f"
-    raise TypeError(f"a parameter field of type {t.__name__} has no ahead-of-time form")
-
-
 def key(args) -> tuple:
     """What the compiled loop's signature depends on in the parameter tuples ``args``
     (scheme, control, system, rod law, floor law) beyond the fixed array types: each one's
@@ -125,48 +113,37 @@ class _Key(tuple):
 _KEYS: dict[tuple, tuple] = {}
 
 
-def pack(args) -> tuple[np.ndarray, np.ndarray]:
-    """The fields of ``args`` in order: the floats in one float64 array, the ints and bools
-    in one int64 array (what the wrappers of ``wrapper_source`` unpack)."""
-    floats, ints = [], []
-    for p in args:
-        for x in p:
-            (floats if _kind(x) == "f" else ints).append(x)
-    return np.array(floats, dtype=np.float64), np.array(ints, dtype=np.int64)
+def pack(args) -> np.ndarray:
+    """The fields of ``args`` as one float64 row (``packing.pack``, exact Python types
+    only): what the wrappers of ``wrapper_source`` rebuild the tuples from."""
+    return np.array(P.pack(args, exact=True), dtype=np.float64)
 
 
 def wrapper_source(args) -> tuple[str, dict]:
     """Python source of the exported functions for parameter tuples of the types of
-    ``args``, and the globals it needs: each rebuilds the tuples from ``(p, ip)``
-    (``pack``), releases the GIL, calls the loop function and takes the GIL back."""
+    ``args``, and the globals it needs: each rebuilds the tuples from the row ``p``
+    (``pack``, ``packing.rebuild_source``), releases the GIL, calls the loop function and
+    takes the GIL back."""
     glob = {f"_{name}": function for name, (function, _) in ENTRIES.items()}
-    fields, nf, ni = [], 0, 0
+    names = []
     for j, p in enumerate(args):
+        names.append(f"_P{j}")
         glob[f"_P{j}"] = type(p)
-        items = []
-        for x in p:
-            kind = _kind(x)
-            if kind == "f":
-                items.append(f"p[{nf}]")
-                nf += 1
-            else:
-                items.append(f"ip[{ni}] != 0" if kind == "b" else f"ip[{ni}]")
-                ni += 1
-        fields.append(f"_P{j}({', '.join(items)})")
+    fields = P.rebuild_source(P.kinds(args, exact=True), "p", names)
     lines = []
     for name, (_, extra) in ENTRIES.items():
-        names = [a for a, _ in extra]
-        lines += [f"def {name}(p, ip, {', '.join(names)}):",
+        arrays = ", ".join(a for a, _ in extra)
+        lines += [f"def {name}(p, {arrays}):",
                   f"    a0, a1, a2, a3, a4 = {', '.join(fields)}",
                   "    ts = _save_thread()",
-                  f"    code = _{name}(a0, a1, a2, a3, a4, {', '.join(names)})",
+                  f"    code = _{name}(a0, a1, a2, a3, a4, {arrays})",
                   "    _restore_thread(ts)",
                   "    return code", ""]
     return "\n".join(lines), glob
 
 
 def _signature(name: str) -> str:
-    return f"i8(f8[::1], i8[::1], {', '.join(t for _, t in ENTRIES[name][1])})"
+    return f"i8(f8[::1], {', '.join(t for _, t in ENTRIES[name][1])})"
 
 
 def _cpu() -> str:
@@ -272,13 +249,13 @@ class AotLoop:
 
     def __init__(self, module, args):
         self._start, self._advance = module.start, module.advance
-        self.p, self.ip = pack(args)
+        self.p = pack(args)
 
     def start(self, *arrays):
-        return self._start(self.p, self.ip, *arrays)
+        return self._start(self.p, *arrays)
 
     def advance(self, *arrays_and_max_steps):
-        return self._advance(self.p, self.ip, *arrays_and_max_steps)
+        return self._advance(self.p, *arrays_and_max_steps)
 
 
 def _module_for(args, args_key: tuple | None):
@@ -307,10 +284,10 @@ def batch_for(args, args_key: tuple | None = None):
     module = _module_for(args, args_key)
     if module is None:
         return None
-    p, ip = pack(args)
+    p = pack(args)
     entry = module.run_batch
 
     def call(*arrays_and_max_steps):
-        return entry(p, ip, *arrays_and_max_steps)
+        return entry(p, *arrays_and_max_steps)
 
     return call

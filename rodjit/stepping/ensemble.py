@@ -2,9 +2,9 @@
 
 A *batch* is points whose five parameter tuples (scheme, control, system, rod law, floor
 law: ``driver.run.parameters``) have the same classes and field types; only their values
-differ.  Each point's tuples travel as one row of ``params`` (every scalar field as a
-double, ``pack``), and ``_rebuild`` makes them again in compiled code, so the values stay
-run-time values and one compile serves the whole grid (as the GPU engine does).
+differ.  Each point's tuples travel as one row of ``params`` (``packing.pack``), and
+``packing.rebuild`` makes them again in compiled code, so the values stay run-time values
+and one compile serves the whole grid (as the GPU engine does).
 
 Per point, ``run_batch`` does what ``sweeps.point`` does with a ``Run``, with the loop's own
 kernels (``loop.start``, ``loop.advance``), so every step is the same:
@@ -31,7 +31,8 @@ from . import impact_stream as S
 from . import layout as L
 from .events import write_bounce
 from .loop import advance, start
-from .._jit import kernel, overload
+from .packing import family, pack, rebuild  # noqa: F401  (a batch's key and row)
+from .._jit import kernel
 
 NO_PROGRESS = 100     # driver.run.NO_PROGRESS: steps were taken, t did not move
 
@@ -66,88 +67,6 @@ B_OPEN = len(L.BOUNCE_ROW_COLUMNS)
 BOUT_SIZE = B_OPEN + 1
 
 
-def _nscalar(proto):
-    """The scalar (float, int, bool) fields of a parameter tuple: the values ``pack``
-    stores for it."""
-    return sum(isinstance(x, (bool, int, float, np.bool_, np.integer, np.floating))
-               for x in proto)
-
-
-def pack(params) -> list:
-    """A point's five parameter tuples as one row of doubles: their scalar fields in order
-    (an int or bool stored exactly as a double; other fields must equal the batch's
-    first point's, ``family``)."""
-    return [float(x) for t in params for x in t
-            if isinstance(x, (bool, int, float, np.bool_, np.integer, np.floating))]
-
-
-def family(params) -> tuple:
-    """What must be equal for points to share a batch: the tuples' classes, each field's
-    type, and the value of every field that is not a scalar."""
-    out = []
-    for t in params:
-        out.append(type(t))
-        for x in t:
-            if isinstance(x, (bool, int, float, np.bool_, np.integer, np.floating)):
-                out.append(type(x))
-            else:
-                out.append(("value", repr(x)))
-    return tuple(out)
-
-
-@overload(_nscalar)
-def _nscalar_ov(proto):
-    from numba.core import types
-
-    n = sum(isinstance(t, (types.Float, types.Integer, types.Boolean)) for t in proto.types)
-    return lambda proto: n
-
-
-def _rebuild(proto, row, o):
-    """The parameter tuple of ``proto``'s class with its scalar fields from ``row[o:]``
-    (this Python version runs where Numba is off, NUMBA_DISABLE_JIT=1)."""
-    args = []
-    k = 0
-    for x in proto:
-        if isinstance(x, (bool, np.bool_)):
-            args.append(bool(row[o + k] != 0.0))
-        elif isinstance(x, (int, np.integer)):
-            args.append(int(row[o + k]))
-        elif isinstance(x, (float, np.floating)):
-            args.append(float(row[o + k]))
-        else:
-            args.append(x)
-            continue
-        k += 1
-    return type(proto)(*args)
-
-
-@overload(_rebuild)
-def _rebuild_ov(proto, row, o):
-    from numba.core import types
-
-    args = []
-    k = 0
-    for j, t in enumerate(proto.types):
-        if isinstance(t, types.Boolean):
-            args.append(f"row[o + {k}] != 0.0")
-        elif isinstance(t, types.Integer):
-            args.append(f"int(row[o + {k}])")
-        elif isinstance(t, types.Float):
-            args.append(f"row[o + {k}]")
-        else:
-            args.append(f"proto[{j}]")
-            continue
-        k += 1
-    cls = proto.instance_class
-    name = f"_rebuild_{cls.__name__}"
-    ns = {"cls": cls, "__name__": __name__}
-    # compiled with this file's name: Numba caches an implementation by its source file
-    exec(compile(f"def {name}(proto, row, o):\n    return cls({', '.join(args)})\n",
-                 __file__, "exec"), ns)
-    return ns[name]
-
-
 @kernel
 def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, flight,
               state, trial, work, interp, sstats, clock, count, ev, snap_t, snap_step,
@@ -159,18 +78,10 @@ def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, fligh
     ``impact_stream.SIZE`` doubles), ``bout`` the batch's bounce rows (``BOUT_SIZE``
     columns), ``fout`` and ``iout`` its summary values (``F_*``, ``I_*``).  Returns the
     bounce rows written."""
-    o1 = _nscalar(scheme0)
-    o2 = o1 + _nscalar(ctrl0)
-    o3 = o2 + _nscalar(system0)
-    o4 = o3 + _nscalar(rod0)
+    protos = (scheme0, ctrl0, system0, rod0, floor0)
     nbo = 0
     for i in range(params.shape[0]):
-        p = params[i]
-        scheme = _rebuild(scheme0, p, 0)
-        ctrl = _rebuild(ctrl0, p, o1)
-        system = _rebuild(system0, p, o2)
-        rod = _rebuild(rod0, p, o3)
-        floor = _rebuild(floor0, p, o4)
+        scheme, ctrl, system, rod, floor = rebuild(protos, params[i])
         nbo = _run_point(scheme, ctrl, system, rod, floor, init[i], clock0[i], flight[i],
                          state, trial, work, interp, sstats, clock, count, ev, snap_t,
                          snap_step, snap_u, snap_v, diag, episodes, bounces, fail, imp,
