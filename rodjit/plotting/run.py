@@ -103,7 +103,7 @@ def figure(source, kind: str = "heights", *, ax=None, quantity: str = "strain",
             t_range = impact_window(src)
         # the default heights figure: the whole run and its first impact side by side
         zoom = (kind == "heights" and ax is None and t_range is None
-                and src.n_snapshots() > 0 and first_impact(src) is not None)
+                and src.n_snapshots() > 0 and first_impact_span(src) is not None)
         if ax is None:
             size = figsize or ((11.0, 4.5) if zoom else (7.5, 4.5))
             fig = new_figure(figsize=size, layout="constrained")
@@ -137,7 +137,7 @@ def check_t_range(t_range):
     return (t0, t1)
 
 
-def first_impact(src):
+def first_impact_span(src):
     """``(t_impact, t_release)`` of the run's first impact (one still in contact at the
     end: until the last snapshot), or None where the rod never reached the floor."""
     found = contacts(src, -np.inf, np.inf)
@@ -147,7 +147,7 @@ def first_impact(src):
 def impact_window(src) -> tuple[float, float]:
     """The time window of the first impact: half its duration before the rod reaches the
     floor to half after it leaves (the approach and the release), inside the run."""
-    hit = first_impact(src)
+    hit = first_impact_span(src)
     if hit is None:
         raise NothingToDraw("the rod never reached the floor: no impact to draw "
                             "(t_range = 'impact'); give the times instead")
