@@ -20,6 +20,7 @@ import pytest
 from click.testing import CliRunner
 
 from conftest import datasets, rodjit_cli
+import rodjit
 from rodjit import cli
 from rodjit.output.run_layout import CK_DATASETS
 
@@ -364,3 +365,96 @@ def test_real_command_line(base, tmp_path, kind):
         lines = r.stderr.strip().splitlines()
         assert r.returncode == 2 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
     assert sha(p) == before
+
+
+# ---- a sweep file's columns prove themselves -------------------------------------------------
+SWEEP_CONFIG = {"rod.N": 3, "time.t_end": 0.1, "initial.height": 0.005}
+SWEEP_GRID = {"rod.mu": [1.0, 2.0], "floor.kappa_b": [1000.0, 3000.0]}
+
+
+@pytest.fixture(scope="module")
+def partial_sweep(tmp_path_factory):
+    """A sweep file interrupted after 2 of its 4 points (each with bounce rows), and the
+    table of the same sweep run in one go."""
+    from test_sweep_driver import _interrupt_after
+
+    d = tmp_path_factory.mktemp("hostile_sweep_columns")
+    cfg = rodjit.Config().override(SWEEP_CONFIG)
+    with pytest.raises(rodjit.SweepInterrupted):
+        rodjit.sweep(cfg, SWEEP_GRID, output=d / "cut.h5", scheduler="inline", batch_size=1,
+                     progress=_interrupt_after(2))
+    cut = rodjit.load_sweep(d / "cut.h5")
+    assert list(cut["status"]) == ["completed", "completed", "pending", "pending"]
+    full = rodjit.sweep(cfg, SWEEP_GRID, output=d / "full.h5", scheduler="inline",
+                        handle_signals=False)
+    assert np.all(full["n_bounces"] > 0)
+    return d, rodjit.load_sweep(d / "full.h5")
+
+
+def refused_sweep(path, names: str) -> str:
+    """``info`` and ``sweep --resume`` of ``path``: one line naming ``names``, exit 2, the
+    file untouched; the line."""
+    before = sha(path)
+    for args in (("info", path), ("sweep", "--resume", "-o", path, "--scheduler", "inline",
+                                  "-q")):
+        r = invoke(*args)
+        assert r.exit_code == 2 and (r.exception is None or
+                                     isinstance(r.exception, SystemExit)), r.output
+        lines = r.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("Error: "), r.stderr
+        assert names in lines[0] and ("changed after rodjit wrote it" in lines[0]
+                                      or "integrity check" in lines[0]), lines[0]
+        assert sha(path) == before
+    with pytest.raises(ValueError) as exc:
+        rodjit.load_sweep(path)
+    assert len(str(exc.value).splitlines()) == 1 and names in str(exc.value)
+    return lines[0]
+
+
+def _retype(f, name, dtype) -> None:
+    data = f[name][()]
+    del f[name]
+    f.create_dataset(name, data=data.astype(dtype))
+
+
+SWEEP_COLUMN_EDITS = {
+    "bounce_start far past the table": ("/summary/bounce_start[0]", lambda f: f[
+        "summary/bounce_start"].__setitem__(0, 10**9)),
+    "pending rows marked completed": ("/summary/", lambda f: f["summary/status"].__setitem__(
+        slice(2, 4), np.array(["completed"] * 2, dtype=object))),
+    "a column retyped": ("/summary/steps", lambda f: _retype(f, "summary/steps", np.float64)),
+    "the bounce table deleted": ("/bounces", lambda f: f.__delitem__("bounces")),
+    "a bounce count below 0": ("/summary/bounce_count[1] = -1", lambda f: f[
+        "summary/bounce_count"].__setitem__(1, -1)),
+    "save_runs redirected": ("header_digest", lambda f: f.attrs.__setitem__(
+        "save_runs", "elsewhere")),
+}
+
+
+@pytest.mark.parametrize("kind", SWEEP_COLUMN_EDITS)
+def test_edited_sweep_columns(partial_sweep, tmp_path, kind):
+    """Each edit is refused by info, --resume and load_sweep in one line naming what
+    does not hold, the file untouched and nothing written (no run-file directory)."""
+    d, _ = partial_sweep
+    p = tmp_path / "s.h5"
+    shutil.copy(d / "cut.h5", p)
+    names, edit = SWEEP_COLUMN_EDITS[kind]
+    with h5py.File(p, "r+") as f:
+        edit(f)
+    refused_sweep(p, names)
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["s.h5"]
+
+
+def test_a_running_sweeps_table_keeps_its_own_pending_points(partial_sweep, tmp_path):
+    """A table read while the sweep runs gives no bounce rows for the points it calls
+    pending, though the file has them by the time they are asked for."""
+    d, full = partial_sweep
+    p = tmp_path / "s.h5"
+    shutil.copy(d / "cut.h5", p)
+    table = rodjit.load_sweep(p)
+    rodjit.sweep(output=p, resume=True, scheduler="inline", handle_signals=False)
+    rows = table.bounce_rows()
+    assert set(rows["point"]) == {0, 1}
+    assert table.bounces(2)["t_impact"].size == 0 < full.bounces(2)["t_impact"].size
+    for i in (0, 1):
+        assert np.array_equal(table.bounces(i)["t_impact"], full.bounces(i)["t_impact"])

@@ -29,12 +29,16 @@ ATTRS = {"save_runs": "", "scheduler": "inline", "jobs": 1}
 
 
 def batch(points, rows: int = 3) -> BatchResult:
-    """Made-up results of ``points``: every summary column set, ``rows`` bounce rows each."""
+    """Made-up results of ``points``: every summary column set, ``rows`` bounce rows each
+    (the counts and message as a completed point's)."""
     idx = np.asarray(points, np.int64)
     values = empty_columns(idx.size)
     for name, (kind, _) in SUMMARY_COLUMNS.items():
         values[name][:] = ("completed" if name == "status" else f"text {name}"
                            if kind == "str" else idx + 0.5 if kind == "float" else idx)
+    # what a completed point with ``rows`` bounces carries (a sweep file proves its rows)
+    values["message"][:] = ""
+    values["n_bounces"][:] = values["n_complete_bounces"][:] = rows
     bounces = {name: np.resize(np.arange(idx.size * rows) % 2 if col.dtype == bool
                                else np.arange(idx.size * rows), idx.size * rows)
                .astype(col.dtype) for name, col in empty_bounces().items()}

@@ -80,9 +80,10 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
         assert Grid.from_json(a["grid"]) == Grid.from_spec(GRID)
         assert list(a["grid_keys"]) == ["rod.mu", "floor.beta"] and a["n_points"] == 4
         s = f["summary"]
-        # the dimension, then table order, then where each point's bounce rows are
+        # the dimension, then table order, then where each point's bounce rows are and
+        # the digest that proves each row
         assert list(s) == ["point", "rod.mu", "floor.beta", *SUMMARY_COLUMNS,
-                           "bounce_start", "bounce_count"]
+                           "bounce_start", "bounce_count", "row_digest"]
         assert s["rod.mu"].dtype == np.float64 and s["steps"].dtype == np.int64
         assert h5py.check_string_dtype(s["status"].dtype)
         assert all(s[c].shape == (4,) for c in s)
@@ -204,10 +205,16 @@ def test_resume_reruns_failed_points_only(tmp_path, inline_table):
     path = tmp_path / "s.h5"
     rodjit.sweep(BASE, GRID, output=path, scheduler="inline")
     with h5py.File(path, "r+") as f:        # as if point 1 had failed
-        f["summary/status"][1] = "failed"
-        f["summary/steps"][1] = 0
-        f["summary/bounce_count"][1] = 0      # a failed point has no bounce rows
-        f["summary/bounce_start"][1] = -1
+        s = f["summary"]
+        s["status"][1] = "failed"
+        s["message"][1] = "made to fail"
+        for name in ("steps", "n_bounces", "n_complete_bounces", "bounce_count"):
+            s[name][1] = 0                    # a failed point has no bounce rows
+        s["bounce_start"][1] = -1
+        values = {name: (s[name].asstr()[1:2] if h5py.check_string_dtype(s[name].dtype)
+                         else s[name][1:2]) for name in SUMMARY_COLUMNS}
+        s["row_digest"][1] = sweep_file.row_digests([1], values, [-1], [0], {
+            name: f["bounces"][name][()] for name in f["bounces"]})[0]
     walls = rodjit.load_sweep(path)["wall_time"].copy()
     table = rodjit.sweep(BASE, GRID, output=path, resume=True, scheduler="inline")
     assert table.stats["points_run"] == 1

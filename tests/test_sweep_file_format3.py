@@ -85,27 +85,50 @@ def test_a_format_2_file_reads_as_one_table_and_is_not_continued(tmp_path):
     assert path.read_bytes() == before
 
 
-def test_rows_a_cut_write_left_are_dropped_on_resume(tmp_path, today):
-    """A write cut short after its bounce rows but before its points were marked done:
-    the rows stay in the file, the points stay pending; resume drops the rows and runs
-    the points again, to the table of an uninterrupted sweep."""
+def test_a_point_marked_pending_with_its_rows_left_is_refused(tmp_path, today):
+    """A write is whole or undone (the journal), so rows of a point marked pending are an
+    edit: the resume refuses the file, untouched, naming the dataset."""
     path = tmp_path / "cut.h5"
     shutil.copy(today.path, path)
     with h5py.File(path, "r+") as f:
         s = f["summary"]
         s["status"][2:] = np.array(["pending", "pending"], dtype=object)
-        first = int(s["bounce_start"][2])
-    table = rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
-    assert table.stats["points_run"] == 2
-    with h5py.File(path, "r") as f:
-        g, s = f["bounces"], f["summary"]
-        assert g["t_impact"].shape[0] == int(g.attrs["rows"]) == int(s["bounce_count"][()].sum())
-        assert int(s["bounce_start"][2]) == first                 # written again in place
-    for i in range(len(today)):
-        assert same_bounces(table.bounces(i), today.bounces(i))
-    assert same_bounces(rodjit.load_sweep(path).bounce_rows(), today.bounce_rows())
+    before = path.read_bytes()
+    with pytest.raises(ValueError, match=r"/summary/\w+\[2\] = .* in a pending row"):
+        rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
+    assert path.read_bytes() == before
 
 
 def test_a_sweep_without_a_file_gives_the_same_rows(today):
     table = rodjit.sweep(BASE, GRID, scheduler="inline", handle_signals=False)
     assert same_bounces(table.bounce_rows(), today.bounce_rows())
+
+
+def test_a_format_3_file_from_before_row_digests_reads_and_resumes(tmp_path, today):
+    """A file whose header_digest covers base, grid and n_points only has no row_digest:
+    it reads and continues (without one) as before; today's files do not pass for one."""
+    path = tmp_path / "old3.h5"
+    shutil.copy(today.path, path)
+    with h5py.File(path, "r+") as f:
+        del f["summary/row_digest"]
+        f["summary/status"][2:] = np.array(["pending", "pending"], dtype=object)
+        s = f["summary"]
+        for name in ("bounce_start", "bounce_count"):
+            s[name][2:] = -1 if name == "bounce_start" else 0
+        for name, ds in s.items():
+            if name in ("restitution_first", "contact_time_first") or ds.dtype.kind == "f" \
+                    and name not in GRID:
+                ds[2:] = np.nan
+            elif ds.dtype.kind == "i" and name not in ("point", "bounce_start"):
+                ds[2:] = 0
+            elif h5py.check_string_dtype(ds.dtype) and name != "status":
+                ds[2:] = np.array(["", ""], dtype=object)
+        with pytest.raises(ValueError, match="row_digest is missing"):
+            from rodjit.sweeps.sweep_check import read_sweep
+            read_sweep(f)
+        f.attrs["header_digest"] = sweep_file.header_digest(
+            f.attrs["base_config_toml"], f.attrs["grid"], f.attrs["n_points"])
+    assert rodjit.load_sweep(path).counts["pending"] == 2
+    table = rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
+    assert table.stats["points_run"] == 2
+    assert same_bounces(rodjit.load_sweep(path).bounce_rows(), today.bounce_rows())

@@ -32,6 +32,7 @@ from .executors import check_scheduler, default_jobs, make_executor
 from .grid import MAX_POINTS, Grid
 from .main_guard import check_main
 from .plan import check_runs_dir, plan_sweep
+from .sweep_check import read_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
 from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
@@ -63,8 +64,7 @@ def _open_resume(output, config, grid, max_points):
     """Base config, grid, columns and attributes of the sweep file to continue."""
     with sweep_file.open_sweep(output) as f:
         sweep_file.check_continuable(f, output)
-        header = sweep_file.read_header(f)
-        columns = sweep_file.read_summary(f)
+        header, columns = read_sweep(f)
         alive = (writer_alive(f, lock=False) if header["attrs"].get("status") == "running"
                  else False)
         pid = writer_pid(f) if alive else None

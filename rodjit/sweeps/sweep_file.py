@@ -64,7 +64,7 @@ from .point import SUMMARY_COLUMNS, empty_columns
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
            "read_header", "read_summary", "read_bounces", "read_all_bounces", "join_bounces",
            "check_sweep_file", "key_columns", "open_sweep", "reopen", "OLD_SUMMARY",
-           "check_continuable"]
+           "check_continuable", "key_kind", "row_digests", "header_digest", "ROW_DIGEST"]
 
 KIND = "sweep"
 FORMAT_VERSION = 3
@@ -81,6 +81,7 @@ POINT = "point"         # the summary's dimension
 BOUNCES = "bounces"     # format 3: the group of the one bounce table of every point
 ROW = "bounce"          # its dimension (the row number)
 POINT_INDEX = "point_index"     # each bounce row's point
+ROW_DIGEST = "row_digest"       # the summary dataset that proves each written row
 # the summary datasets that locate each point's bounce rows (format 3); not table columns
 RAGGED = {"bounce_start": "first row of the point's bounces in /bounces (-1: none written)",
           "bounce_count": "number of the point's rows in /bounces (CF count of the ragged "
@@ -96,7 +97,8 @@ _STR = h5py.string_dtype("utf-8")
 _DTYPES = {"str": _STR, "int": np.int64, "float": np.float64}
 
 
-def _key_kind(values) -> str:
+def key_kind(values) -> str:
+    """The dtype name ("str", "int", "float") of a swept key's column, from its values."""
     v = values[0]
     return "str" if isinstance(v, str) else "int" if isinstance(v, int) else "float"
 
@@ -106,7 +108,7 @@ def key_columns(grid: Grid) -> dict[str, np.ndarray]:
     out = {}
     for axis, (key, values) in enumerate(zip(grid.keys, grid.values)):
         idx = np.indices(grid.shape)[axis].ravel() if len(grid) else np.zeros(0, int)
-        kind = _key_kind(values)
+        kind = key_kind(values)
         arr = np.array(values, dtype=object if kind == "str" else _DTYPES[kind])
         out[key] = arr[idx]
     return out
@@ -179,15 +181,55 @@ def _refused(exc: OSError):
     raise WriteFailed(cause, cause) from None
 
 
-def header_digest(base_toml: str, grid_json: str, n_points: int) -> str:
+def header_digest(base_toml: str, grid_json: str, n_points: int,
+                  save_runs: str | None = None) -> str:
     """The root attribute ``header_digest``: BLAKE2b-128 (hex) of what the file claims to
-    sweep (the base configuration, the grid, the number of points); files written before
-    it existed lack it."""
+    sweep (the base configuration, the grid, the number of points) and of the root
+    attribute that steers a resume (``save_runs``, where the points' run files go), which
+    also vouches for the summary column ``row_digest`` (``row_digests``).  ``save_runs``
+    None: the digest of the files written before it was covered, which lack
+    ``row_digest``; files written before ``header_digest`` existed lack it too."""
     h = hashlib.blake2b(digest_size=16, person=b"rodjit-sweep")
-    for part in (str(base_toml), str(grid_json), str(int(n_points))):
+    parts = [str(base_toml), str(grid_json), str(int(n_points))]
+    if save_runs is not None:
+        parts += [str(save_runs), ROW_DIGEST]
+    for part in parts:
         data = part.encode("utf-8", "surrogatepass")
         h.update(len(data).to_bytes(8, "little") + data)
     return h.hexdigest()
+
+
+def row_digests(index, values: dict, starts, counts, table: dict,
+                offset: int = 0) -> np.ndarray:
+    """The summary column ``row_digest`` of the points ``index``: BLAKE2b-128 (hex) of each
+    point's summary row (``values``: ``SUMMARY_COLUMNS`` over those points, as they read
+    back), where its bounce rows are (``starts``, ``counts``) and those rows (``table``:
+    the bounce columns as stored, row ``starts[k] - offset`` the point's first).  It proves
+    a written row: a byte changed anywhere in it, or in its bounce rows, no longer
+    matches.  Pending rows carry none (``b""``)."""
+    index = np.asarray(index, np.int64)
+    starts, counts = np.asarray(starts, np.int64), np.asarray(counts, np.int64)
+    numbers = [index, starts, counts]
+    texts = []
+    for name, (kind, _) in SUMMARY_COLUMNS.items():
+        if kind == "str":
+            texts.append(values[name])
+        else:
+            numbers.append(np.asarray(values[name], _DTYPES[kind]))
+    fixed = np.ascontiguousarray(np.column_stack([a.view(np.uint64) for a in numbers]))
+    # each bounce row's bytes, column after column: a point's rows are one slice
+    rows = [np.ascontiguousarray(table[name]) for name in BOUNCE_COLUMNS]
+    size = rows[0].shape[0]
+    packed = np.ascontiguousarray(np.concatenate(
+        [r.view(np.uint8).reshape(size, r.dtype.itemsize) for r in rows], axis=1))
+    out = np.empty(index.size, dtype="S32")
+    for k in range(index.size):
+        text = "\0".join(str(t[k]) for t in texts).encode("utf-8", "surrogatepass")
+        a, c = int(starts[k]) - offset, int(counts[k])
+        data = b"".join((fixed[k].tobytes(), len(text).to_bytes(8, "little"), text,
+                         packed[a:a + c].tobytes() if c > 0 else b""))
+        out[k] = hashlib.blake2b(data, digest_size=16, person=b"rodjit-row").hexdigest()
+    return out
 
 
 def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
@@ -195,13 +237,15 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
     its name only once whole (``journal.creating``); WriteFailed if the disk refuses, and
     nothing is left."""
     n = len(grid)
+    attrs = {"save_runs": "", **attrs}
+    digest = header_digest(base.to_toml(), grid.to_json(), n, str(attrs["save_runs"]))
     with creating(path) as tmp, _writing(tmp, mode="w") as f:
         for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
                            "rodjit_version": __version__, "created": now(),
                            "command": command, "base_config_toml": base.to_toml(),
                            "grid": grid.to_json(), "grid_keys": list(grid.keys),
                            "n_points": n,
-                           "header_digest": header_digest(base.to_toml(), grid.to_json(), n),
+                           "header_digest": digest,
                            "status": "running", "message": "",
                            "history": [f"{now()} created by: {command}"],
                            **writer_attrs(), **attrs,
@@ -216,7 +260,7 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
         point.make_scale(POINT)
         point.attrs.update(long_name="index of the grid point (grid order)", units="1")
         for key, col in key_columns(grid).items():
-            kind = _key_kind(grid.values[grid.keys.index(key)])
+            kind = key_kind(grid.values[grid.keys.index(key)])
             ds = s.create_dataset(key, data=col, dtype=_DTYPES[kind], chunks=chunk)
             spec = field_spec(key)
             ds.attrs["description"] = f"swept configuration key {key}"
@@ -238,6 +282,11 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
                                                      np.int64), chunks=chunk)
             ds.attrs.update(description=text, long_name=text, units="1")
             ds.dims[0].attach_scale(point)
+        ds = s.create_dataset(ROW_DIGEST, data=np.full(n, b"", "S32"), chunks=chunk)
+        text = ("BLAKE2b-128 (hex) of the point's summary row and bounce rows, written with "
+                "them ('' while pending): proves the row as rodjit wrote it")
+        ds.attrs.update(description=text, long_name=text)
+        ds.dims[0].attach_scale(point)
         _create_bounces(f)
 
 
@@ -275,8 +324,6 @@ def check_continuable(f: h5py.File, path=None) -> None:
 def reopen(path, *, history: str) -> None:
     """Mark a sweep file running again (resume), recording who continues it."""
     with _writing(path) as f:
-        if _format(f) >= 3:
-            _cut_bounces(f)
         f.attrs["status"] = "running"
         f.attrs["message"] = ""
         f.attrs["history"] = history_with(f, history)
@@ -297,25 +344,35 @@ def write_batch(path, result, wait: float = LOCK_WAIT) -> None:
     idx = np.asarray(result.index, dtype=np.int64)
     if idx.size == 0:
         return
-    v = result.values
+    v = {name: np.asarray(result.values[name], dtype=object if kind == "str" else
+                          _DTYPES[kind]) for name, (kind, _) in SUMMARY_COLUMNS.items()}
+    counts = np.asarray(result.bounce_count, np.int64)
     with _writing(path, wait) as f:
         s = f["summary"]
-        for name, (kind, _) in SUMMARY_COLUMNS.items():
+        for name in SUMMARY_COLUMNS:
             if name == "status":
                 continue      # last: a row counts as done only once all of it is there
-            s[name][idx] = np.asarray(v[name], dtype=object if kind == "str" else _DTYPES[kind])
-        _append_rows(f, idx, result.bounces, np.asarray(result.bounce_count, np.int64))
-        s["status"][idx] = np.asarray(v["status"], dtype=object)
+            s[name][idx] = v[name]
+        n0, table = _append_rows(f, idx, result.bounces, counts)
+        if ROW_DIGEST in s:       # (a format-3 file written before rows had digests: none)
+            s[ROW_DIGEST][idx] = row_digests(idx, v, s["bounce_start"][idx], counts, table,
+                                             n0)
+        s["status"][idx] = v["status"]
 
 
-def _append_rows(f: h5py.File, idx: np.ndarray, bounces: dict, counts: np.ndarray) -> None:
+def _append_rows(f: h5py.File, idx: np.ndarray, bounces: dict,
+                 counts: np.ndarray) -> tuple[int, dict]:
     """Append the bounce rows of the points ``idx`` (increasing; ``counts`` rows each, in
     that order in the columns ``bounces``) to the one table, and record where each point's
-    rows are."""
+    rows are; the table's first new row and the new rows as stored."""
     g, s = f[BOUNCES], f["summary"]
     n0 = int(g.attrs["rows"])
     starts = n0 + np.cumsum(counts) - counts
     n1 = n0 + int(counts.sum())
+    stored = {}
+    for name in BOUNCE_COLUMNS:
+        data = np.asarray(bounces[name])
+        stored[name] = data.astype(cf.BOOL_DTYPE) if data.dtype == bool else data
     if n1 > n0:
         names = (ROW, POINT_INDEX) + tuple(BOUNCE_COLUMNS)
         for name in names:
@@ -323,25 +380,11 @@ def _append_rows(f: h5py.File, idx: np.ndarray, bounces: dict, counts: np.ndarra
         g[ROW][n0:n1] = np.arange(n0, n1, dtype=np.int64)
         g[POINT_INDEX][n0:n1] = np.repeat(idx, counts)
         for name in BOUNCE_COLUMNS:
-            data = np.asarray(bounces[name])
-            g[name][n0:n1] = data.astype(cf.BOOL_DTYPE) if data.dtype == bool else data
+            g[name][n0:n1] = stored[name]
     s["bounce_count"][idx] = counts
     s["bounce_start"][idx] = np.where(counts > 0, starts, -1)
     g.attrs["rows"] = n1
-
-
-def _cut_bounces(f: h5py.File) -> None:
-    """Cut the bounce table to the rows of the points marked done: rows past them are
-    what a write cut short left (their points are pending and run again)."""
-    g, s = f[BOUNCES], f["summary"]
-    done = s["status"].asstr()[()] != "pending"
-    start, count = s["bounce_start"][()], s["bounce_count"][()]
-    ends = (start + count)[done & (count > 0)]
-    rows = int(ends.max()) if ends.size else 0
-    for name in (ROW, POINT_INDEX) + tuple(BOUNCE_COLUMNS):
-        if g[name].shape[0] != rows:
-            g[name].resize((rows,))
-    g.attrs["rows"] = rows
+    return n0, stored
 
 
 def finish(path, status: str, message: str = "", attrs: dict | None = None,
@@ -383,16 +426,22 @@ def read_header(f: h5py.File) -> dict:
                  for k, v in f.attrs.items()}
         base_toml, grid_json = str(f.attrs["base_config_toml"]), str(f.attrs["grid"])
         n = f.attrs["n_points"]
-        if "header_digest" in f.attrs and str(f.attrs["header_digest"]) != header_digest(
+        digest = str(f.attrs.get("header_digest", ""))
+        # the digest of today's files covers save_runs and vouches for row_digest; that of
+        # the format-3 files written before covers neither
+        rows = digest == header_digest(base_toml, grid_json, int(n),
+                                       str(f.attrs.get("save_runs", "")))
+        if "header_digest" in f.attrs and not rows and digest != header_digest(
                 base_toml, grid_json, int(n)):
             raise NotARunFile(f"{name!r} fails its integrity check: its header_digest does "
-                              f"not match its base_config_toml, grid and n_points (the file "
-                              f"was altered or damaged)")
+                              f"not match its base_config_toml, grid, n_points and save_runs "
+                              f"(the file was altered or damaged)")
     grid = Grid.from_json(grid_json)
     if int(n) != len(grid):
         raise NotARunFile(f"{name!r} fails its integrity check: it claims {int(n)} points, "
                           f"its grid has {len(grid)}")
-    return {"base": Config.from_stored_toml(base_toml), "grid": grid, "attrs": attrs}
+    return {"base": Config.from_stored_toml(base_toml), "grid": grid, "attrs": attrs,
+            "row_digests": rows}
 
 
 def _format(f: h5py.File) -> int:
@@ -400,7 +449,8 @@ def _format(f: h5py.File) -> int:
 
 
 def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
-    """The summary columns, in file order; text columns as arrays of str.  NotARunFile if
+    """The summary columns, in the layout's order (a format 1 or 2 file's: in file order);
+    text columns as arrays of str.  NotARunFile if
     a column is missing or its rows are not the points the file claims.  A format 1 or 2
     file's columns of another meaning read under their ``OLD_SUMMARY`` names, and the
     columns it lacks as NaN."""
@@ -416,7 +466,7 @@ def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
                 raise NotARunFile(f"{name!r} fails its integrity check: its summary column "
                                   f"{col!r} has {ds.shape[0] if ds.shape else 0} rows, not "
                                   f"the {n} points it claims")
-            if col in RAGGED:
+            if col in RAGGED or col == ROW_DIGEST:
                 continue                      # where the bounce rows are, not a column
             out[OLD_SUMMARY.get(col, col) if old else col] = (
                 ds.asstr()[()].astype(object) if h5py.check_string_dtype(ds.dtype)
@@ -429,6 +479,11 @@ def read_summary(f: h5py.File) -> dict[str, np.ndarray]:
         for col, (kind, _) in SUMMARY_COLUMNS.items():
             if col not in out and kind == "float":
                 out[col] = np.full(n, np.nan)
+    if not old:                 # the swept keys, then SUMMARY_COLUMNS, as written
+        first = [str(k) for k in np.ravel(Grid.from_json(str(f.attrs["grid"])).keys)]
+        first += [c for c in SUMMARY_COLUMNS if c not in first]
+        out = {c: out[c] for c in first if c in out} | {c: v for c, v in out.items()
+                                                       if c not in first}
     return out
 
 
@@ -440,10 +495,11 @@ def read_bounces(f: h5py.File, index: int) -> dict[str, np.ndarray]:
         if start < 0 or count == 0:
             return empty_bounces()
         g = f[BOUNCES]
-        if count < 0 or start + count > int(g.attrs["rows"]) or start + count > g[ROW].shape[0]:
+        if count < 0 or start + count > int(g.attrs["rows"]) or start + count > g[ROW].shape[0] \
+                or np.any(g[POINT_INDEX][start:start + count] != index):
             raise NotARunFile(f"{f.filename!r} fails its integrity check: point {index}'s "
-                              f"bounce rows {start}..{start + count - 1} lie outside its "
-                              f"bounce table ({g[ROW].shape[0]} rows)")
+                              f"bounce rows {start}..{start + count - 1} are not its rows "
+                              f"in its bounce table ({g[ROW].shape[0]} rows)")
         return _as_read({name: g[name][start:start + count] for name in BOUNCE_COLUMNS})
     g = f["points"].get(str(index))
     if g is None:
@@ -467,13 +523,18 @@ def _as_read(table: dict) -> dict[str, np.ndarray]:
     return table
 
 
-def read_all_bounces(f: h5py.File) -> dict[str, np.ndarray]:
+def read_all_bounces(f: h5py.File, done=None) -> dict[str, np.ndarray]:
     """Every point's bounce rows in one table, ordered by point (then by time), with the
-    column ``point``: each row's grid point.  Any format."""
+    column ``point``: each row's grid point.  Any format.  ``done``: the points to read
+    (a mask; by default those the file has written), of which those the file has not
+    written are left out."""
     if _format(f) < 3:
-        return join_bounces((i, read_bounces(f, i)) for i in range(int(f.attrs["n_points"])))
+        n = int(f.attrs["n_points"])
+        return join_bounces((i, read_bounces(f, i)) for i in range(n)
+                            if done is None or done[i])
     s, g = f["summary"], f[BOUNCES]
-    done = s["status"].asstr()[()] != "pending"
+    written = s["status"].asstr()[()] != "pending"
+    done = written if done is None else written & np.asarray(done, bool)
     start, count = s["bounce_start"][()], s["bounce_count"][()]
     points = np.flatnonzero(done & (count > 0))
     c = count[points]

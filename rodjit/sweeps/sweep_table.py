@@ -16,6 +16,7 @@ from ..records.bounces import empty_bounces
 from . import sweep_file
 from .grid import Grid, format_value
 from .point import SUMMARY_COLUMNS
+from .sweep_check import read_sweep
 
 if TYPE_CHECKING:
     import pandas
@@ -147,8 +148,8 @@ class SweepTable:
         """
         if index in self._bounces:
             return self._bounces[index]
-        if self.path is None:
-            return empty_bounces()
+        if self.path is None or self.columns["status"][index] == "pending":
+            return empty_bounces()      # (pending here, whatever the file says since)
         with sweep_file.open_sweep(self.path) as f:
             return sweep_file.read_bounces(f, index)
 
@@ -160,12 +161,19 @@ class SweepTable:
         -------
         dict of str to numpy.ndarray
             ``point``, then the run file's ``/bounces`` columns (``t_impact``,
-            ``restitution``, ...); the rows of the points that have run.
+            ``restitution``, ...); the rows of the points that have run (by this table:
+            a point that has run in a sweep still going since it was read is left out).
+
+        Raises
+        ------
+        ValueError
+            The file no longer proves itself (``load_sweep``).
         """
         if self.path is None or self._bounces:
             return sweep_file.join_bounces(sorted(self._bounces.items()))
         with sweep_file.open_sweep(self.path) as f:
-            return sweep_file.read_all_bounces(f)
+            read_sweep(f)
+            return sweep_file.read_all_bounces(f, self.columns["status"] != "pending")
 
     def to_pandas(self) -> pandas.DataFrame:
         """A pandas DataFrame, one row per point (index: the point number)."""
@@ -315,10 +323,20 @@ def load_sweep(path: str | os.PathLike[str]) -> SweepTable:
     ----------
     path : str or os.PathLike
         A sweep file written by ``rodjit sweep`` or ``rodjit.sweep``.
+
+    Returns
+    -------
+    SweepTable
+
+    Raises
+    ------
+    ValueError
+        One line: the file is missing, not a sweep file, or does not prove itself (a
+        column, attribute or bounce row that is not what rodjit wrote: the file was
+        changed or damaged since; ``sweep_check``).
     """
     with sweep_file.open_sweep(path) as f:
-        header = sweep_file.read_header(f)
-        columns = sweep_file.read_summary(f)
+        header, columns = read_sweep(f)
         attrs = header["attrs"]
     return SweepTable(grid=header["grid"], base=header["base"], columns=columns,
                       path=str(Path(path)), status=str(attrs["status"]),
