@@ -51,7 +51,7 @@ def test_the_object_count_does_not_grow_with_the_points(tmp_path):
 def test_each_points_rows_are_where_the_summary_says(today):
     with h5py.File(today.path, "r") as f:
         s, g = f["summary"], f["bounces"]
-        assert f.attrs["format_version"] == 3 and "points" not in f
+        assert f.attrs["format_version"] == sweep_file.FORMAT_VERSION == 4 and "points" not in f
         assert int(g.attrs["rows"]) == g["t_impact"].shape[0] == int(s["bounce_count"][()].sum())
         for i in range(len(today)):
             a, c = int(s["bounce_start"][i]), int(s["bounce_count"][i])
@@ -80,7 +80,7 @@ def test_a_format_2_file_reads_as_one_table_and_is_not_continued(tmp_path):
         assert same_bounces({k: v[rows["point"] == i] for k, v in rows.items() if k != "point"},
                             old.bounces(i))
     before = path.read_bytes()
-    with pytest.raises(ValueError, match="continues format 3 only"):
+    with pytest.raises(ValueError, match="continues formats 3 and 4 only"):
         rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
     assert path.read_bytes() == before
 
@@ -104,12 +104,18 @@ def test_a_sweep_without_a_file_gives_the_same_rows(today):
     assert same_bounces(table.bounce_rows(), today.bounce_rows())
 
 
-def test_a_format_3_file_from_before_row_digests_reads_and_resumes(tmp_path, today):
-    """A file whose header_digest covers base, grid and n_points only has no row_digest:
-    it reads and continues (without one) as before; today's files do not pass for one."""
+def test_a_format_3_file_reads_and_resumes_in_format_3(tmp_path, today):
+    """Format 3 (a header_digest over base, grid and n_points only, no row_digest) reads
+    and continues without row digests, staying format 3; a format-4 file does not pass
+    for one, nor one for a format-4 file."""
     path = tmp_path / "old3.h5"
     shutil.copy(today.path, path)
     with h5py.File(path, "r+") as f:
+        f.attrs["format_version"] = 3
+        with pytest.raises(ValueError, match="fails its integrity check"):
+            from rodjit.sweeps.sweep_check import read_sweep
+            read_sweep(f)       # format 3 with a format-4 digest
+        f.attrs["format_version"] = 4
         del f["summary/row_digest"]
         f["summary/status"][2:] = np.array(["pending", "pending"], dtype=object)
         s = f["summary"]
@@ -128,7 +134,12 @@ def test_a_format_3_file_from_before_row_digests_reads_and_resumes(tmp_path, tod
             read_sweep(f)
         f.attrs["header_digest"] = sweep_file.header_digest(
             f.attrs["base_config_toml"], f.attrs["grid"], f.attrs["n_points"])
+        with pytest.raises(ValueError, match="fails its integrity check"):
+            read_sweep(f)       # format 4 with a format-3 digest
+        f.attrs["format_version"] = 3
     assert rodjit.load_sweep(path).counts["pending"] == 2
     table = rodjit.sweep(output=path, resume=True, scheduler="inline", handle_signals=False)
     assert table.stats["points_run"] == 2
     assert same_bounces(rodjit.load_sweep(path).bounce_rows(), today.bounce_rows())
+    with h5py.File(path, "r") as f:
+        assert f.attrs["format_version"] == 3 and "row_digest" not in f["summary"]

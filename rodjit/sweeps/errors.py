@@ -239,19 +239,22 @@ class FormatNotContinued(ValueError):
         The sweep file (``path``, a str).
     version : int
         Its format (``version``).
-    current : int
-        The format this version writes and continues (``current``).
+    current : int or tuple of int
+        The formats this version continues.
     """
 
-    def __init__(self, path, version, current: int) -> None:
+    def __init__(self, path, version, current: int | tuple[int, ...]) -> None:
         self.path, self.version, self.current = str(path), version, current
         super().__init__(self.worded("resume=True"))
 
     def worded(self, resume: str) -> str:
         """The message, naming resuming as ``resume``."""
+        formats = (self.current,) if isinstance(self.current, int) else tuple(self.current)
+        said = (f"format {formats[0]}" if len(formats) == 1 else
+                "formats " + ", ".join(map(str, formats[:-1])) + f" and {formats[-1]}")
         return (f"{self.path!r} is a sweep file of format {self.version}, whose bounces and "
-                f"summary columns have older meanings; {resume} continues format "
-                f"{self.current} only: start a new sweep")
+                f"summary columns have older meanings; {resume} continues {said} only: "
+                f"start a new sweep")
 
     def __reduce__(self):
         return type(self), (self.path, self.version, self.current)

@@ -67,10 +67,12 @@ __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "fin
            "check_continuable", "key_kind", "row_digests", "header_digest", "ROW_DIGEST"]
 
 KIND = "sweep"
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
 DIGEST_SINCE = 3     # the first format whose files carry ``header_digest``
-READS = (1, 2, 3)       # the formats this version reads
-CONTINUES = (3,)        # and those it continues (--resume)
+ROWS_SINCE = 4       # the first whose ``header_digest`` covers save_runs and rows carry
+                     # ``row_digest`` (format 3: the same layout without them)
+READS = (1, 2, 3, 4)    # the formats this version reads
+CONTINUES = (3, 4)      # and those it continues (--resume; a format-3 file stays format 3)
 # format 1 and 2 summary columns whose meaning has a new name: old name -> name read
 OLD_SUMMARY = {"restitution_first": "restitution_first_apex_bounces",
                "restitution_mean": "restitution_mean_apex_bounces",
@@ -186,9 +188,9 @@ def header_digest(base_toml: str, grid_json: str, n_points: int,
     """The root attribute ``header_digest``: BLAKE2b-128 (hex) of what the file claims to
     sweep (the base configuration, the grid, the number of points) and of the root
     attribute that steers a resume (``save_runs``, where the points' run files go), which
-    also vouches for the summary column ``row_digest`` (``row_digests``).  ``save_runs``
-    None: the digest of the files written before it was covered, which lack
-    ``row_digest``; files written before ``header_digest`` existed lack it too."""
+    also vouches for the summary column ``row_digest`` (``row_digests``): format 4.
+    ``save_runs`` None: the digest of format 3, which covers neither (its files lack
+    ``row_digest``); files of formats 1 and 2 lack ``header_digest``."""
     h = hashlib.blake2b(digest_size=16, person=b"rodjit-sweep")
     parts = [str(base_toml), str(grid_json), str(int(n_points))]
     if save_runs is not None:
@@ -318,7 +320,7 @@ def check_continuable(f: h5py.File, path=None) -> None:
     """ValueError unless this version continues the sweep file's format (``CONTINUES``)."""
     version = _format(f)
     if version not in CONTINUES:
-        raise FormatNotContinued(path or f.filename, version, FORMAT_VERSION)
+        raise FormatNotContinued(path or f.filename, version, CONTINUES)
 
 
 def reopen(path, *, history: str) -> None:
@@ -427,12 +429,13 @@ def read_header(f: h5py.File) -> dict:
         base_toml, grid_json = str(f.attrs["base_config_toml"]), str(f.attrs["grid"])
         n = f.attrs["n_points"]
         digest = str(f.attrs.get("header_digest", ""))
-        # the digest of today's files covers save_runs and vouches for row_digest; that of
-        # the format-3 files written before covers neither
-        rows = digest == header_digest(base_toml, grid_json, int(n),
-                                       str(f.attrs.get("save_runs", "")))
-        if "header_digest" in f.attrs and not rows and digest != header_digest(
-                base_toml, grid_json, int(n)):
+        # the digest of a format-4 file covers save_runs and vouches for row_digest; that
+        # of a format-3 file covers neither
+        rows = _format(f) >= ROWS_SINCE
+        expected = (header_digest(base_toml, grid_json, int(n),
+                                  str(f.attrs.get("save_runs", ""))) if rows
+                    else header_digest(base_toml, grid_json, int(n)))
+        if "header_digest" in f.attrs and digest != expected:
             raise NotARunFile(f"{name!r} fails its integrity check: its header_digest does "
                               f"not match its base_config_toml, grid, n_points and save_runs "
                               f"(the file was altered or damaged)")
