@@ -143,3 +143,33 @@ def test_a_format_3_file_reads_and_resumes_in_format_3(tmp_path, today):
     assert same_bounces(rodjit.load_sweep(path).bounce_rows(), today.bounce_rows())
     with h5py.File(path, "r") as f:
         assert f.attrs["format_version"] == 3 and "row_digest" not in f["summary"]
+
+
+def test_a_format_3_file_written_by_the_release_before_shows_and_resumes(tmp_path):
+    """tests/fixtures/format3_sweep.h5, written by the code before format 4 and interrupted
+    after three of six points: info shows it, load_sweep reads it, --resume runs the other
+    three into it (still format 3), and the table is that of the same sweep run whole now
+    (to rounding where the fixture's CPU differs from this one)."""
+    from click.testing import CliRunner
+
+    from rodjit.cli import main
+
+    path = tmp_path / "f3.h5"
+    shutil.copy(FIXTURES / "format3_sweep.h5", path)
+    old = rodjit.load_sweep(path)
+    assert old.attrs["format_version"] == 3 and old.counts == {
+        "completed": 3, "failed": 0, "pending": 3}
+    r = CliRunner().invoke(main, ["info", str(path)])
+    assert r.exit_code == 0 and "format 3" in r.output and "interrupted" in r.output, r.output
+    r = CliRunner().invoke(main, ["sweep", "--resume", "-o", str(path), "--scheduler",
+                                  "inline", "-q"])
+    assert r.exit_code == 0, r.output
+    resumed = rodjit.load_sweep(path)
+    assert resumed.status == "completed" and resumed.attrs["format_version"] == 3
+    with h5py.File(path, "r") as f:
+        assert "row_digest" not in f["summary"]
+    whole = rodjit.sweep(old.base, old.grid, scheduler="inline",
+                         handle_signals=False)
+    for name in ("restitution_first", "contact_time_first", "min_u0", "steps"):
+        assert np.allclose(resumed[name], whole[name], rtol=1e-6, equal_nan=True), name
+    assert list(resumed["status"]) == ["completed"] * 6
