@@ -73,7 +73,8 @@ def test_every_sweep_kind_draws_from_a_table_and_from_a_file(sweep_file, kind):
 
 def test_restitution_lines_differ_in_marker_and_colour(sweep_file):
     ax = rodjit.plot(sweep_file, "restitution").axes[0]
-    lines = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")]
+    lines = [ln for ln in ax.get_lines()
+             if not ln.get_label().startswith(("_", "no value"))]
     assert len(lines) == 2
     assert lines[0].get_marker() != lines[1].get_marker()
     assert tuple(lines[0].get_color()) != tuple(lines[1].get_color())
@@ -260,7 +261,8 @@ def test_sweep_panels_one_per_value(sweep_file, tmp_path):
     assert len(axes) == 2
     assert "β = 0.02" in axes[0].get_title() and "β = 0.05" in axes[1].get_title()
     for ax, beta in zip(axes, (0.02, 0.05)):
-        line = [ln for ln in ax.get_lines() if not ln.get_label().startswith("_")] or \
+        line = [ln for ln in ax.get_lines()
+                if not ln.get_label().startswith(("_", "no value"))] or \
             [ln for ln in ax.get_lines() if ln.get_marker() != "None"]
         mask = table["floor.beta"] == beta
         np.testing.assert_array_equal(line[0].get_ydata(),
