@@ -130,12 +130,12 @@ def available(lib: str) -> bool:
 class Problem:
     """One setting: its Config, initial state, snapshot times and error measure."""
 
-    def __init__(self, name):
+    def __init__(self, name, over=None):
         spec = SETTINGS[name]
         self.name = name
         cfg = load_preset(spec["preset"]).override({
-            **spec["over"], "time.t_end": T_END, "output.snapshot_interval": SNAPSHOT,
-            "output.diagnostics_interval": SNAPSHOT})
+            **spec["over"], **(over or {}), "time.t_end": T_END,
+            "output.snapshot_interval": SNAPSHOT, "output.diagnostics_interval": SNAPSHOT})
         self.cfg = cfg
         self.p = peer_rhs.params(cfg)
         u0, v0 = initial_state(cfg)
@@ -191,6 +191,26 @@ def run_cyrk(pb, method, tol, t_eval=None):
     if not ok:
         raise RuntimeError(msg)
     return elapsed, y, {"steps": steps}
+
+
+def pool_init(ready, pb) -> None:
+    """A process pool's initializer: the right-hand side's cfunc compiled and
+    ``nbsolve2_ivp`` compiled by a first call on the problem ``pb`` (Numba compiles both in
+    every process), then ``(pid, seconds)`` put on the queue ``ready``, so that the caller
+    can time its pool from the moment every worker is ready."""
+    import os
+    t0 = time.perf_counter()
+    run_cyrk(pb, "DOP853", 1e-6, t_eval=pb.t_eval[:3])
+    ready.put((os.getpid(), time.perf_counter() - t0))
+
+
+def pool_solve(task) -> tuple:
+    """One point in a pool worker: ``task`` = (problem, method, tol) as ``run_cyrk`` takes
+    them; returns the final state and the steps (not the whole output, which a sweep would
+    reduce in the worker too)."""
+    pb, method, tol = task
+    _, y, info = run_cyrk(pb, method, tol)
+    return y[:, -1].copy(), info["steps"]
 
 
 def _cvode_rhs(t, y, yp, ud):

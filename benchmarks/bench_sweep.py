@@ -1,5 +1,5 @@
-"""Parameter sweeps: scaling over two cores, Dask against the process pool, and
-the overhead per point.
+"""Parameter sweeps: scaling over two cores, Dask against the process pool, the
+overhead per point, and the sweep against its CPU time and CyRK's process pool.
 
 1. A 64-point grid over μ × κ_b × β (4 × 4 × 4) on the paper setting (data/paper_mu100.toml:
    N = 5, semi-implicit, t_end = 5 s): points per second with 1 and with 2 worker processes.
@@ -47,6 +47,36 @@ the overhead per point.
    for all of them), compile apart (the first call of a shape, minus a second), in turns
    with the same points as one ensemble batch in this process (one core each).
 
+6. ``--peer`` (only this part): ``rodjit sweep paper-mu100 --grid
+   "rod.mu=linspace(100,300,P)" --jobs 2 -q -o F``, the command a user types, in a child
+   process, for P = 20, 200 and 2000: its wall time against the CPU time of all its
+   processes (the command, its fork server and workers) over the jobs plus one start-up,
+   the wall of the same command over 2 points; target ≤ 1.3.  The CPU time is
+   ``RUSAGE_CHILDREN`` before and after, this process made the reaper of the command's
+   orphans (``adopt_orphans``: the fork server and its workers outlive the command and
+   nobody else waits for them), checked against the tree's CPU time read from ``/proc``
+   every 50 ms.  The marginal ratio (wall − the 2-point wall) / ((CPU − its CPU) / jobs)
+   says how much of the rest the start-up explains.  CPU time does not see what other load
+   on a shared machine takes from the workers, the wall does: beside it the wall over the
+   points' loops (their ``run_time``, wall time in which a worker never waits on the
+   sweep) over the jobs plus the start-up, which that load hits as it hits the wall.  Then the 200-point grid against
+   CyRK (``bench_peers``: the same right-hand side ``peer_rhs``, its runner ``run_cyrk``)
+   at matched accuracy: the state error over the first second as ``bench_peers`` measures
+   it (snapshots every 5 ms, against CyRK DOP853 at rtol = atol = 1e-13) on PEER_SAMPLE
+   points spread over the grid; rodjit's at the preset's settings (its configuration with
+   t_end = 1 s, snapshots every 5 ms as it has them: the sweep's steps over that second,
+   landing on the same output times), the peer's the loosest rtol = atol of a
+   half-decade ladder 1e-3 … 1e-10 whose largest error is at most rodjit's, for CyRK
+   Radau and DOP853.  Each then solves the 200 points over the preset's t_end (output
+   every 1 ms, the sweep's diagnostics interval; each point's final state returned) in a
+   spawned ``multiprocessing`` Pool(2), whose workers compile the cfunc and the solver in
+   their initializer (timed and printed apart, not in the pool's time), in turns with the
+   sweeps above: rodjit's speed over the fastest pool's, rodjit's wall as the user meets
+   it (start-up included) and without the start-up; target ≥ 0.67.  Also against the
+   points' loops alone, and with the pool's own start-up (spawn, imports, compiles) added.  For context, the same
+   200-point sweep with ``--set time.integrator=radau5`` (the preset's tolerances) and its
+   error.
+
 Each sweep writes its sweep file like ``rodjit sweep -o``.  A sweep's time is split into
 start-up (the workers importing rodjit and loading the kernels, until all report ready; a
 LocalCluster's scheduler and workers), the steady state until the last result, which is what
@@ -57,6 +87,7 @@ end-to-end ratios are printed too.  Each configuration is timed --repeat times i
     python benchmarks/bench_sweep.py [--repeat 3] [--quick] [--baseline CHECKOUT]
     python benchmarks/bench_sweep.py --engine [--full] [--baseline CHECKOUT] [--memory]
     python benchmarks/bench_sweep.py --diffrax [--diffrax-points 200]
+    python benchmarks/bench_sweep.py --peer [--repeat 3]
 """
 from __future__ import annotations
 
@@ -142,10 +173,11 @@ def cli_sweep(tree: str, grid: dict, out: Path, jobs: int) -> float:
     return time.perf_counter() - t0
 
 
-def tree_rss(pid: int) -> int:
-    """Resident bytes of process ``pid`` and all its descendants (Linux ``/proc``)."""
-    children: dict[int, list[int]] = {}
-    rss: dict[int, int] = {}
+def proc_table() -> dict[int, tuple[int, float, int]]:
+    """Every process of the machine (Linux ``/proc``): pid -> (parent pid, CPU seconds
+    used so far, user and system, resident bytes)."""
+    tick, page = os.sysconf("SC_CLK_TCK"), os.sysconf("SC_PAGE_SIZE")
+    table = {}
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
@@ -154,15 +186,30 @@ def tree_rss(pid: int) -> int:
                 fields = f.read().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        # after the command: state, ppid, ..., rss (pages) is field 24 of stat (index 21 here)
-        children.setdefault(int(fields[1]), []).append(int(entry))
-        rss[int(entry)] = int(fields[21]) * os.sysconf("SC_PAGE_SIZE")
-    total, todo = 0, [pid]
+        # after the command: state, ppid, ..., utime and stime (fields 14, 15 of stat,
+        # indices 11, 12 here), ..., rss in pages (field 24, index 21)
+        table[int(entry)] = (int(fields[1]), (int(fields[11]) + int(fields[12])) / tick,
+                             int(fields[21]) * page)
+    return table
+
+
+def descendants(pid: int, table: dict) -> set[int]:
+    """``pid`` and every process below it in ``table`` (``proc_table``'s form)."""
+    children: dict[int, list[int]] = {}
+    for p, row in table.items():
+        children.setdefault(row[0], []).append(p)
+    out, todo = set(), [pid]
     while todo:
         p = todo.pop()
-        total += rss.get(p, 0)
+        out.add(p)
         todo += children.get(p, [])
-    return total
+    return out
+
+
+def tree_rss(pid: int) -> int:
+    """Resident bytes of process ``pid`` and all its descendants (Linux ``/proc``)."""
+    table = proc_table()
+    return sum(table[p][2] for p in descendants(pid, table) if p in table)
 
 
 def peak_memory(tree: str, grid: dict, out: Path, jobs: int) -> dict:
@@ -522,6 +569,312 @@ def diffrax_part(base, points: int, repeat: int = 2) -> dict:
     return out
 
 
+# ---- part 6 (--peer): the sweep's wall against its CPU, and against CyRK's process pool --
+PEER_POINTS = (20, 200, 2000)    # the grids whose wall is held against their CPU
+PEER_TIMED = 200                 # the grid timed against CyRK's pool
+PEER_JOBS = 2
+PEER_SAMPLE = 8                  # grid points where the peer's tolerance is matched
+PEER_TOLS = tuple(10.0 ** (-k / 2) for k in range(6, 21))     # 1e-3 … 1e-10, half decades
+PEER_METHODS = ("Radau", "DOP853")
+PEER_T_EVAL = 0.001              # the peer's output interval: the sweep's diagnostics_interval
+TARGET_CPU, TARGET_PEER = 1.3, 0.67
+
+
+def peer_grid(points: int) -> dict:
+    """Part 6's grid: μ over ``points`` values in [100, 300] on paper-mu100."""
+    return {"rod.mu": f"linspace(100, 300, {points})"}
+
+
+def adopt_orphans() -> bool:
+    """Make this process the reaper of its orphaned descendants (Linux
+    ``PR_SET_CHILD_SUBREAPER``).  ``rodjit sweep``'s fork server and the workers forked from
+    it are waited for by nobody once the command has exited: without this their CPU time
+    never reaches ``RUSAGE_CHILDREN`` (``/usr/bin/time`` sees the sweep's own process only).
+    False where the call is unavailable."""
+    try:
+        import ctypes
+        return ctypes.CDLL(None, use_errno=True).prctl(36, 1, 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _children_cpu() -> float:
+    import resource
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def cpu_run(args: list, env: dict | None = None, cwd=None, interval: float = 0.05,
+            reap_wait: float = 60.0) -> dict:
+    """Wall time of the command ``args`` in a child process and the CPU time of all its
+    processes: ``RUSAGE_CHILDREN`` before and after, once every process it left behind
+    (adopted by this one, ``adopt_orphans``) has been reaped.  ``cpu_sampled`` checks it:
+    the CPU time of every process of the tree read from ``/proc`` every ``interval``
+    seconds, each process's last reading summed (a lower bound: it misses each process's
+    last ``interval``)."""
+    me = os.getpid()
+    own = descendants(me, proc_table())       # this process's own children (a pool's)
+    c0 = _children_cpu()
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(args, env=env, cwd=cwd, stdout=subprocess.DEVNULL)
+    sampled: dict[int, float] = {}
+    while proc.poll() is None:
+        table = proc_table()
+        for p in descendants(me, table) - own:
+            if p in table:
+                sampled[p] = table[p][1]
+        time.sleep(interval)
+    wall = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise SystemExit(f"{' '.join(map(str, args[1:6]))} ... exited {proc.returncode}")
+    deadline = time.perf_counter() + reap_wait
+    while time.perf_counter() < deadline:
+        left = [p for p, row in proc_table().items() if row[0] == me and p not in own]
+        if not left:
+            break
+        for p in left:
+            try:
+                os.waitpid(p, os.WNOHANG)
+            except ChildProcessError:
+                pass
+        time.sleep(0.01)
+    else:
+        print(f"   (processes left by the command still ran after {reap_wait:g} s: their "
+              f"CPU time is not counted)")
+    return {"wall": wall, "cpu": _children_cpu() - c0, "cpu_sampled": sum(sampled.values())}
+
+
+def peer_sweep(points: int, out: Path, sets: tuple = ()) -> dict:
+    """``rodjit sweep paper-mu100 --grid "rod.mu=linspace(100,300,P)" --jobs 2 -q -o out``
+    as a user types it (``cpu_run``), with the sum of its points' ``run_time``."""
+    here = str(Path(__file__).resolve().parents[1])
+    args, env = _sweep_command(here, peer_grid(points), out, PEER_JOBS)
+    for s in sets:
+        args += ["--set", s]
+    r = cpu_run(args, env, cwd=out.parent)
+    table = rodjit.load_sweep(out)
+    assert len(table) == points and table.counts["completed"] == points, table.report()
+    r.update(points=points, stepping=float(np.sum(table["run_time"])),
+             steps=int(np.sum(table["steps"])))
+    return r
+
+
+def peer_problems(base, mus) -> list:
+    """The peer's problem of each μ over the preset's full t_end, output every
+    PEER_T_EVAL: what ``bench_peers.run_cyrk`` takes (y0, the packed parameters, t_eval)."""
+    from types import SimpleNamespace
+
+    import peer_rhs
+    from rodjit.model.system import initial_state
+    u0, v0 = initial_state(base)
+    y0 = np.concatenate([u0, v0])
+    t_eval = PEER_T_EVAL * np.arange(int(round(base.time.t_end / PEER_T_EVAL)) + 1)
+    return [SimpleNamespace(y0=y0, t_eval=t_eval,
+                            p=peer_rhs.params(base.override({"rod.mu": float(m)})))
+            for m in mus]
+
+
+def peer_accuracy(base, mus, sample) -> dict:
+    """The state error over the first second (``bench_peers``: snapshots every 5 ms,
+    max(|u − u_ref|∞ / 1 m, |v − v_ref|∞ / V)) against CyRK DOP853 at rtol = atol = 1e-13,
+    on the grid points ``sample``: rodjit's at the preset's settings (the preset's
+    configuration with t_end = 1 s and a snapshot every 5 ms, its own interval), and for
+    each peer method the loosest tolerance of PEER_TOLS whose largest error over the sample
+    is at most rodjit's.  Also rodjit's ``radau5`` at the preset's tolerances (context)."""
+    import bench_peers
+
+    probs = [bench_peers.Problem("paper-mu100", {"rod.mu": float(mus[i])}) for i in sample]
+    refs = [bench_peers.run_cyrk(pb, "DOP853", 1e-13)[1] for pb in probs]
+
+    def rodjit_errors(over: dict) -> list:
+        errs = []
+        for i, pb, ref in zip(sample, probs, refs):
+            r = rodjit.simulate(base.override({
+                "rod.mu": float(mus[i]), "time.t_end": bench_peers.T_END,
+                "output.snapshot_interval": bench_peers.SNAPSHOT, **over}))
+            if not np.allclose(r.t, pb.t_eval, rtol=0, atol=1e-12):
+                raise SystemExit("rodjit's snapshot times differ from the peer's")
+            errs.append(pb.error(np.vstack([r.u.T, r.v.T]), ref))
+        return errs
+
+    own = rodjit_errors({})
+    out = {"sample_mu": [float(mus[i]) for i in sample], "rodjit": own,
+           "rodjit_radau5": rodjit_errors({"time.integrator": "radau5"}), "peers": {}}
+    target = max(own)
+    for method in PEER_METHODS:
+        ladder = []
+        for tol in PEER_TOLS:
+            try:
+                errs = [pb.error(bench_peers.run_cyrk(pb, method, tol)[1], ref)
+                        for pb, ref in zip(probs, refs)]
+            except RuntimeError:
+                errs = [float("inf")]
+            ladder.append((tol, max(errs)))
+            if max(errs) <= target:
+                out["peers"][method] = {"tol": tol, "errors": errs, "ladder": ladder}
+                break
+        else:
+            out["peers"][method] = {"tol": None, "ladder": ladder}
+    return out
+
+
+def cyrk_pool(problem):
+    """A spawned Pool(2) whose workers compile CyRK's right-hand side and solver in their
+    initializer (``bench_peers.pool_init``): the pool, the seconds until both were ready
+    and each worker's compile time.  Spawned, so that each compiles (a forked worker
+    would inherit this process's compiled cfunc)."""
+    import multiprocessing as mp
+
+    import bench_peers
+    ctx = mp.get_context("spawn")
+    ready = ctx.Queue()
+    t0 = time.perf_counter()
+    pool = ctx.Pool(PEER_JOBS, initializer=bench_peers.pool_init, initargs=(ready, problem))
+    compiles = [ready.get(timeout=900)[1] for _ in range(PEER_JOBS)]
+    return pool, time.perf_counter() - t0, compiles
+
+
+def peer_part(base, tmp, repeat: int) -> dict:
+    """Part 6 (module docstring)."""
+    import bench_peers
+
+    tmp = Path(tmp)
+    adopted = adopt_orphans()
+    if not adopted:
+        print("   (no PR_SET_CHILD_SUBREAPER here: the CPU time is /proc's sampled one)")
+    mus = np.linspace(100.0, 300.0, PEER_TIMED)
+    sample = np.unique(np.round(np.linspace(0, PEER_TIMED - 1, PEER_SAMPLE)).astype(int))
+    t0 = time.perf_counter()
+    acc = peer_accuracy(base, mus, sample)
+    matching = time.perf_counter() - t0
+    methods = {m: r["tol"] for m, r in acc["peers"].items() if r["tol"] is not None}
+    problems = peer_problems(base, mus)
+    pool, pool_startup, compiles = cyrk_pool(problems[0])
+    sizes = (2, *PEER_POINTS)
+    runs = {p: [] for p in sizes}
+    radau5, pools = [], {m: [] for m in methods}
+    try:
+        peer_sweep(2, tmp / "peer_warm.h5")          # the kernels in the cache
+        peer_sweep(2, tmp / "peer_warm.h5", ("time.integrator=radau5",))
+        for _ in range(repeat):                      # in turns: the load hits all alike
+            for p in sizes:
+                runs[p].append(peer_sweep(p, tmp / f"peer_{p}.h5"))
+            radau5.append(peer_sweep(PEER_TIMED, tmp / "peer_radau5.h5",
+                                     ("time.integrator=radau5",)))
+            for m, tol in methods.items():
+                tasks = [(pb, m, tol) for pb in problems]
+                t1 = time.perf_counter()
+                solved = pool.map(bench_peers.pool_solve, tasks)
+                pools[m].append({"wall": time.perf_counter() - t1,
+                                 "steps": int(sum(s for _, s in solved))})
+    finally:
+        pool.terminate()
+        pool.join()
+    best = {p: min(r, key=lambda x: x["wall"]) for p, r in runs.items()}
+    start = best[2]
+
+    def median(f) -> float:
+        """The median over the rounds of ``f(k)``: every ratio divides two numbers of the
+        same round, whose load the machine's drift changes least."""
+        return float(np.median([f(k) for k in range(repeat)]))
+
+    rows, cpu_rows = [], {}
+    for p in PEER_POINTS:
+        b, r, s2 = best[p], runs[p], runs[2]
+        ratio = median(lambda k: r[k]["wall"] / (r[k]["cpu"] / PEER_JOBS + s2[k]["wall"]))
+        marginal = median(lambda k: (r[k]["wall"] - s2[k]["wall"])
+                          / ((r[k]["cpu"] - s2[k]["cpu"]) / PEER_JOBS))
+        # the points' loops run in wall time: what other load takes from the workers shows
+        # in them as in the sweep's wall, which CPU time does not see
+        loops = median(lambda k: r[k]["wall"] / (r[k]["stepping"] / PEER_JOBS
+                                                  + s2[k]["wall"]))
+        cpu_rows[p] = {"best": b, "runs": r, "ratio": ratio, "marginal_ratio": marginal,
+                       "wall_over_loops_plus_startup": loops}
+        rows.append([p, b["wall"], b["cpu"], b["cpu_sampled"], b["stepping"] / PEER_JOBS,
+                     start["wall"], ratio, marginal, loops])
+    print(f"   rodjit sweep paper-mu100 --grid \"rod.mu=linspace(100,300,P)\" --jobs "
+          f"{PEER_JOBS} -q -o F (best of {repeat}, in turns; the ratios the median of the "
+          f"rounds'); start-up = the same command "
+          f"over 2 points; CPU of all its processes by RUSAGE_CHILDREN"
+          f"{' (orphans adopted and reaped)' if adopted else ''}, /proc sampled every 50 ms "
+          f"beside it")
+    print(_util.table(rows, ["P", "wall [s]", "CPU all [s]", "CPU sampled [s]",
+                             "stepping/jobs [s]", "start-up [s]",
+                             "wall/(CPU/jobs+start-up)", "marginal wall/(CPU/jobs)",
+                             "wall/(loops/jobs+start-up)"]))
+    worst = max(r["ratio"] for r in cpu_rows.values())
+    print(f"   worst wall / (CPU/jobs + start-up): {worst:.2f} (target <= {TARGET_CPU}: "
+          f"{'yes' if worst <= TARGET_CPU else 'NO'}); marginal = (wall − start-up wall) / "
+          f"((CPU − start-up CPU)/jobs); loops = the points' run_time (wall time inside "
+          f"their compiled loops, where a worker never waits on the sweep): above CPU/jobs "
+          f"by what other load on the machine took from the workers")
+    own = max(acc["rodjit"])
+    print(f"   accuracy over [0, 1 s] on {len(sample)} of the {PEER_TIMED} points (against "
+          f"CyRK DOP853 1e-13): rodjit {base.time.integrator} at the preset's rtol "
+          f"{base.time.rtol:g}, atol {base.time.atol:g}: {own:.2g}; radau5 at the same "
+          f"tolerances {max(acc['rodjit_radau5']):.2g}")
+    for m, r in acc["peers"].items():
+        if r["tol"] is None:
+            print(f"   CyRK {m}: no tolerance down to {PEER_TOLS[-1]:g} reaches it: not timed")
+        else:
+            print(f"   CyRK {m}: rtol = atol = {r['tol']:.3g} (error {max(r['errors']):.2g})")
+    b200, r200, s2 = best[PEER_TIMED], runs[PEER_TIMED], runs[2]
+    steady = b200["wall"] - start["wall"]
+    loops = b200["stepping"] / PEER_JOBS
+    r5 = min(radau5, key=lambda x: x["wall"])
+    prow, out_pools = [], {}
+    for m, rs in pools.items():
+        w = min(x["wall"] for x in rs)
+        ratios = {
+            "speed_ratio": median(lambda k: rs[k]["wall"] / r200[k]["wall"]),
+            "speed_ratio_without_startup": median(
+                lambda k: rs[k]["wall"] / (r200[k]["wall"] - s2[k]["wall"])),
+            "speed_ratio_loops_alone": median(
+                lambda k: rs[k]["wall"] / (r200[k]["stepping"] / PEER_JOBS)),
+            "speed_ratio_pool_startup_included": median(
+                lambda k: (rs[k]["wall"] + pool_startup) / r200[k]["wall"]),
+            "speed_ratio_radau5": median(lambda k: rs[k]["wall"] / radau5[k]["wall"]),
+            "speed_ratio_radau5_without_startup": median(
+                lambda k: rs[k]["wall"] / (radau5[k]["wall"] - s2[k]["wall"]))}
+        out_pools[m] = {"tol": methods[m], "wall": w, "runs": rs, "steps": rs[0]["steps"],
+                        **ratios}
+        prow.append([f"CyRK {m} {methods[m]:.3g}", w, rs[0]["steps"], b200["wall"], steady,
+                     loops, *list(ratios.values())[:4]])
+    print(f"   {PEER_TIMED} points over t_end = {base.time.t_end:g} s, {PEER_JOBS} processes "
+          f"each: CyRK's spawned Pool({PEER_JOBS}).map (t_eval every {PEER_T_EVAL:g} s, "
+          f"returning each point's final state), ready in {pool_startup:.1f} s (compile "
+          f"{', '.join(f'{c:.1f}' for c in compiles)} s in its workers, apart), against "
+          f"rodjit's sweep as the user meets it and without its start-up; steps: rodjit "
+          f"{b200['steps']}")
+    print(_util.table(prow, ["peer", "pool [s]", "steps", "rodjit wall [s]",
+                             "rodjit − start-up [s]", "rodjit loops/jobs [s]",
+                             "rodjit/peer speed", "without start-up", "loops alone",
+                             "peer's start-up too"]))
+    fastest = min(out_pools, key=lambda m: out_pools[m]["wall"]) if out_pools else None
+    if fastest:
+        ratio = out_pools[fastest]["speed_ratio"]
+        print(f"   rodjit speed / CyRK {fastest} pool speed: {ratio:.2f} (target >= "
+              f"{TARGET_PEER}: {'yes' if ratio >= TARGET_PEER else 'NO'}); "
+              f"{out_pools[fastest]['speed_ratio_without_startup']:.2f} without the start-up,"
+              f" {out_pools[fastest]['speed_ratio_loops_alone']:.2f} for the points' compiled "
+              f"loops alone (their run_time over the jobs); medians of the rounds")
+        print(f"   (context) the same sweep with --set time.integrator=radau5: {r5['wall']:.2f} s"
+              f" wall, {r5['steps']} steps, loops/jobs {r5['stepping'] / PEER_JOBS:.3f} s: "
+              f"speed over CyRK {fastest}'s pool "
+              f"{out_pools[fastest]['speed_ratio_radau5']:.2f} "
+              f"({out_pools[fastest]['speed_ratio_radau5_without_startup']:.2f} without the "
+              f"start-up)")
+    return {"jobs": PEER_JOBS, "repeat": repeat, "adopted_orphans": adopted,
+            "startup": start, "startup_runs": runs[2], "radau5_runs": radau5,
+            "cpu": {str(k): v for k, v in cpu_rows.items()},
+            "meets_cpu_target": worst <= TARGET_CPU, "accuracy": acc,
+            "tolerance_matching": matching, "peer_t_eval": PEER_T_EVAL,
+            "pool_startup": pool_startup, "pool_compiles": compiles, "pools": out_pools,
+            "fastest_peer": fastest, "rodjit_radau5": r5,
+            "meets_peer_target": bool(fastest) and
+            out_pools[fastest]["speed_ratio"] >= TARGET_PEER}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=3)
@@ -544,7 +897,17 @@ def main(argv=None):
                     help="part 5: only the diffrax jit(vmap) row")
     ap.add_argument("--diffrax-points", type=int, default=DIFFRAX_POINTS,
                     help=f"points diffrax is timed on (default {DIFFRAX_POINTS}; 0: all 2000)")
+    ap.add_argument("--peer", action="store_true",
+                    help="only part 6: the sweep's wall against its CPU, and against "
+                         "CyRK's process pool at matched accuracy")
     args = ap.parse_args(argv)
+    if args.peer:
+        _util.header("parameter sweeps: wall against CPU, and CyRK's process pool")
+        with tempfile.TemporaryDirectory() as tmp:
+            out = peer_part(load_preset("paper-mu100"), tmp, args.repeat)
+        path = _util.save("sweep_peer", out)
+        print(f"   -> {path}")
+        return out
     if args.diffrax_points < 0:
         ap.error("--diffrax-points must be >= 0")
     if args.diffrax:

@@ -1,9 +1,12 @@
 """benchmarks/bench_sweep.py's baseline: a checkout compared against runs with its
 ahead-of-time extension, as its install would have it (on the JIT every one of its
-workers would pay Numba's start-up, which its users do not)."""
+workers would pay Numba's start-up, which its users do not); and the CPU time of a
+command's whole process tree, the processes it leaves behind included."""
 from __future__ import annotations
 
+import json
 import math
+import subprocess
 import sys
 from pathlib import Path
 
@@ -81,3 +84,38 @@ def test_loop_pairs_stops_on_a_failing_child(tmp_path):
     with pytest.raises(SystemExit, match="a loop timing child exited 1"):
         bench_sweep.loop_pairs(here, str(broken), rounds=1, points=((40.0, 1000.0, 0.05),),
                                reps=1, t_end=0.05)
+
+
+def test_descendants_walks_the_whole_tree_and_nothing_else():
+    table = {1: (0, 0.0, 0), 2: (1, 0.0, 0), 3: (2, 0.0, 0), 4: (1, 0.0, 0),
+             5: (9, 0.0, 0), 6: (5, 0.0, 0)}
+    assert bench_sweep.descendants(1, table) == {1, 2, 3, 4}
+    assert bench_sweep.descendants(5, table) == {5, 6}
+    assert bench_sweep.descendants(7, table) == {7}
+
+
+# in a child, so that this test process does not stay the reaper of later tests' orphans:
+# a command that starts a process, which outlives it, burns 0.4 s of CPU and exits
+_ORPHAN = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+import bench_sweep
+burn = "import time\\nt = time.process_time()\\nwhile time.process_time() - t < 0.4: pass"
+command = [sys.executable, "-c",
+           f"import subprocess, sys; subprocess.Popen([sys.executable, '-c', {burn!r}])"]
+adopted = bench_sweep.adopt_orphans()
+print(json.dumps({"adopted": adopted, **bench_sweep.cpu_run(command)}))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux /proc and prctl")
+def test_cpu_run_counts_the_processes_a_command_leaves_behind():
+    """``rodjit sweep``'s fork server and workers outlive the command: their CPU time
+    counts only once this process has adopted and reaped them."""
+    bench = str(Path(__file__).resolve().parents[1] / "benchmarks")
+    done = subprocess.run([sys.executable, "-c", _ORPHAN, bench], capture_output=True,
+                          text=True, timeout=120, check=True)
+    r = json.loads(done.stdout.strip().splitlines()[-1])
+    assert r["adopted"]
+    assert r["cpu"] >= 0.4
+    assert r["wall"] < r["cpu"]          # the command itself returned before the burn ended
