@@ -261,6 +261,7 @@ PARALLEL_NAMES: dict[str, frozenset[str]] = {
     "FORMAT_VERSION": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file",
                                  "rodjit.analysis.converge"}),
     "KIND": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
+    "READS": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
     "REQUIRED_ATTRS": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
     # field indices of a compiled array: each array's module numbers its own fields
     "F_T": frozenset({"rodjit.stepping.layout", "rodjit.gpu.trajectory"}),

@@ -182,7 +182,7 @@ def test_xarray_opens_every_group_of_a_sweep_file(sweep_file):
         assert ds["t_impact"].dims == ("bounce",) and ds["t_impact"].size > 0
         assert ds["point_index"].attrs["instance_dimension"] == "point"
     with h5py.File(sweep_file, "r") as f:
-        assert f.attrs["format_version"] == 3
+        assert f.attrs["format_version"] == 4
         b = f["bounces"]
         assert b["open"].dtype == np.int8 and b["t_impact"].size > 0
 
