@@ -113,3 +113,19 @@ def test_points_that_cannot_start_fail_as_they_would_alone():
     got = _check((base, {"rod.kappa": [100.0, 13.0, 50.0], "rod.mu": [0.0, 5.0],
                          "initial.height": [0.5, 1e12]}))
     assert sum(isinstance(g, Exception) for g in got) == 8
+
+
+def test_kept_initial_states_are_bounded_in_memory(monkeypatch):
+    """A sweep of the initial state of a long rod keeps the latest states only, whatever
+    the count kept of small pieces."""
+    monkeypatch.setattr(setup, "ARRAY_FLOATS", 2 * 41 * 16)     # 16 states of N = 40
+    setup.clear()
+    base = rodjit.Config().override({"time.t_end": 0.3, "rod.N": 40})
+    starts = setup.starts([base.override({"initial.height": 1.0 + k / 64})
+                           for k in range(40)])
+    assert not any(isinstance(s, Exception) for s in starts)
+    assert len(setup._MADE["state"]) == 16 and len(setup._MADE["clock"]) == 1
+    # the latest are kept, the others made again (equal, not the same object)
+    assert setup.start(starts[-1].config).state is starts[-1].state
+    again = setup.start(starts[0].config)
+    assert again.state is not starts[0].state and _bits(again.state) == _bits(starts[0].state)

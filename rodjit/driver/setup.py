@@ -48,6 +48,7 @@ __all__ = ["Start", "start", "starts", "parameters", "positions", "clear", "snap
            "rows_needed", "clock_row", "tolerance"]
 
 CACHE_SIZE = 4096    # entries kept of each piece (the oldest go first)
+ARRAY_FLOATS = 2**22  # and of a piece that is an array, at most about this many floats
 
 
 class Start(NamedTuple):
@@ -120,10 +121,11 @@ _PIECES = ("runnable", "system", "rod", "floor", "tau", "scheme", "ctrl", "state
 _MADE: dict[str, dict] = {name: {} for name in _PIECES}
 
 
-def _keep(cache: dict, key, value) -> None:
+def _keep(cache: dict, key, value, limit: int = CACHE_SIZE) -> None:
+    """Keep ``value`` under ``key``, forgetting the oldest entries beyond ``limit``."""
     with _LOCK:
         cache[key] = value
-        if len(cache) > CACHE_SIZE:
+        while len(cache) > limit:
             del cache[next(iter(cache))]
 
 
@@ -174,11 +176,14 @@ def _get(name: str, key: tuple, make, *args):
     hit = cache.get(key)
     if hit is None:
         try:
-            hit = (True, make(*args))
+            value = make(*args)
         except Exception as exc:        # the same failure for every point that reads it
             _keep(cache, key, (False, exc))
             raise
-        _keep(cache, key, hit)
+        hit = (True, value)
+        # the initial states of long rods: a bound on their memory too
+        size = value.size if isinstance(value, np.ndarray) else 1
+        _keep(cache, key, hit, min(CACHE_SIZE, max(16, ARRAY_FLOATS // size)))
     if hit[0]:
         return hit[1]
     raise hit[1].with_traceback(None)
