@@ -1,7 +1,7 @@
 """The fixed cost of a run cut without changing it: the pieces of a point's set-up kept by
 the values of what they read, shared by the Configs ``override`` derives and by equal ones
-(``driver.setup``), and ``simulate``'s sink keeping its run's last block uncopied (``MemorySink(views=True)``);
-a Config still refused and warned about at every run."""
+(``driver.setup``), and ``simulate``'s sink keeping its run's last block uncopied
+(``MemorySink(views=True)``); a Config still refused and warned about at every run."""
 import dataclasses
 import warnings
 

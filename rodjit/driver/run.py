@@ -32,7 +32,8 @@ from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, work_rows
-from .setup import parameters, positions, rows_needed, snapshot_bound, start as set_up, tolerance
+from .setup import parameters, positions, rows_needed, snapshot_bound, tolerance
+from .setup import start as set_up
 
 __all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
 

@@ -249,8 +249,8 @@ def run_batch(configs, index) -> BatchResult:
     """Run the points ``configs`` (grid indices ``index``) on the GPU; a point that cannot
     start (its set-up raises) is failed with the reason, as a CPU point is.  ``worker``
     holds the device and the batch's seconds: ``setup_time`` (the points' set-up,
-    ``driver.setup``, on the host), ``compile_time`` (the kernels, first batch of a family in a process),
-    ``kernel_time`` (the launches and the copies of their results back) and ``wall_time``.
+    ``driver.setup``, on the host), ``compile_time`` (the kernels, first batch of a family
+    in a process), ``kernel_time`` (the launches and the copies of their results back) and ``wall_time``.
 
     Raises CudaUnavailable or GpuUnsupported (one line) before anything runs."""
     cuda = import_cuda()

@@ -3,15 +3,13 @@
 
 What runs in Python per point, before the call, and why: the point's Config
 (``Grid.config``: the base configuration with the swept keys replaced, the fast path of
-``Config.override``), its parameter tuples (``driver.run.parameters``), its initial state
-(checked admissible) and its clock row: the same functions a ``Run`` calls, so the compiled
-loop starts from exactly the arrays ``rodjit run`` would give it.  That set-up measures
-about 90 µs a point on the paper's grid (most of it the Config), under a tenth of the
-point's loop; a ``Run`` object, its buffers and its compile lookup are not made.  The
-flight time τ is cached by rod law and N.  After the call, Python works on columns, except
-for a point that needs text (a failure message, the reason of a first contact without
-lift-off, whose lift-off energy is computed for those points only) and the means over each
-point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
+``Config.override``), and its set-up (``driver.setup.start``: parameter tuples, initial
+state checked admissible, clock row, flight time), the one a ``Run`` makes, so the compiled
+loop starts from exactly the arrays ``rodjit run`` would give it, packed into a row of
+doubles.  A ``Run`` object, its buffers and its compile lookup are not made.  After the
+call, Python works on columns, except for a point that needs text (a failure message, the
+reason of a first contact without lift-off, whose lift-off energy is computed for those
+points only) and the means over each point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
 
 A point the batch could not hold (more bounce rows than its share of the batch's,
 ``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
