@@ -203,12 +203,13 @@ def start(config, u0=None, v0=None) -> Start:
     _get("runnable", (time_t, rod_t), config.check_runnable)
     system, rod, floor, laws = _body(config, rod_t)
     # τ reads the rod law's parameters and N only (``records.physics.flight_time``)
-    tau = _get("tau", (laws[0], _token(rod), n), flight_time, config)
+    rod_p = _token(rod)
+    tau = _get("tau", (laws[0], rod_p, n), flight_time, config)
     scheme, ctrl = _stepping(config, time_t)
     if u0 is None and v0 is None:
         ini = (_token(config.initial), n)
         state = _get("state", ini, _state, config)
-        _get("admissible", (*ini, *laws, _token(rod), _token(floor)), check_admissible,
+        _get("admissible", (*ini, *laws, rod_p, _token(floor)), check_admissible,
              state[0], rod, floor, "initial state")
     else:
         state = _state(config, u0, v0)
