@@ -23,9 +23,9 @@ Measured (µs; medians of eight rounds of fresh processes, the trees in turns, o
 by section identity, the CPU engine's per point, the GPU engine's per batch) and against
 this one with every piece made anew (no cache): a 200-point ``rod.mu`` grid of
 paper-mu100, each point's Config made beforehand, its start and packed row as the CPU
-engine makes them 71.5 → 42.2 a point (85.4 without the cache), all at once as the GPU
-engine does 28.2 → 31.0 (75.2); ``Run`` of a repeated 1 ms paper-mu100 Config 34.2 →
-32.8 (101.8), its warm ``simulate`` 117.0 → 117.6 (189.8).  Its values are those made
+engine makes them 66.9 → 36.7 a point (80.0 without the cache), all at once as the GPU
+engine does 27.8 → 29.2 (73.5); ``Run`` of a repeated 1 ms paper-mu100 Config 34.0 →
+29.5 (99.9), its warm ``simulate`` 116.6 → 113.1 (185.7).  Its values are those made
 anew, to the bit: results do not change.
 """
 from __future__ import annotations
