@@ -29,8 +29,8 @@ diagnostics every 5 ms) with the integrators that are rodjit's best there (μ = 
 1e-3), and a tiny run (t_end = 1 ms) where the fixed cost is nearly all of the call.
 The ``new-config/`` cases make a new Config for every call, as ``bench_peers.py`` does
 (``override`` of the setting's Config with the integrator and tolerance, outside the
-timed call); both share the values of the rod, floor, gravity and initial sections
-(``driver.prepared.Body``) and derive the rest at every call.
+timed call); both find the pieces of their set-up kept by the values of what each reads
+(``driver.setup``).
 """
 from __future__ import annotations
 

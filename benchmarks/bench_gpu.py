@@ -12,8 +12,9 @@ Measured, each in this one run:
   points (``setup_time``), and the compile time apart
   (first launch of the kernel in the process).
 - The host's set-up of the points alone (no GPU needed), 10^4 points: points/s of the
-  batch set-up the engine uses (``rodjit.gpu.starts.starts``) against one ``Run`` per point
-  (``start_of``, the set-up it replaced), the points' ``Config`` made beforehand.
+  set-up the engine uses (``rodjit.driver.setup.starts``) against one ``Run`` per point
+  (the same set-up, and a run's buffers), the points' ``Config`` made beforehand and the
+  set-up's kept pieces forgotten before each.
 - CPU path: ``rodjit.sweep`` on every core (the process pool), 2^10 points.
 - diffrax 0.7 (if importable): Tsit5 with a PID controller, ``jax.jit(jax.vmap(...))`` over
   (μ, κ_b), on the semi-discrete system of MODEL.md §2 written in JAX (benchmarks/jax_rod.py,
@@ -167,8 +168,10 @@ def diffrax_runs(t_end, exps, ref, target_err):
 
 def host_setup(n: int = 10_000) -> dict:
     """Points/s of the host's set-up of ``n`` points of the paper grid: the engine's batch
-    set-up and one ``Run`` per point, in this run (each the best of 3)."""
-    from rodjit.gpu.starts import start_of, starts
+    set-up and one ``Run`` per point, in this run (each the best of 3, from no kept
+    pieces)."""
+    from rodjit.driver.run import Run
+    from rodjit.driver.setup import clear, starts
 
     grid = grid_of(n)
     cfg = base("energy", 5.0)
@@ -177,13 +180,15 @@ def host_setup(n: int = 10_000) -> dict:
     def best(fn):
         times = []
         for _ in range(3):
+            clear()
             t0 = time.perf_counter()
             fn()
             times.append(time.perf_counter() - t0)
         return len(configs) / min(times)
 
     batch = best(lambda: starts(configs))
-    per_point = best(lambda: [start_of(c) for c in configs])
+    per_point = best(lambda: [Run(c, snapshot_capacity=1, diag_capacity=1, event_capacity=1)
+                              for c in configs])
     return {"points": len(configs), "batch_points_per_s": batch,
             "run_per_point_points_per_s": per_point}
 
@@ -223,7 +228,7 @@ def main() -> int:
                                         "{1000, 3000}", "gpu": {}}
     out["host_setup"] = h = host_setup()
     print(f"  host set-up of {h['points']} points: {h['batch_points_per_s']:.3g} points/s "
-          f"(batch, gpu.starts) against {h['run_per_point_points_per_s']:.3g} points/s (one "
+          f"(batch, driver.setup) against {h['run_per_point_points_per_s']:.3g} points/s (one "
           f"Run per point)")
     for integ in args.integrators.split(","):
         rows, compile_s, last = gpu_runs(integ, args.t_end, exps)

@@ -461,3 +461,54 @@ def test_the_packing_walks_see_the_forms_they_look_for(tmp_path):
     known = {f"rodjit.{n}": tmp_path / f"{n}.py" for n in "abcd"}
     assert field_walkers(known) == {"rodjit.a", "rodjit.b"}
     assert rebuild_writers(known) == {"rodjit.c", "rodjit.d"}
+
+
+# ---- one implementation of a point's set-up ----------------------------------------------
+SETUP = "rodjit.driver.setup"
+# what a point's set-up makes of its Config: the run checks' sections aside, the functions
+# of the floors below that make its pieces
+SETUP_NAMES = ("rod_system", "law_params", "build_system", "flight_time", "make_scheme",
+               "initial_state", "check_admissible", "clock_row")
+# the modules that set points up: a single run, the CPU engine's batches, the GPU engine
+SETUP_CALLERS = ("rodjit.driver.run", "rodjit.sweeps.ensemble", "rodjit.gpu.engine")
+
+
+def _uses(tree, name: str) -> bool:
+    """Whether ``tree`` reads ``name`` (a call, or the function handed on), as a name or
+    as an attribute of a module (``control.build`` for ``name == "control.build"``)."""
+    owner, _, attr = name.rpartition(".")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and not owner and node.id == attr \
+                and isinstance(node.ctx, ast.Load):
+            return True
+        if isinstance(node, ast.Attribute) and node.attr == attr and (
+                not owner or (isinstance(node.value, ast.Name) and node.value.id == owner)):
+            return True
+    return False
+
+
+def test_a_points_set_up_has_one_implementation(graph):
+    """One module sets a point up from its Config (``driver.setup``: the parameter tuples,
+    the initial state checked admissible, the clock row, the flight time): a single run,
+    the CPU engine's batches and the GPU engine take it from there, and no module of the
+    driver's floor or above makes a piece of it itself.  (Below the driver, the run file
+    and the first-impact stream read the flight time for themselves: they are no set-up.)"""
+    known = modules()
+    for caller in SETUP_CALLERS:
+        assert SETUP in graph[caller], f"{caller} does not import {SETUP}"
+    trees = {name: ast.parse(path.read_text(), str(path)) for name, path in known.items()
+             if floor(name) >= FLOOR_OF["driver"]}
+    for name in (*SETUP_NAMES, "control.build"):
+        users = {mod for mod, tree in trees.items() if _uses(tree, name)}
+        assert users <= {SETUP}, (name, sorted(users))
+        # the set-up makes the system and the laws' parameters apart (``build_system``
+        # makes both at once, for benchmarks and tests)
+        assert name == "build_system" or SETUP in users, name
+
+
+def test_the_set_up_walk_sees_names_handed_on_and_module_attributes():
+    tree = ast.parse("from x import flight_time\nimport control\n"
+                     "def f(c):\n    return get(flight_time, c), control.build(c)\n")
+    assert _uses(tree, "flight_time") and _uses(tree, "control.build")
+    assert not _uses(tree, "initial_state")
+    assert not _uses(ast.parse("aot.build(1)\n"), "control.build")

@@ -1,7 +1,7 @@
-"""The fixed cost of a run cut without changing it: the values of a Config's rod, floor,
-gravity and initial sections shared by the Configs ``override`` derives (``driver.prepared``),
-and ``simulate``'s sink keeping its run's last block uncopied (``MemorySink(views=True)``);
-a Config still refused and warned about at every run."""
+"""The fixed cost of a run cut without changing it: the pieces of a point's set-up kept by
+the values of what they read, shared by the Configs ``override`` derives and by equal ones
+(``driver.setup``), and ``simulate``'s sink keeping its run's last block uncopied
+(``MemorySink(views=True)``); a Config still refused and warned about at every run."""
 import dataclasses
 import warnings
 
@@ -10,7 +10,7 @@ import pytest
 
 import rodjit
 from rodjit.config import ModelWarning
-from rodjit.driver import prepared
+from rodjit.driver import setup
 from rodjit.driver.run import Run
 from rodjit.records.result import MemorySink
 from rodjit.stepping import layout as L
@@ -30,18 +30,36 @@ def _same(a, b):
         assert a.stats[k] == b.stats[k]
 
 
-def test_a_run_gets_its_own_state_not_the_kept_template():
+def test_a_run_gets_its_own_state_and_clock_not_the_kept_ones():
     cfg = rodjit.Config().override({"time.t_end": 0.2})
-    body = prepared.body(cfg)
-    state = body.initial(cfg)
+    kept = setup.start(cfg)
+    state, clock = kept.state.copy(), kept.clock.copy()
     run = Run(cfg)
-    assert prepared.body(cfg) is body and not np.shares_memory(run.state, body._state)
+    assert setup.start(cfg).state is kept.state
+    assert not np.shares_memory(run.state, kept.state)
+    assert not np.shares_memory(run.clock, kept.clock)
+    # the run starts from the kept arrays to the bit, and shares the parameter tuples
+    assert run.state[:2].tobytes() == state.tobytes() and not run.state[2].any()
+    assert run.clock.tobytes() == clock.tobytes() and run.ev.tobytes() == kept.ev().tobytes()
+    assert all(a is b for a, b in zip(run._args(), kept.params()))
     run.start(None)
     while run.advance(MemorySink()) != L.DONE:
         pass
-    # the run moved its own state; the template is as it was
-    np.testing.assert_array_equal(body.initial(cfg), state)
+    # the run moved its own state and clock; the kept ones are as they were
+    np.testing.assert_array_equal(setup.start(cfg).state, state)
+    np.testing.assert_array_equal(setup.start(cfg).clock, clock)
     assert run.t == pytest.approx(0.2)
+
+
+def test_a_run_from_its_own_profiles_is_checked_under_their_name():
+    cfg = rodjit.Config().override({"time.t_end": 0.2})
+    u = np.linspace(0.5, 1.6, cfg.rod.N + 1)
+    run = Run(cfg, u0=u, v0=np.zeros(cfg.rod.N + 1))
+    assert run.u.tobytes() == u.tobytes()
+    with pytest.raises(ValueError, match="u0 is not admissible"):
+        Run(cfg, u0=u[::-1], v0=np.zeros(cfg.rod.N + 1))
+    # a profile is not kept: the default start is still the config's
+    assert setup.start(cfg).state[0].tobytes() != u.tobytes()
 
 
 def test_a_refused_config_is_refused_at_every_run():
@@ -86,35 +104,39 @@ def test_a_viewing_sink_settled_between_calls_equals_a_copying_one():
     assert not np.array_equal(unsettled.t, copied.t)
 
 
-def test_configs_that_differ_in_time_keys_share_their_body_and_run_unchanged():
+def test_configs_that_differ_in_time_keys_share_their_rod_pieces_and_run_unchanged():
     base = rodjit.load_preset("paper-mu0").override({"time.t_end": 0.3})
     a = base.override({"time.integrator": "dp54", "time.rtol": 1e-5, "time.atol": 1e-5})
     b = base.override({"time.integrator": "dop853", "time.rtol": 1e-6, "time.atol": 1e-6})
-    assert prepared.body(a) is prepared.body(b)          # the rod's values derived once
-    # the same runs as from configurations that share nothing with them
+    sa, sb = setup.start(a), setup.start(b)
+    assert sa.rod is sb.rod and sa.system is sb.system    # the rod's values derived once
+    assert sa.state is sb.state and sa.scheme is not sb.scheme
+    # an equal Config that shares no object with it finds the same pieces, and runs the same
     for cfg in (a, b):
         fresh = rodjit.Config.from_dict(_flat(cfg))      # every section a new object
         assert fresh == cfg and fresh.rod is not cfg.rod
-        assert prepared.body(fresh) is not prepared.body(a)
+        assert all(x is y for x, y in zip(setup.start(fresh).params(),
+                                          setup.start(cfg).params()))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", ModelWarning)
             _same(rodjit.simulate(cfg), rodjit.simulate(fresh))
-    # a changed rod section gets its own body
-    assert prepared.body(a.override({"rod.mu": 1.0})) is not prepared.body(a)
+    # a changed rod section gets its own pieces
+    assert setup.start(a.override({"rod.mu": 1.0})).system is not sa.system
 
 
-def test_a_law_registered_again_gets_a_new_body(monkeypatch):
+def test_a_law_registered_again_gets_new_pieces(monkeypatch):
     """A law registered again under the same name (a notebook cell run twice: new
-    functions) is not mistaken for the one a kept body was built with."""
+    functions) is not mistaken for the one kept pieces were made with."""
     cfg = rodjit.Config().override({"time.t_end": 0.1})
-    kept = prepared.body(cfg)
-    get_law = prepared.get_law
+    kept = setup.start(cfg)
+    get_law = setup.get_law
     again = dataclasses.replace(get_law("floor", cfg.floor.law), description="again")
-    monkeypatch.setattr(prepared, "get_law",
+    monkeypatch.setattr(setup, "get_law",
                         lambda kind, name: again if kind == "floor" else get_law(kind, name))
-    assert prepared.body(cfg) is not kept
+    got = setup.start(cfg)
+    assert got.floor is not kept.floor and got.rod is kept.rod
     monkeypatch.undo()
-    assert prepared.body(cfg) is kept
+    assert setup.start(cfg).floor is kept.floor
 
 
 def _flat(cfg):

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from rodjit.driver.prepared import parameters
+from rodjit.driver.setup import parameters
 from rodjit.stepping import packing as P
 from rodjit.stepping.registry import NAMES
 

@@ -22,7 +22,6 @@ from .._jit import python_function
 from ..config import ModelWarning
 from ..kernels.forces import BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE, TOO_CLOSE
 from ..model.laws import lower
-from ..model.system import check_admissible, initial_state
 from ..records.sink import Sink
 from ..records.stats import run_stats
 
@@ -33,7 +32,8 @@ from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.schemes import SCHEME_STATS, work_rows
-from .prepared import body, clock_row, parameters, rows_needed, snapshot_bound, tolerance
+from .setup import parameters, positions, rows_needed, snapshot_bound, tolerance
+from .setup import start as set_up
 
 __all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_text", "capacities"]
 
@@ -177,27 +177,20 @@ class Run:
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
         self.config = config
-        config.check_runnable()     # a tolerance the integrator cannot honour: one line
-        self.scheme, self.ctrl, self.system, self.rod, self.floor = parameters(config)
-        shared = body(config)       # the values of its rod, floor, gravity, initial sections
+        # its parameter tuples, initial state (checked admissible), clock row at the start
+        # and flight time (``driver.setup``): the arrays are copied, the tuples shared
+        s = set_up(config, u0, v0)
+        self.scheme, self.ctrl, self.system, self.rod, self.floor = s.params()
         n1 = config.rod.N + 1
-        if u0 is None and v0 is None:
-            self.state = shared.initial(config)
-        else:
-            u, v = initial_state(config, u0, v0)
-            check_admissible(u, self.rod, self.floor,
-                             "u0" if u0 is not None else "initial state")
-            self.state = np.zeros((3, n1))
-            self.state[0] = u
-            self.state[1] = v
+        self.state = np.zeros((3, n1))
+        self.state[:2] = s.state
         self.trial = np.zeros((3, n1))
         self.work = np.zeros((work_rows(self.scheme), n1))
         self.interp = np.zeros((2, n1))   # a dense output's interpolated (u, v)
         self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
-        self.clock = clock_row(config)    # t_end, the output intervals and tolerance set
+        self.clock = s.clock.copy()       # t_end, the output intervals and tolerance set
         self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
-        self.ev = np.zeros(L.EV_SIZE)
-        self.ev[L.FLIGHT_TIME] = shared.flight_time
+        self.ev = s.ev()
         self.fail = np.zeros(L.FAIL_SIZE)
         snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
                                                       diag_capacity)
@@ -215,7 +208,7 @@ class Run:
         self.run_time = 0.0
         self._warm = False
         self._advance = None        # the compiled entry of ``advance`` (``warm_up``)
-        self.x = shared.x           # reference positions x_i = i/N (shared: read only)
+        self.x = positions(n1 - 1)  # reference positions x_i = i/N (shared: read only)
         self._key = aot.key(self._args())
         # the loop compiled at install for the default run's types, or None: the JIT
         self._aot = aot.loop_for(self._args(), self._key)

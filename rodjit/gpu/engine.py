@@ -1,9 +1,9 @@
 """The GPU engine's host side: check a batch of points, pack it, launch its kernel, and
 turn what the threads left into a ``sweeps.batch.BatchResult``.
 
-Every point starts from exactly the arrays the driver's ``Run`` makes (parameter tuples,
-initial state, clock, flight time), made for the whole batch at once (``starts``), so a
-thread starts where ``rodjit run`` would; it runs the CPU's loop (``kernel``, ``trajectory``), and its summary row is made here by the same
+Every point starts from exactly the arrays the driver's ``Run`` starts from (parameter
+tuples, initial state, clock, flight time), made by the same set-up (``driver.setup``), so
+a thread starts where ``rodjit run`` would; it runs the CPU's loop (``kernel``, ``trajectory``), and its summary row is made here by the same
 functions as a CPU point's (``records.extremes.Extremes``, ``records.bounces.bounce_table``,
 ``sweeps.point.bounce_values``, ``Run.failure_message``).
 
@@ -20,10 +20,13 @@ import re
 import socket
 import time
 import types
+import warnings
 
 import numpy as np
 
+from ..config import ModelWarning
 from ..driver.run import NODE_STEPS_PER_CALL, Run
+from ..driver.setup import start, starts
 from ..model.laws import get_law
 from .._jit import Kernel
 from ..records.bounces import bounce_table
@@ -35,11 +38,10 @@ from ..stepping import layout as L
 from ..stepping.packing import pack
 from ..sweeps.batch import BatchResult
 from ..sweeps.ensemble import point_lift_energy
-from ..sweeps.point import bounce_values, empty_columns
+from ..sweeps.point import bounce_values, empty_columns, pass_on
 from . import trajectory as T
 from ._cuda import CudaUnavailable, import_cuda
 from .kernel import N_MAX, deep_call, family_of, make_kernel, signature, simulated
-from .starts import starts
 
 __all__ = ["run_batch", "check_device", "check_point", "prepare", "resolve_device",
            "GPU_INTEGRATORS",
@@ -116,7 +118,8 @@ def _launch(runs, cuda):
     n1 = fam.n1
     cs, cd = _capacities(runs[0])
     n = len(runs)
-    # the points share their parameter tuples where they agree (``starts``): each packed once
+    # the points share their parameter tuples where they agree (``driver.setup``): each
+    # packed once
     packed: dict = {}
     rows = []
     for r in runs:
@@ -130,7 +133,7 @@ def _launch(runs, cuda):
     params = np.array(rows, dtype=np.float64).reshape(n, -1)
     state0 = np.ascontiguousarray(np.stack([r.state for r in runs]))
     clock0 = np.stack([r.clock for r in runs])
-    ev0 = np.stack([r.ev for r in runs])
+    ev0 = np.stack([r.ev() for r in runs])
     k = make_kernel(fam)
     d = cuda.to_device
     out = [d(params), d(state0), d(clock0), d(ev0),
@@ -171,11 +174,13 @@ def prepare(config) -> None:
     anything: a model CUDA cannot compile is refused in one line, not after the file is
     made.  A point that cannot start is left to fail as a point."""
     check_point(config)
-    got, _ = starts([config])
-    start = got[0]
-    if isinstance(start, Exception):
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ModelWarning)
+            s = start(config)
+    except Exception:
         return
-    fam = family_of(start.params())
+    fam = family_of(s.params())
     _compile(make_kernel(fam), fam, config)
 
 
@@ -243,9 +248,9 @@ def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
 def run_batch(configs, index) -> BatchResult:
     """Run the points ``configs`` (grid indices ``index``) on the GPU; a point that cannot
     start (its set-up raises) is failed with the reason, as a CPU point is.  ``worker``
-    holds the device and the batch's seconds: ``setup_time`` (the points' set-up, ``starts``,
-    on the host), ``compile_time`` (the kernels, first batch of a family in a process),
-    ``kernel_time`` (the launches and the copies of their results back) and ``wall_time``.
+    holds the device and the batch's seconds: ``setup_time`` (the points' set-up,
+    ``driver.setup``, on the host), ``compile_time`` (the kernels, first batch of a family
+    in a process), ``kernel_time`` (the launches and the copies of their results back) and ``wall_time``.
 
     Raises CudaUnavailable or GpuUnsupported (one line) before anything runs."""
     cuda = import_cuda()
@@ -255,8 +260,10 @@ def run_batch(configs, index) -> BatchResult:
     t_start = time.perf_counter()
     n = len(configs)
     cols = empty_columns(n)
-    runs, warned = starts(configs)
-    said: list[str] = list(warned)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ModelWarning)
+        runs: list = starts(configs)
+    said: list[str] = list(pass_on(caught))
     for j, r in enumerate(runs):
         if isinstance(r, Exception):     # as run_point: the point fails, the batch goes on
             cols["status"][j] = "failed"
@@ -291,8 +298,8 @@ def run_batch(configs, index) -> BatchResult:
             at = np.asarray(part, dtype=np.int64)
             impact_columns(cols, at, fout[:, T.F_IMPACT:T.F_IMPACT + S.OUT_SIZE],
                            iout[:, T.I_IMPACT],
-                           lambda q: point_lift_energy(types.SimpleNamespace(
-                               config=runs[part[q]].config, params=runs[part[q]].params())))
+                           lambda q: point_lift_energy(runs[part[q]].config,
+                                                       runs[part[q]].rod))
             for j in part:
                 got = bounce_values({"impact_status": cols["impact_status"][j]}, tables[j])
                 for name, x in got.items():

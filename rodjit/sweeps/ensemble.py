@@ -3,15 +3,13 @@
 
 What runs in Python per point, before the call, and why: the point's Config
 (``Grid.config``: the base configuration with the swept keys replaced, the fast path of
-``Config.override``), its parameter tuples (``driver.run.parameters``), its initial state
-(checked admissible) and its clock row: the same functions a ``Run`` calls, so the compiled
-loop starts from exactly the arrays ``rodjit run`` would give it.  That set-up measures
-about 90 µs a point on the paper's grid (most of it the Config), under a tenth of the
-point's loop; a ``Run`` object, its buffers and its compile lookup are not made.  The
-flight time τ is cached by rod law and N.  After the call, Python works on columns, except
-for a point that needs text (a failure message, the reason of a first contact without
-lift-off, whose lift-off energy is computed for those points only) and the means over each
-point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
+``Config.override``), and its set-up (``driver.setup.start``: parameter tuples, initial
+state checked admissible, clock row, flight time), the one a ``Run`` makes, so the compiled
+loop starts from exactly the arrays ``rodjit run`` would give it, packed into a row of
+doubles.  A ``Run`` object, its buffers and its compile lookup are not made.  After the
+call, Python works on columns, except for a point that needs text (a failure message, the
+reason of a first contact without lift-off, whose lift-off energy is computed for those
+points only) and the means over each point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
 
 A point the batch could not hold (more bounce rows than its share of the batch's,
 ``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
@@ -35,12 +33,11 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..config import ModelWarning
-from ..driver.prepared import clock_row
-from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text, parameters
-from ..model.system import check_admissible, initial_state
+from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text
+from ..driver.setup import Start, start
 from ..records.columns import BOUNCE_COLUMNS
 from ..records.impact import impact_columns
-from ..records.observables import flight_time, lift_energy
+from ..records.observables import lift_energy
 from ..stepping import aot
 from ..stepping import ensemble as E
 from ..stepping import impact_stream as S
@@ -156,42 +153,6 @@ def _no_bounces() -> dict:
     return empty_bounces()
 
 
-_FLIGHT: dict = {}
-
-
-def _flight_time(config) -> float:
-    key = (config.rod.law, config.rod, config.rod.N)
-    try:
-        return _FLIGHT[key]
-    except (KeyError, TypeError):
-        tau = flight_time(config)
-        try:
-            _FLIGHT[key] = tau
-        except TypeError:
-            pass
-        return tau
-
-
-class _Point(NamedTuple):
-    config: Any
-    params: tuple
-    row: list
-    u: np.ndarray
-    v: np.ndarray
-    clock: np.ndarray
-    tau: float
-
-
-def _prepare(config) -> _Point:
-    """What ``Run.__init__`` computes for a point, without its buffers."""
-    config.check_runnable()
-    params = parameters(config)
-    u, v = initial_state(config)
-    check_admissible(u, params[3], params[4], "initial state")
-    clock = clock_row(config)
-    return _Point(config, params, E.pack(params), u, v, clock, _flight_time(config))
-
-
 def run_batch(task: BatchTask) -> BatchResult:
     """Run the points of ``task`` (module docstring); a point that fails, also in its
     set-up, gets its row marked failed with its reason, the others go on."""
@@ -208,15 +169,15 @@ def run_batch(task: BatchTask) -> BatchResult:
         groups: dict = {}
         for k, i in enumerate(idx):
             try:
-                p = _prepare(task.grid.config(task.base, int(i)))
+                s = start(task.grid.config(task.base, int(i)))
             except Exception as exc:     # as run_point reports a point that cannot start
                 values["status"][k] = "failed"
                 values["message"][k] = f"{type(exc).__name__}: {exc}"
                 continue
-            cfg = p.config
-            key = (E.family(p.params), cfg.rod.N, capacities(cfg, p.params[1]),
+            cfg = s.config
+            key = (E.family(s.params()), cfg.rod.N, capacities(cfg, s.ctrl),
                    cfg.output.diagnostics_interval, cfg.time.t_end)
-            groups.setdefault(key, []).append((k, p))
+            groups.setdefault(key, []).append((k, s))
         pieces = [_run_group(members, values) for members in groups.values()]
         compiled = sum(piece[3] for piece in pieces)
         loading = sum(piece[4] for piece in pieces)
@@ -263,31 +224,31 @@ def _scratch(n1, scheme, cap_s, cap_d, ev_cap) -> tuple:
 EV_CAP = 1024    # event rows of a point's scratch
 
 
-def _batch_kernel(p: _Point):
-    """The batch kernel for points of ``p``'s family, as a function of its arguments after
-    the parameter tuples: the one compiled ahead of time where it was built for these
-    types (``stepping.aot``), else the JIT's."""
-    ahead = aot.batch_for(p.params)
+def _batch_kernel(params: tuple):
+    """The batch kernel for points of the family of ``params`` (a point's parameter
+    tuples), as a function of its arguments after the parameter tuples: the one compiled
+    ahead of time where it was built for these types (``stepping.aot``), else the JIT's."""
+    ahead = aot.batch_for(params)
     if ahead is not None:
         return ahead
-    return functools.partial(E.run_batch, *p.params)
+    return functools.partial(E.run_batch, *params)
 
 
-def _load_kernel(p: _Point) -> float:
-    """Load (or compile) the batch kernel of ``p``'s family if this process has not: a
-    call with no point, so that loading is timed apart, as a Run's compile_time.  The
-    seconds it took (0 when the kernel was loaded before)."""
-    key = E.family(p.params)
+def _load_kernel(s: Start) -> float:
+    """Load (or compile) the batch kernel of the family of point ``s`` if this process has
+    not: a call with no point, so that loading is timed apart, as a Run's compile_time.
+    The seconds it took (0 when the kernel was loaded before)."""
+    params = s.params()
+    key = E.family(params)
     if key in _LOADED:
         return 0.0
-    cfg = p.config
-    scheme, ctrl = p.params[0], p.params[1]
+    cfg = s.config
     n1 = cfg.rod.N + 1
-    cap_s, cap_d = capacities(cfg, ctrl)
+    cap_s, cap_d = capacities(cfg, s.ctrl)
     t0 = time.perf_counter()
-    _batch_kernel(p)(np.zeros((0, len(p.row))), np.zeros((0, 2, n1)),
+    _batch_kernel(params)(np.zeros((0, len(E.pack(params)))), np.zeros((0, 2, n1)),
                      np.zeros((0, L.CLOCK_SIZE)), np.zeros(0),
-                     *_scratch(n1, scheme, cap_s, cap_d, EV_CAP),
+                     *_scratch(n1, s.scheme, cap_s, cap_d, EV_CAP),
                      np.zeros((BOUNCE_ROWS, E.BOUT_SIZE)),
                      np.zeros((0, E.F_SIZE)), np.zeros((0, E.I_SIZE), dtype=np.int64), 1)
     _LOADED.add(key)
@@ -297,35 +258,33 @@ def _load_kernel(p: _Point) -> float:
 def load_batch_kernel(config) -> float:
     """Load the batch kernel a sweep's points of ``config``'s family run with (a worker's
     start, ``workers.start_worker``); the seconds it took."""
-    return _load_kernel(_prepare(config))
+    return _load_kernel(start(config))
 
 
 def _run_group(members, values):
     """One compiled call for points of one family; their columns into ``values``.
     Returns ``(positions, bout, iout)`` for the bounce rows, the seconds of the compiled
     call and of loading its kernel (0 after the first call of a family)."""
-    k0, p0 = members[0]
-    cfg = p0.config
-    scheme, ctrl = p0.params[0], p0.params[1]
+    _, s0 = members[0]
+    cfg = s0.config
     n1 = cfg.rod.N + 1
     m = len(members)
-    params = np.array([p.row for _, p in members], dtype=np.float64)
+    params = np.array([E.pack(s.params()) for _, s in members], dtype=np.float64)
     init = np.empty((m, 2, n1))
     clock0 = np.empty((m, L.CLOCK_SIZE))
     flight = np.empty(m)
-    for j, (_, p) in enumerate(members):
-        init[j, 0] = p.u
-        init[j, 1] = p.v
-        clock0[j] = p.clock
-        flight[j] = p.tau
-    cap_s, cap_d = capacities(cfg, ctrl)
+    for j, (_, s) in enumerate(members):
+        init[j] = s.state
+        clock0[j] = s.clock
+        flight[j] = s.tau
+    cap_s, cap_d = capacities(cfg, s0.ctrl)
     fout = np.zeros((m, E.F_SIZE))
     iout = np.zeros((m, E.I_SIZE), dtype=np.int64)
     bout = np.zeros((BOUNCE_ROWS * m, E.BOUT_SIZE))
-    compile_time = _load_kernel(p0)
+    compile_time = _load_kernel(s0)
     t0 = time.perf_counter()
-    _batch_kernel(p0)(params, init, clock0, flight,
-                      *_scratch(n1, scheme, cap_s, cap_d, EV_CAP), bout, fout, iout,
+    _batch_kernel(s0.params())(params, init, clock0, flight,
+                               *_scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP), bout, fout, iout,
                       int(max(1, NODE_STEPS_PER_CALL // n1)))
     elapsed = time.perf_counter() - t0
     pos = np.array([k for k, _ in members], dtype=np.int64)
@@ -339,12 +298,13 @@ def _run_group(members, values):
     values["t_final"][pos] = fout[:, E.F_T_FINAL]
     values["status"][pos] = np.where(res == E.R_COMPLETED, "completed", "failed")
     impact_columns(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + S.OUT_SIZE],
-                   iout[:, E.I_IMPACT], lambda j: point_lift_energy(members[j][1]))
-    for j, (k, p) in enumerate(members):
+                   iout[:, E.I_IMPACT],
+                   lambda j: point_lift_energy(members[j][1].config, members[j][1].rod))
+    for j, (k, s) in enumerate(members):
         if res[j] == E.R_FAILED:
             values["message"][k] = failure_text(fout[j, E.F_FAIL:E.F_FAIL + L.FAIL_SIZE],
-                                                float(fout[j, E.F_T_END]), p.params[1],
-                                                p.config, p.params[3], p.params[4])
+                                                float(fout[j, E.F_T_END]), s.ctrl,
+                                                s.config, s.rod, s.floor)
         elif res[j] == E.R_NONFINITE:
             values["message"][k] = ("a non-finite diagnostic value was computed; refusing "
                                     "to write it")
@@ -357,12 +317,11 @@ def _run_group(members, values):
 _LIFT: dict = {}
 
 
-def point_lift_energy(p) -> float:
-    """``lift_energy`` of a point (a bisection in Python), cached by what it depends on:
-    the rod law and its parameters, gravity and N; ``p`` has ``config`` and ``params``
-    (its parameter tuples)."""
-    cfg = p.config
-    key = (cfg.rod.law, p.params[3], float(cfg.gravity.g), cfg.rod.N)
+def point_lift_energy(cfg, rod) -> float:
+    """``lift_energy`` of a point of configuration ``cfg`` and rod law parameters ``rod``
+    (a bisection in Python), cached by what it depends on: the rod law and its
+    parameters, gravity and N."""
+    key = (cfg.rod.law, rod, float(cfg.gravity.g), cfg.rod.N)
     try:
         return _LIFT[key]
     except (KeyError, TypeError):
