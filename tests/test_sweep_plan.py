@@ -90,3 +90,47 @@ def test_checks_of_a_large_grid_run_per_combination():
                                     "rod.mu": "linspace(0, 1, 1000)"})
     assert len(plan.grid) == 10**6 and plan.runs_bytes == 0.0
     assert P.SWEEP_OVERHEAD > 0
+
+
+@pytest.mark.parametrize("to_file", [False, True])
+def test_a_sweep_that_would_not_fit_in_memory_is_refused_on_every_path(tmp_path, monkeypatch,
+                                                                       to_file):
+    """The points' table is held in memory (a quarter as much with a sweep file): a grid
+    under max_points can still need more than the machine has. plan_sweep, sweep and a
+    resume refuse it in one line, before a file or a worker; the dry run says the
+    estimate."""
+    from click.testing import CliRunner
+
+    from rodjit.cli import main
+
+    grid = {"rod.mu": [1.0, 2.0, 3.0, 4.0]}
+    base = rodjit.Config().override({"time.t_end": 0.01, "rod.N": 3})
+    out = tmp_path / "s.h5" if to_file else None
+    assert P.plan_sweep(base, grid, output=out).memory == 4 * (
+        P.MEMORY_POINT_BYTES_FILE if to_file else P.MEMORY_POINT_BYTES)
+    if to_file:
+        rodjit.sweep(base, {"rod.mu": [1.0, 2.0]}, output=out, scheduler="inline",
+                     handle_signals=False)
+        before = out.read_bytes()
+    monkeypatch.setattr(P, "physical_memory", lambda: 3.5 * (
+        P.MEMORY_POINT_BYTES_FILE if to_file else P.MEMORY_POINT_BYTES))
+    target = tmp_path / "new.h5" if to_file else None
+    with pytest.raises(ValueError, match=r"^a sweep of 4 points would hold about .* in memory"):
+        P.plan_sweep(base, grid, output=target)
+    with pytest.raises(ValueError, match=r"more than the .* of this machine"):
+        rodjit.sweep(base, grid, output=target, scheduler="inline", handle_signals=False)
+    if to_file:
+        assert not target.exists()
+        r = CliRunner().invoke(main, ["sweep", "--grid", "rod.mu=1,2,3,4", "--set",
+                                      "time.t_end=0.01", "-o", str(target), "--dry-run"])
+        assert r.exit_code == 2 and "in memory" in r.stderr and not target.exists()
+        monkeypatch.setattr(P, "physical_memory", lambda: 1.0)
+        with pytest.raises(ValueError, match=r"^a sweep of 2 points would hold"):
+            rodjit.sweep(output=out, resume=True, scheduler="inline", handle_signals=False)
+        assert out.read_bytes() == before
+
+
+def test_the_dry_run_says_the_memory(tmp_path):
+    plan = P.plan_sweep(rodjit.Config(), {"rod.mu": [1.0, 2.0]}, output=tmp_path / "s.h5")
+    line = [ln for ln in plan.report().splitlines() if ln.startswith("memory")][0]
+    assert "in the sweep's process" in line

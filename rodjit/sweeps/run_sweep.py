@@ -31,7 +31,7 @@ from . import sweep_file
 from .executors import check_scheduler, default_jobs, make_executor
 from .grid import MAX_POINTS, Grid
 from .main_guard import check_main
-from .plan import check_runs_dir, plan_sweep
+from .plan import check_memory, check_runs_dir, plan_sweep
 from .sweep_check import read_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
@@ -193,6 +193,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
     plan = None
     if resume:
         base, grid, columns, attrs = _open_resume(output, config, grid, max_points)
+        check_memory(len(grid), True)
         if save_runs is None and attrs.get("save_runs"):
             save_runs = attrs["save_runs"]
     else:
