@@ -251,3 +251,23 @@ def test_a_picture_never_replaces_its_input_or_any_hdf5_file(tmp_path, monkeypat
     refused(r, "is the file being drawn" if onto != "another run file" else
             "is an HDF5 file, not a picture")
     assert {p: p.read_bytes() for p in before} == before
+
+
+@pytest.mark.parametrize("inside", ["runs/s.h5", "runs/sub/s.h5", "runs/0_rod.mu=1.h5"])
+def test_a_sweep_file_inside_the_run_files_directory_is_refused_up_front(tmp_path,
+                                                                          monkeypatch, inside):
+    """-o inside --save-runs (where a run file of its name would replace it) is refused in
+    one line before anything is written, on the command line and in Python."""
+    monkeypatch.chdir(tmp_path)
+    r = invoke("sweep", *GRID, "--save-runs", "runs", "-o", inside)
+    refused(r, "would hold the sweep file -o")
+    assert not (tmp_path / "runs").exists()
+    with pytest.raises(ValueError, match="would hold the sweep file"):
+        import rodjit
+
+        rodjit.sweep(rodjit.Config().override({"time.t_end": 0.02, "rod.N": 3}),
+                     {"rod.mu": [1, 2]}, output=inside, save_runs="runs", scheduler="inline",
+                     handle_signals=False)
+    assert not (tmp_path / "runs").exists()
+    r = invoke("sweep", *GRID, "--save-runs", "runs", "-o", "beside.h5")
+    assert r.exit_code == 0, r.output

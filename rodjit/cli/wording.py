@@ -55,6 +55,9 @@ def _runs_dir_unusable(exc: Any) -> str:
         return f"--save-runs {exc.path!r} is not a directory"
     if exc.problem == "not_creatable":
         return f"--save-runs directory {exc.path!r} cannot be created here"
+    if exc.problem == "holds_output":
+        return (f"--save-runs {exc.path!r} would hold the sweep file -o {exc.clash!r}; "
+                f"write the sweep file outside the run files' directory")
     return (f"--save-runs {exc.path!r} already holds {exc.clash!r}; use --overwrite to "
             f"replace its run files, or --resume")
 

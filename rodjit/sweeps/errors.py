@@ -131,11 +131,12 @@ class RunsDirUnusable(ValueError):
     path : str or os.PathLike
         The directory as given (``path``, a str).
     problem : str
-        ``"not_a_directory"``, ``"not_creatable"`` (its parent cannot be written) or
+        ``"not_a_directory"``, ``"not_creatable"`` (its parent cannot be written),
         ``"holds"`` (it holds a run file of this sweep and neither overwriting nor resuming
-        was asked for).
+        was asked for) or ``"holds_output"`` (the sweep file would be inside it, where a
+        run file of the same name would replace it).
     clash : str, optional
-        The run file it already holds (``"holds"``).
+        The run file it already holds (``"holds"``), the sweep file (``"holds_output"``).
     """
 
     def __init__(self, path: str | os.PathLike[str], problem: str, clash: str = "") -> None:
@@ -144,6 +145,8 @@ class RunsDirUnusable(ValueError):
             f"save_runs {self.path!r} is not a directory" if problem == "not_a_directory"
             else f"save_runs directory {self.path!r} cannot be created here"
             if problem == "not_creatable" else
+            f"save_runs {self.path!r} would hold the sweep file {clash!r}; write the sweep "
+            f"file outside the run files' directory" if problem == "holds_output" else
             f"save_runs {self.path!r} already holds {clash!r}; pass overwrite=True to "
             f"replace its run files, or resume=True")
 

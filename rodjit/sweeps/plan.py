@@ -155,7 +155,7 @@ def plan_sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | No
     grid = Grid.from_spec(grid, max_points=max_points)
     grid.validate(base)
     worst_index, worst, runs_bytes = _points(base, grid, max_steps)
-    runs_dir = check_runs_dir(save_runs, grid, range(len(grid)), overwrite, False)
+    runs_dir = check_runs_dir(save_runs, grid, range(len(grid)), overwrite, False, output)
     replaces = False
     sweep_bytes = SWEEP_OVERHEAD + len(grid) * (POINT_BYTES + 8 * len(grid.keys))
     if output is not None:
@@ -253,14 +253,18 @@ def _check_free(output, sweep_bytes: float, runs_dir, runs_bytes: float) -> None
                              f"{format_size(free)} free on the disk of {str(where)!r}")
 
 
-def check_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool) -> Path | None:
+def check_runs_dir(save_runs, grid: Grid, todo, overwrite: bool, resume: bool,
+                   output=None) -> Path | None:
     """Check the directory of the points' run files (``save_runs``; created later, once
-    everything else is valid); RunsDirUnusable if it cannot take them."""
+    everything else is valid); RunsDirUnusable if it cannot take them, or if the sweep
+    file ``output`` would be inside it."""
     if save_runs is None:
         return None
     d = Path(save_runs).resolve()
     if d.exists() and not d.is_dir():
         raise RunsDirUnusable(save_runs, "not_a_directory")
+    if output is not None and d in Path(output).resolve().parents:
+        raise RunsDirUnusable(save_runs, "holds_output", str(output))
     existing = d.parent
     while not existing.exists():
         existing = existing.parent

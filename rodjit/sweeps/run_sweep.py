@@ -204,7 +204,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
         columns = _new_columns(grid)
     todo = [i for i in range(len(grid)) if columns["status"][i] != "completed"]
     runs_dir = (plan.runs_dir if plan is not None else
-                check_runs_dir(save_runs, grid, todo, overwrite, resume))
+                check_runs_dir(save_runs, grid, todo, overwrite, resume, output))
     if command is None:
         command = f"rodjit.sweep(config, grid, output={str(output) if output else None!r})"
 
