@@ -328,7 +328,12 @@ def test_a_run_cut_into_calls_and_small_buffers_is_bitwise_the_same(integrator, 
     allowed to cover at most 2 output times of each grid (FULL before many steps, many
     steps ended on an output time): the same steps and rows as one call into large
     buffers under the same rule."""
+    from rodjit.driver import setup
+
+    # the set-up keeps a run's control tuple by the configuration's values: forget it when
+    # the constant it is built from changes
     monkeypatch.setattr(control, "DENSE_OUTPUTS_MAX", 2)
+    setup.clear()
     cfg = _paper(integrator, **{"time.t_end": 0.6, "rod.mu": 0.5,
                                 "output.diagnostics_interval": 0.002})
     one = _simulate(cfg)
@@ -337,6 +342,7 @@ def test_a_run_cut_into_calls_and_small_buffers_is_bitwise_the_same(integrator, 
     np.testing.assert_array_equal(cut.diagnostics["t"], np.arange(301) * 0.002)
     # without the rule's cut the run takes fewer steps: every output time was interpolated
     monkeypatch.undo()
+    setup.clear()
     free = _simulate(cfg)
     assert free.stats["steps"] < one.stats["steps"]
     assert np.abs(free.diagnostics["u_bottom"] - one.diagnostics["u_bottom"]).max() < 1e-3
