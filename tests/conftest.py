@@ -153,8 +153,10 @@ def _limit_files(limit: int) -> None:
 
 def datasets(path) -> dict[str, np.ndarray]:
     """Every dataset of an HDF5 file by path (checkpoint slots excluded, see ``final_state``)."""
+    from rodjit.output import hdf5
+
     out = {}
-    with rodjit.output.hdf5.open_file(path) as f:
+    with hdf5.open_file(path) as f:
         def visit(name, obj):
             if isinstance(obj, h5py.Dataset) and not name.startswith("checkpoint"):
                 out[name] = obj[()]
@@ -164,8 +166,10 @@ def datasets(path) -> dict[str, np.ndarray]:
 
 def final_state(path) -> dict[str, np.ndarray]:
     """The stepper arrays of the file's valid checkpoint (what a resume continues from)."""
-    with rodjit.output.hdf5.open_file(path) as f:
-        ck = rodjit.output.hdf5.read_checkpoint(f)
+    from rodjit.output import hdf5
+
+    with hdf5.open_file(path) as f:
+        ck = hdf5.read_checkpoint(f)
     return {k: ck[k] for k in ("state", "clock", "count", "ev", "sstats")} | {
         "lengths": np.array(list(ck["lengths"].values()))}
 
