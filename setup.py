@@ -6,9 +6,13 @@ pyproject.toml.
 interpreter that imports only the modules it needs (not ``rodjit/__init__``, which would
 need every runtime dependency in the build environment), with a throw-away Numba cache.
 It is optional: if the compile fails (no C compiler, say), the install goes on and runs
-use the JIT.
+use the JIT.  An extension already in the source tree that was built from the same
+sources for this host (an earlier editable install of this checkout) is kept instead of
+compiled again (``aot.reusable``): a second ``pip install -e ".[extra]"`` took 49 s with
+the compile and 2.5 s without (2 cores, no build isolation).
 """
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -33,6 +37,16 @@ print(aot.build(out, Run(Config())._args()))
 
 
 RECORD = "_aot_loop.json"      # the extension's record (``stepping.aot``), beside it
+
+_REUSABLE = """
+import sys, types
+root, directory = sys.argv[1], sys.argv[2]
+package = types.ModuleType("rodjit")
+package.__path__ = [root]
+sys.modules["rodjit"] = package
+from rodjit.stepping import aot
+print(aot.reusable(directory) or "")
+"""
 
 
 class BuildAot(build_ext):
@@ -66,6 +80,8 @@ class BuildAot(build_ext):
     def build_extension(self, ext):
         target = Path(self.get_ext_fullpath(ext.name))
         target.parent.mkdir(parents=True, exist_ok=True)
+        if self._keep_built(ext, target):
+            return
         with tempfile.TemporaryDirectory() as cache:
             env = {**os.environ, "NUMBA_CACHE_DIR": cache, "RODJIT_AOT": "0"}
             proc = subprocess.run([sys.executable, "-c", _BUILD, str(ROOT / "rodjit"),
@@ -75,6 +91,27 @@ class BuildAot(build_ext):
             tail = (proc.stderr or proc.stdout).strip().splitlines()[-3:]
             print("rodjit: the ahead-of-time loop was not built; runs will compile it on "
                   "first use (" + " / ".join(tail) + ")", file=sys.stderr)
+
+
+    def _keep_built(self, ext, target: Path) -> bool:
+        """Copy the extension already in the source tree to ``target`` (with its record)
+        where it was built from these sources for this host (``aot.reusable``): one
+        compile per install of a checkout, not one per ``pip install -e ".[extra]"``."""
+        inplace, _ = self._get_inplace_equivalent(self.get_finalized_command("build_py"),
+                                                  ext)
+        source_dir = Path(inplace).parent
+        env = {**os.environ, "RODJIT_AOT": "0"}
+        proc = subprocess.run([sys.executable, "-c", _REUSABLE, str(ROOT / "rodjit"),
+                               str(source_dir)], env=env, capture_output=True, text=True)
+        found = proc.stdout.strip() if proc.returncode == 0 else ""
+        if not found:
+            return False
+        if Path(found).resolve() != target.resolve():
+            shutil.copy2(found, target)
+            shutil.copy2(source_dir / RECORD, target.parent / RECORD)
+        print("rodjit: the ahead-of-time loop built for these sources is kept (no compile)",
+              file=sys.stderr)
+        return True
 
 
 setup(ext_modules=[Extension("rodjit.stepping._aot_loop", sources=[], optional=True)],

@@ -149,6 +149,75 @@ def test_a_failed_build_leaves_no_record(monkeypatch, tmp_path):
     assert aot.extension_record(tmp_path) is None
 
 
+def test_numba_pycc_still_builds_the_loop(built):
+    """The ahead-of-time loop is built with ``numba.pycc``, marked for deprecation by Numba:
+    this fails the day it is gone or stops building the loop (docs/getting-started.md has
+    the plan for that day)."""
+    from numba.pycc import CC
+
+    assert callable(CC.export) and callable(CC.compile)
+    module, _, directory = built
+    assert aot.reusable(directory) is not None
+    assert all(callable(getattr(module, name)) for name in aot.ENTRIES)
+
+
+def test_an_extension_is_reused_only_where_its_record_and_file_say_so(tmp_path):
+    """``reusable``: what an install keeps instead of compiling again: the extension file
+    of this interpreter beside a record of these sources and this host."""
+    import sysconfig
+
+    so = tmp_path / (aot.EXTENSION + sysconfig.get_config_var("EXT_SUFFIX"))
+    record = {"key": [], "sources": aot.SOURCES_DIGEST, **aot._host()}
+    assert aot.reusable(tmp_path) is None                       # nothing there
+    (tmp_path / aot.RECORD).write_text(json.dumps(record))
+    assert aot.reusable(tmp_path) is None                       # a record, no file
+    so.write_bytes(b"")
+    assert aot.reusable(tmp_path) == so
+    for field, other in (("sources", "0" * 40), ("numba", "0.0"), ("cpu", "i486")):
+        (tmp_path / aot.RECORD).write_text(json.dumps({**record, field: other}))
+        assert aot.reusable(tmp_path) is None, field
+
+
+@pytest.mark.slow     # a wheel built from a copy of the checkout (the compile kept)
+def test_an_install_keeps_the_extension_built_for_its_sources(built, tmp_path):
+    """An install of a checkout whose source tree holds the extension built for its sources
+    (an editable install made it) keeps it: no second compile of the loop."""
+    import shutil
+    import subprocess
+    import sys
+
+    import setuptools
+
+    if int(setuptools.__version__.split(".")[0]) < 77:
+        pytest.skip("the build needs setuptools >= 77 in this environment")
+    from pathlib import Path
+
+    _, _, directory = built
+    path = aot.reusable(directory)
+    assert path is not None
+    root = Path(__file__).resolve().parents[1]
+    listed = subprocess.run(["git", "ls-files"], cwd=root, capture_output=True, text=True)
+    if listed.returncode != 0:
+        pytest.skip("not a git checkout")
+    src = tmp_path / "src"
+    for name in listed.stdout.split():
+        if (root / name).is_file():
+            (src / name).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(root / name, src / name)
+    shutil.copy2(path, src / "rodjit" / "stepping" / path.name)
+    shutil.copy2(directory / aot.RECORD, src / "rodjit" / "stepping" / aot.RECORD)
+    out = subprocess.run([sys.executable, "-m", "pip", "wheel", "-v", "--no-deps",
+                          "--no-build-isolation", "-w", str(tmp_path / "dist"), str(src)],
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert "the ahead-of-time loop built for these sources is kept" in out.stdout + out.stderr
+    import zipfile
+
+    wheel = next((tmp_path / "dist").glob("rodjit-*.whl"))
+    names = zipfile.ZipFile(wheel).namelist()
+    assert f"rodjit/stepping/{path.name}" in names and f"rodjit/stepping/{aot.RECORD}" in names
+
+
 # ---- the built extension ------------------------------------------------------------------
 
 def test_the_build_records_what_it_is_tied_to(built):

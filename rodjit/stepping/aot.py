@@ -221,6 +221,17 @@ def extension_record(directory: Path | None = None) -> dict | None:
         return None
 
 
+def reusable(directory: Path) -> Path | None:
+    """The extension built in ``directory`` if it was built from these sources for this
+    host (its record says so, ``_usable``) and is there: an install that finds one in
+    the source tree keeps it instead of compiling the same loop again (an editable install
+    with another extra, ``pip install -e ".[test]"`` after ``pip install -e .``)."""
+    import sysconfig
+
+    path = Path(directory) / (EXTENSION + str(sysconfig.get_config_var("EXT_SUFFIX")))
+    return path if _usable(extension_record(directory)) and path.is_file() else None
+
+
 def _usable(record: dict | None) -> bool:
     return (record is not None and record.get("sources") == SOURCES_DIGEST
             and all(record.get(k) == v for k, v in _host().items()))
