@@ -106,3 +106,17 @@ def test_a_point_without_a_value_is_marked_not_dropped(tmp_path):
     assert list(marks[0].get_xdata()) == [3.0]
     assert ax.get_legend() is not None
     assert "no value" in [t.get_text() for t in ax.get_legend().get_texts()][0]
+
+
+def test_a_heatmap_of_one_value_says_so(sweep_path):
+    """At μ = 10 the rod never lifts off: restitution_first is 0 wherever it has a value. The title
+    says so and the colour scale is not a ±0.1 band around a single value."""
+    table = rodjit.load_sweep(sweep_path)
+    at = table["rod.mu"] == 10.0
+    e = table["restitution_first"][at]
+    assert np.all(e[np.isfinite(e)] == 0.0)
+    ax = sweep_figure(sweep_path, "heatmap", at={"rod.mu": "10"}).axes[0]
+    assert "(every value 0)" in ax.get_title()
+    assert ax.collections[0].get_clim() == (-1.0, 1.0)
+    ax = sweep_figure(sweep_path, "heatmap", at={"rod.mu": "1"}).axes[0]
+    assert "every value" not in ax.get_title()

@@ -235,7 +235,14 @@ def _heatmap(fig, table, quantity, x, y, at, ax=None) -> None:
                 ax.text(c + 0.5, r + 0.5, text, ha="center", va="center", fontsize=7,
                         color=color)
     title = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in fixed.items())
-    _title(ax, _label(quantity) + (f"\nat {title}" if title else ""))
+    finite = z[np.isfinite(z)]
+    same = ""
+    if finite.size > 1 and finite.min() == finite.max():   # a colour scale of one value
+        v = float(finite[0])
+        half = 0.5 * abs(v) if v != 0 else 1.0
+        mesh.set_clim(v - half, v + half)
+        same = f" (every value {v:.4g})"
+    _title(ax, _label(quantity) + same + (f"\nat {title}" if title else ""))
 
 
 def sweep_figure(source, kind: str = "restitution", *, quantity=None, x=None, y=None,
