@@ -263,11 +263,6 @@ PARALLEL_NAMES: dict[str, frozenset[str]] = {
     "KIND": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
     "READS": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
     "REQUIRED_ATTRS": frozenset({"rodjit.output.run_layout", "rodjit.sweeps.sweep_file"}),
-    # field indices of a compiled array: each array's module numbers its own fields
-    "F_T": frozenset({"rodjit.stepping.layout", "rodjit.gpu.trajectory"}),
-    **{name: frozenset({"rodjit.stepping.ensemble", "rodjit.gpu.trajectory"})
-       for name in ("F_E0", "F_FAIL", "F_SIZE", "I_BOUNCES", "I_IMPACT",
-                    "I_SIZE")},
     # public names of long standing, renaming them would break users' imports: a file's
     # statuses (rodjit.output.hdf5.STATUSES) and a first contact's
     # (rodjit.analysis.observables.STATUSES); the samples a plot draws per curve
@@ -346,15 +341,13 @@ FIRST_IMPACT = "rodjit.stepping.impact_stream"
 # module they take them from: the implementation itself, or records.impact, which runs it
 # for one run
 FIRST_IMPACT_CALLERS = {
-    "rodjit.stepping.ensemble": FIRST_IMPACT,               # the CPU engine's batch call
-    "rodjit.gpu.trajectory": FIRST_IMPACT,                  # a GPU thread
+    "rodjit.stepping.trajectory": FIRST_IMPACT,             # a sweep point (either engine)
     "rodjit.records.impact": FIRST_IMPACT,                  # one run (ImpactStream)
     "rodjit.records.result": "rodjit.records.impact",       # Result.impact
     "rodjit.output.run_writer": "rodjit.records.impact",    # a run file as it is written
     "rodjit.output.summary": "rodjit.records.impact",       # a run file read back
     "rodjit.sweeps.point": "rodjit.records.impact",         # a sweep point's sink
-    "rodjit.sweeps.ensemble": "rodjit.records.impact",      # the CPU engine's columns
-    "rodjit.gpu.engine": "rodjit.records.impact",           # the GPU engine's columns
+    "rodjit.sweeps.decode": "rodjit.records.impact",        # either engine's columns
 }
 # what the implementation computes: the codes and the values of its ``finish``
 FIRST_IMPACT_NAMES = ("LIFT_OFF", "OPEN_AT_END", "NO_IMPACT", "UNDEFINED", "OUT_SIZE",
@@ -512,3 +505,57 @@ def test_the_set_up_walk_sees_names_handed_on_and_module_attributes():
     assert _uses(tree, "flight_time") and _uses(tree, "control.build")
     assert not _uses(tree, "initial_state")
     assert not _uses(ast.parse("aot.build(1)\n"), "control.build")
+
+
+# ---- one per-point driver and one reading of its results ---------------------------------
+DRIVER = "rodjit.stepping.trajectory"
+DECODER = "rodjit.sweeps.decode"
+# the modules that take the loop's ``advance`` kernel: the per-point driver (either sweep
+# engine), a single run's driver (``Run``) and the ahead-of-time extension (its entry)
+ADVANCE_TAKERS = {DRIVER, "rodjit.driver.run", "rodjit.stepping.aot"}
+# result columns the CPU batch kernel reads to place a point's bounce rows and go on
+BATCH_BOOKKEEPING = {"I_STOPPED", "I_BOUNCES", "I_BSTART"}
+
+
+def _names_read(tree) -> set[str]:
+    out = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name):
+            out.add(node.id)
+        elif isinstance(node, ast.Attribute):
+            out.add(node.attr)
+        elif isinstance(node, ast.alias):
+            out.add(node.name)
+    return out
+
+
+def test_a_sweep_points_run_has_one_driver_and_one_decoder(graph):
+    """One compiled function runs a sweep point (``stepping.trajectory.run_one``: the CPU
+    engine's batch kernel loops over it, a GPU thread calls it) and one module reads its
+    results into summary columns and bounce tables (``sweeps.decode``), for both engines:
+    no other module takes the loop's ``advance`` besides a single run's driver, none
+    other reads the driver's result columns (the batch kernel only its rows' bookkeeping),
+    and both engines' hosts decode through the decoder."""
+    known = modules()
+    trees = {name: ast.parse(path.read_text(), str(path)) for name, path in known.items()}
+    takers = set()
+    for name, tree in trees.items():
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.ImportFrom) and node.module
+                    and node.module.endswith("loop")
+                    and any(a.name == "advance" for a in node.names)):
+                takers.add(name)
+    assert takers == ADVANCE_TAKERS, sorted(takers)
+    _, constants = definitions(known)
+    results = {c for c, mods in constants.items() if DRIVER in mods
+               and re.fullmatch(r"[FI]_\w+|BAD_DIAGNOSTICS", c) and not c.endswith("_SIZE")}
+    assert {"F_ENERGY_ERROR", "F_IMPACT", "I_CODE", "I_STOPPED"} <= results
+    readers = {name: _names_read(tree) & results for name, tree in trees.items()
+               if DRIVER in graph[name] and _names_read(tree) & results}
+    assert set(readers) == {"rodjit.stepping.ensemble", DECODER}, sorted(readers)
+    assert readers["rodjit.stepping.ensemble"] <= BATCH_BOOKKEEPING
+    for host in ("rodjit.sweeps.ensemble", "rodjit.gpu.engine"):
+        assert DECODER in graph[host], host
+        assert _calls_of(trees[host], "summarize") and _calls_of(trees[host], "bounce_tables")
+    callers = {name for name, tree in trees.items() if _calls_of(tree, "run_one")}
+    assert callers == {"rodjit.stepping.ensemble", "rodjit.gpu.kernel"}, sorted(callers)

@@ -142,3 +142,42 @@ def test_cli_device_cuda(tmp_path):
     err = p.stderr.strip().splitlines()
     assert len(err) == 1 and "--scheduler" in err[0], p.stderr
     assert not bad.exists()
+
+
+FULL_SCRIPT = """
+import json
+import numpy as np
+import rodjit
+import rodjit.gpu.engine as G
+from rodjit.sweeps.point import PointTask, run_point, SUMMARY_COLUMNS
+
+G.BOUNCE_ROWS = 1                 # a thread keeps one bounce row
+cfg = rodjit.Config().override({"time.t_end": 2.0})
+gpu = rodjit.sweep(cfg, {"initial.height": [0.1, 0.2]}, device="cuda", progress=False)
+report = {"n_bounces": gpu.columns["n_bounces"].tolist(), "differ": []}
+for i in range(len(gpu.grid)):
+    ref = run_point(PointTask(i, gpu.grid.config(gpu.base, i), None, ()))
+    for name in SUMMARY_COLUMNS:
+        if name in ("wall_time", "compile_time", "run_time"):
+            continue
+        a, b = gpu.columns[name][i], ref.values[name]
+        if not (a == b or (isinstance(b, float) and np.isnan(a) and np.isnan(b))):
+            report["differ"].append(f"{i}.{name}: {a!r} {b!r}")
+    got = gpu.bounces(i)
+    for name, col in ref.bounces.items():
+        x, y = np.asarray(got[name]), np.asarray(col)
+        if not np.array_equal(x, y, equal_nan=y.dtype.kind == "f"):
+            report["differ"].append(f"{i}.bounces.{name}")
+print(json.dumps(report))
+"""
+
+
+def test_a_point_with_more_bounces_than_a_thread_keeps_has_them_all():
+    """A thread whose bounce rows are full stops, and its point runs again on the CPU
+    engine: every bounce is in its table, and its row is the per-point path's (no bounce
+    dropped, ``n_bounces`` the point's own)."""
+    p = _simulated(["-c", FULL_SCRIPT])
+    assert p.returncode == 0, p.stderr[-3000:]
+    report = json.loads(p.stdout.strip().splitlines()[-1])
+    assert min(report["n_bounces"]) > 2, report
+    assert not report["differ"], report["differ"]

@@ -94,10 +94,21 @@ def test_a_point_that_cannot_start_fails_alone_with_the_per_point_message():
     assert batch.values["message"][1] == "ValueError: this law refuses rod.kappa = 13"
 
 
-def test_a_point_that_overflows_its_arrays_runs_on_the_per_point_path(monkeypatch):
-    monkeypatch.setattr(ensemble, "BOUNCE_ROWS", 0)    # no room for any bounce row
-    batch = _check_against_points(BASE, {"rod.mu": [0.0, 10.0]})
-    assert np.all(batch.bounce_count > 0)
+def test_a_point_with_more_bounces_than_the_batch_holds_goes_on_and_keeps_them_all(
+        monkeypatch):
+    """A call returns when the batch's bounce rows are full, and the next goes on with the
+    point where it stopped: every bounce row is kept, each row and table equal the
+    per-point path's, and no point runs twice (nor on the per-point path)."""
+    monkeypatch.setattr(ensemble, "BOUNCE_ROWS", 1)     # room for one row a point
+    monkeypatch.setattr(ensemble, "run_point", None)    # never called
+    calls = []
+    take = ensemble.decode.take_rows
+    monkeypatch.setattr(ensemble.decode, "take_rows",
+                        lambda *a, **k: calls.append(1) or take(*a, **k))
+    batch = _check_against_points(BASE.override({"time.t_end": 2.0}),
+                                  {"initial.height": [0.1, 0.2]})
+    assert batch.bounce_count.sum() > 2 * len(batch.bounce_count)   # more than it holds
+    assert len(calls) > 2                  # calls that returned with the rows full
 
 
 def test_pool_dask_and_inline_give_the_same_table(tmp_path):

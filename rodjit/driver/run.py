@@ -40,7 +40,6 @@ __all__ = ["Block", "Run", "SimulationError", "Sink", "parameters", "failure_tex
 # node-steps per compiled call: long enough that returning to Python costs nothing, short
 # enough that signals, progress and checkpoints are seen promptly
 NODE_STEPS_PER_CALL = 20_000_000
-NO_PROGRESS = 100    # the driver's own failure code: steps were taken, t did not move
 
 
 # the compiled entry points (``_jit.Kernel.entry_point``) of the loop's ``start`` and
@@ -131,7 +130,7 @@ def failure_text(fail, t_end: float, ctrl, config, rod, floor) -> str:
     f = fail
     code = int(f[L.F_CODE])
     t = f[L.F_T]
-    if code == NO_PROGRESS:
+    if code == L.NO_PROGRESS:
         return (f"time stopped advancing at t = {float(t)!r}: {int(f[L.F_VALUE])} steps of "
                 f"dt = {f[L.F_DT]:.3g} each left t unchanged (the resolution of t there "
                 f"is {math.ulp(t):.3g}): time.t_end = {t_end:g} cannot be "
@@ -366,7 +365,7 @@ class Run:
             # every step of the call left t where it was (a step below the resolution of
             # t): calling again would loop for ever
             f = self.fail
-            f[L.F_CODE], f[L.F_T], f[L.F_DT] = NO_PROGRESS, t, self.clock[L.DT]
+            f[L.F_CODE], f[L.F_T], f[L.F_DT] = L.NO_PROGRESS, t, self.clock[L.DT]
             f[L.F_VALUE] = self.count[L.STEP] - steps
             code = L.FAILED
         return code

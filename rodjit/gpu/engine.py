@@ -3,43 +3,39 @@ turn what the threads left into a ``sweeps.batch.BatchResult``.
 
 Every point starts from exactly the arrays the driver's ``Run`` starts from (parameter
 tuples, initial state, clock, flight time), made by the same set-up (``driver.setup``), so
-a thread starts where ``rodjit run`` would; it runs the CPU's loop (``kernel``, ``trajectory``), and its summary row is made here by the same
-functions as a CPU point's (``records.extremes.Extremes``, ``records.bounces.bounce_table``,
-``sweeps.point.bounce_values``, ``Run.failure_message``).
+a thread starts where ``rodjit run`` would; it runs the CPU engine's per-point driver
+(``stepping.trajectory.run_one``, compiled for CUDA: ``kernel``), and its results are read
+by the CPU engine's decoder (``sweeps.decode``): the same summary columns, first-impact
+columns and bounce tables.
 
-The first-impact columns (``records.impact.IMPACT_COLUMNS``) come from the values each
-thread streams from its diagnostics rows (``stepping.impact_stream``, as the CPU engine
-does), turned into columns by ``records.impact.impact_columns``.  ``compile_time``,
-``run_time`` and ``wall_time`` of a point are its equal share of its batch's.
+A thread keeps BOUNCE_ROWS bounce rows; a point with more stops when they are full
+(``stepping.trajectory``), and is run again, whole, on the CPU engine
+(``sweeps.ensemble.run_starts``), which keeps every bounce: its row and bounce table are
+the CPU's.  ``compile_time``, ``run_time`` and ``wall_time`` of a point are its equal
+share of its batch's.
 """
 from __future__ import annotations
 
-import math
 import os
 import re
 import socket
 import time
-import types
 import warnings
 
 import numpy as np
 
 from ..config import ModelWarning
-from ..driver.run import NODE_STEPS_PER_CALL, Run
+from ..driver.run import NODE_STEPS_PER_CALL
 from ..driver.setup import start, starts
 from ..model.laws import get_law
 from .._jit import Kernel
-from ..records.bounces import bounce_table
-from ..records.columns import BOUNCE_COLUMNS
-from ..records.extremes import Extremes
-from ..records.impact import impact_columns
-from ..stepping import impact_stream as S
 from ..stepping import layout as L
+from ..stepping import trajectory as T
 from ..stepping.packing import pack
+from ..sweeps import decode
 from ..sweeps.batch import BatchResult
-from ..sweeps.ensemble import point_lift_energy
-from ..sweeps.point import bounce_values, empty_columns, pass_on
-from . import trajectory as T
+from ..sweeps.ensemble import run_starts
+from ..sweeps.point import empty_columns, pass_on
 from ._cuda import CudaUnavailable, import_cuda
 from .kernel import N_MAX, deep_call, family_of, make_kernel, signature, simulated
 
@@ -49,7 +45,7 @@ __all__ = ["run_batch", "check_device", "check_point", "prepare", "resolve_devic
 
 # the integrators whose loop compiles for the GPU (tests/test_gpu_ptx.py compiles each)
 GPU_INTEGRATORS = ("energy", "dp54", "dop853", "verlet", "semi-implicit", "radau5")
-BOUNCE_ROWS = 64            # bounce rows kept per point (more are counted and warned of)
+BOUNCE_ROWS = 64            # bounce rows a thread keeps (a point with more: the CPU's)
 EVENT_ROWS = 16             # local buffer rows of episodes and of bounces between drains
 THREADS = 128               # threads per block
 MEMORY = 2 << 30            # bytes of output buffers per launch (the batch is split)
@@ -142,8 +138,8 @@ def _launch(runs, cuda):
            cuda.device_array((n, cd, len(L.DIAG_COLUMNS))),
            cuda.device_array((n, EVENT_ROWS, len(L.EPISODE_COLUMNS))),
            cuda.device_array((n, EVENT_ROWS, len(L.BOUNCE_ROW_COLUMNS))),
-           cuda.device_array((n, BOUNCE_ROWS + 1, len(L.BOUNCE_ROW_COLUMNS))),
-           cuda.device_array((n, T.F_SIZE)), cuda.device_array((n, T.I_SIZE), np.int64)]
+           cuda.device_array((n, BOUNCE_ROWS, T.BOUT_SIZE)),
+           cuda.device_array((n, T.F_SIZE)), d(np.zeros((n, T.I_SIZE), np.int64))]
     threads = min(THREADS, n) if not simulated() else min(32, n)
     max_steps = max(1, NODE_STEPS_PER_CALL // n1)
     t0 = time.perf_counter()
@@ -202,49 +198,6 @@ def reason(exc) -> str:
     return lines[0] if lines else type(exc).__name__
 
 
-def _message(run, fout, code) -> str:
-    if code == T.BAD_DIAGNOSTICS:
-        return "a non-finite diagnostic value was computed; refusing to write it"
-    view = types.SimpleNamespace(fail=fout[T.F_FAIL:T.F_FAIL + L.FAIL_SIZE], clock=run.clock,
-                                 ctrl=run.ctrl, config=run.config, rod=run.rod,
-                                 floor=run.floor)
-    return Run.failure_message(view)
-
-
-def _point(run, fout, iout, brows) -> tuple[dict, dict, str]:
-    """A point's summary values (besides the times, the first-impact columns and those of
-    its bounce table) and bounce table; a warning or ''."""
-    nb = int(iout[T.I_BOUNCES])
-    pending = None
-    if iout[T.I_PENDING]:
-        pending = (brows[nb], bool(iout[T.I_PENDING] == 2))
-    bounces = bounce_table([brows[:nb]], pending)
-    code = int(iout[T.I_CODE])
-    ext = Extremes()
-    ext.samples = int(iout[T.I_SAMPLES])
-    ext.balance_max, ext.balance_min = float(fout[T.F_BAL_MAX]), float(fout[T.F_BAL_MIN])
-    ext.kinetic_max = float(fout[T.F_KIN_MAX])
-    ext.strain_min, ext.u0_min = float(fout[T.F_STRAIN_MIN]), float(fout[T.F_U0_MIN])
-    ext.force_max = float(fout[T.F_FORCE_MAX])
-    e = ext.with_bounces(bounces)
-
-    def finite(x):
-        return x if math.isfinite(x) else math.nan
-
-    values = {"status": "completed" if code == L.DONE else "failed",
-              "message": "" if code == L.DONE else _message(run, fout, code),
-              "min_u0": finite(e.u0_min), "max_floor_force": finite(e.force_max),
-              "min_strain": finite(e.strain_min),
-              "energy_error": ext.energy_error(float(fout[T.F_E0])),
-              "steps": int(iout[T.I_STEPS]), "rejected_steps": int(iout[T.I_REJECTED]),
-              "t_final": float(fout[T.F_T]), "run_file": ""}
-    said = ""
-    if iout[T.I_DROPPED]:
-        said = (f"the GPU engine keeps {BOUNCE_ROWS} bounce records per point: a point's "
-                f"later bounces are counted in no column (n_bounces counts those kept)")
-    return values, bounces, said
-
-
 def run_batch(configs, index) -> BatchResult:
     """Run the points ``configs`` (grid indices ``index``) on the GPU; a point that cannot
     start (its set-up raises) is failed with the reason, as a CPU point is.  ``worker``
@@ -279,35 +232,30 @@ def run_batch(configs, index) -> BatchResult:
             if fam is None:
                 fam = families[ids] = family_of(r.params())
             groups.setdefault(fam, []).append(j)
-    tables: list = [None] * n
+    rows_of: list[list] = [[] for _ in range(n)]
+    again: list = []            # points whose bounce rows filled: the CPU engine's
     compile_s = run_s = 0.0
     for members in groups.values():
         per = _bytes_per_point(runs[members[0]])
         step = max(1, int(MEMORY // per))
         for lo in range(0, len(members), step):
-            part = members[lo:lo + step]
+            part = np.asarray(members[lo:lo + step], dtype=np.int64)
             fout, iout, brows, c_s, r_s = _launch([runs[j] for j in part], cuda)
             compile_s += c_s
             run_s += r_s
-            for q, j in enumerate(part):
-                values, tables[j], w = _point(runs[j], fout[q], iout[q], brows[q])
-                for name, x in values.items():
-                    cols[name][j] = x
-                if w:
-                    said.append(w)
-            at = np.asarray(part, dtype=np.int64)
-            impact_columns(cols, at, fout[:, T.F_IMPACT:T.F_IMPACT + S.OUT_SIZE],
-                           iout[:, T.I_IMPACT],
-                           lambda q: point_lift_energy(runs[part[q]].config,
-                                                       runs[part[q]].rod))
-            for j in part:
-                got = bounce_values({"impact_status": cols["impact_status"][j]}, tables[j])
-                for name, x in got.items():
-                    cols[name][j] = x
-    empty = bounce_table(())
-    tables = [t if t is not None else empty for t in tables]
-    counts = np.array([t["t_impact"].size for t in tables], dtype=np.int64)
-    bounces = {name: np.concatenate([t[name] for t in tables]) for name in BOUNCE_COLUMNS}
+            stop = decode.stopped(iout)
+            again.extend((int(j), runs[j]) for j in part[stop])
+            done = np.flatnonzero(~stop)
+            decode.summarize(cols, part[done], [runs[j] for j in part[done]], fout[done],
+                             iout[done])
+            decode.take_rows(rows_of, part[done], brows.reshape(-1, T.BOUT_SIZE),
+                             iout[done], first=done * BOUNCE_ROWS)
+    if again:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ModelWarning)
+            run_starts(again, cols, rows_of)
+        said.extend(pass_on(caught))
+    bounces, counts = decode.bounce_tables(cols, rows_of)
     wall = time.perf_counter() - t_start
     cols["compile_time"][:] = compile_s / max(n, 1)
     cols["run_time"][:] = run_s / max(n, 1)
@@ -323,7 +271,7 @@ def _bytes_per_point(run) -> int:
     n1 = run.system.n + 1
     return 8 * (cs * (2 + 2 * n1) + cd * len(L.DIAG_COLUMNS)
                 + EVENT_ROWS * (len(L.EPISODE_COLUMNS) + len(L.BOUNCE_ROW_COLUMNS))
-                + (BOUNCE_ROWS + 1) * len(L.BOUNCE_ROW_COLUMNS) + 64 + 2 * n1)
+                + BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1)
 
 
 def _worker(cuda) -> dict:

@@ -1,5 +1,6 @@
-"""The CUDA kernel of a batch of sweep points: one thread per point, each running
-``trajectory.run_one`` on its own state in ``cuda.local.array``.
+"""The CUDA kernel of a batch of sweep points: one thread per point, each running the
+per-point driver ``stepping.trajectory.run_one`` (the CPU engine's, compiled for CUDA) on
+its own state in ``cuda.local.array``.
 
 A kernel is made per *family*: the classes of the five parameter tuples of the compiled loop
 (scheme, control, system, rod law, floor law, ``driver.run.parameters``), the kinds of
@@ -25,8 +26,8 @@ from typing import NamedTuple
 from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping import packing as P
+from ..stepping import trajectory as T
 from ..stepping.schemes import SCHEME_STATS, work_rows
-from . import trajectory as T
 from ._cuda import import_cuda
 
 __all__ = ["Family", "family_of", "make_kernel", "compile_ptx", "simulated",

@@ -1,8 +1,9 @@
 """The first-impact observables of a run (docs/MODEL.md §3): its first macroscopic contact,
-computed as the run drains, in a fixed-size state.  The one implementation of them: the
-ensemble engine's batch call (``stepping.ensemble``) and a GPU thread (``gpu.trajectory``)
-run it compiled, block by block as the loop drains; a run writer, a sweep point's sink, a
-run file read back and a ``Result`` run it through ``records.impact.ImpactStream``.
+computed as the run drains, in a fixed-size state.  The one implementation of them: a
+sweep point's driver (``stepping.trajectory``: the CPU engine's batch call and a GPU
+thread) runs it compiled, block by block as the loop drains; a run writer, a sweep
+point's sink, a run file read back and a ``Result`` run it through
+``records.impact.ImpactStream``.
 
 The definitions are those of the macroscopic contacts (``records.contacts``: a contact
 ends at a release followed by τ off the floor and a turn-over of the centre of mass), for

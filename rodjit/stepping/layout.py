@@ -66,6 +66,9 @@ F_VALUE = 2
 F_INDEX = 3
 F_DT = 4
 FAIL_SIZE = 5
+# the driver's own failure code (beside the kernels' ``kernels.forces`` codes): steps
+# were taken, t did not move (``driver.run.Run.compute``, ``trajectory.run_one``)
+NO_PROGRESS = 100
 
 # ---- return codes of the compiled loop -------------------------------------------------
 DONE = 0         # reached t_end

@@ -7,12 +7,11 @@ What runs in Python per point, before the call, and why: the point's Config
 state checked admissible, clock row, flight time), the one a ``Run`` makes, so the compiled
 loop starts from exactly the arrays ``rodjit run`` would give it, packed into a row of
 doubles.  A ``Run`` object, its buffers and its compile lookup are not made.  After the
-call, Python works on columns, except for a point that needs text (a failure message, the
-reason of a first contact without lift-off, whose lift-off energy is computed for those
-points only) and the means over each point's bounce rows (NumPy's ``mean``, so they equal the per-point path's to the bit).
+call, the points' results are read by ``sweeps.decode``, as the GPU engine's are.
 
-A point the batch could not hold (more bounce rows than its share of the batch's,
-``R_OVERFLOW``) runs again on the per-point path (``point.run_point``).
+Every bounce is kept: a call returns early at a point whose rows fill the batch's bounce
+rows (``stepping.trajectory``), and the next call, after the rows are taken out, goes on
+with that point from where it stopped (``run_group``).
 
 Threads: one per worker process (no ``prange`` over points): the sweep's workers are the
 parallelism, as for the per-point path.  Batches on threads of one process (the compiled
@@ -25,7 +24,6 @@ from __future__ import annotations
 import functools
 import importlib
 import pickle
-import math
 import time
 import warnings
 from typing import Any, NamedTuple
@@ -33,25 +31,27 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..config import ModelWarning
-from ..driver.run import NODE_STEPS_PER_CALL, capacities, failure_text
+from ..driver.run import NODE_STEPS_PER_CALL, capacities
 from ..driver.setup import Start, start
 from ..records.columns import BOUNCE_COLUMNS
-from ..records.impact import impact_columns
-from ..records.observables import lift_energy
 from ..stepping import aot
 from ..stepping import ensemble as E
 from ..stepping import impact_stream as S
 from ..stepping import layout as L
+from ..stepping import trajectory as T
 from ..stepping.schemes import SCHEME_STATS, work_rows
+from . import decode
 from .batch import BatchResult
-from .point import (SUMMARY_COLUMNS, PointResult, PointTask, died, empty_columns, pass_on,
-                    run_point, worker_info)
+from .point import SUMMARY_COLUMNS, died, empty_columns, pass_on, run_point, worker_info
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
            "timed", "batches", "check_batch_size", "split_bounces", "as_batch",
-           "BATCH_SECONDS", "MAX_BATCH_SIZE", "point_lift_energy", "load_batch_kernel"]
+           "BATCH_SECONDS", "MAX_BATCH_SIZE", "load_batch_kernel", "run_starts",
+           "run_group"]
 
-BOUNCE_ROWS = 64           # bounce rows a batch holds per point (on average)
+# bounce rows a batch's call holds per point (on average) before it returns for them to be
+# taken out: most points have fewer, so one call runs the batch
+BOUNCE_ROWS = 64
 
 
 BATCH_SECONDS = 0.3    # work per batch of the ensemble engine
@@ -160,13 +160,13 @@ def run_batch(task: BatchTask) -> BatchResult:
     idx = np.asarray(task.index, dtype=np.int64)
     n = idx.size
     values = empty_columns(n)
-    per_point: dict[int, PointResult] = {}    # position -> the per-point path's result
+    rows_of: list[list] = [[] for _ in range(n)]
     caught: list = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelWarning)
         for mod in task.laws:
             importlib.import_module(mod)
-        groups: dict = {}
+        members = []
         for k, i in enumerate(idx):
             try:
                 s = start(task.grid.config(task.base, int(i)))
@@ -174,34 +174,38 @@ def run_batch(task: BatchTask) -> BatchResult:
                 values["status"][k] = "failed"
                 values["message"][k] = f"{type(exc).__name__}: {exc}"
                 continue
-            cfg = s.config
-            key = (E.family(s.params()), cfg.rod.N, capacities(cfg, s.ctrl),
-                   cfg.output.diagnostics_interval, cfg.time.t_end)
-            groups.setdefault(key, []).append((k, s))
-        pieces = [_run_group(members, values) for members in groups.values()]
-        compiled = sum(piece[3] for piece in pieces)
-        loading = sum(piece[4] for piece in pieces)
-        # the points that did not fit: the per-point path
-        for k in map(int, np.flatnonzero(values["status"] == "overflow")):
-            r = run_point(PointTask(int(idx[k]), task.grid.config(task.base, int(idx[k])),
-                                    None, task.laws))
-            per_point[int(k)] = r
-            for name in SUMMARY_COLUMNS:
-                values[name][k] = r.values[name]
+            members.append((k, s))
+        compiled, loading = run_starts(members, values, rows_of)
     said = pass_on(caught)
-    bounces, counts = _assemble(n, pieces, per_point)
-    fill_bounce_values(values, bounces, counts, per_point)
+    bounces, counts = decode.bounce_tables(values, rows_of)
     wall = time.perf_counter() - t0
     # a point's share of the batch's time, by its steps (its loop's work)
     work = (values["steps"] + values["rejected_steps"]).astype(float)
-    batch_mask = np.array([k not in per_point for k in range(n)])
-    share = np.where(work > 0, work, 1.0) * batch_mask
+    share = np.where(work > 0, work, 1.0)
     share = share / share.sum() if share.sum() > 0 else share
-    values["run_time"] = np.where(batch_mask, share * compiled, values["run_time"])
-    values["wall_time"] = np.where(batch_mask, share * (wall - sum(
-        r.values["wall_time"] for r in per_point.values())), values["wall_time"])
-    values["compile_time"] = np.where(batch_mask, share * loading, values["compile_time"])
+    values["run_time"] = share * compiled
+    values["wall_time"] = share * wall
+    values["compile_time"] = share * loading
     return BatchResult(idx, values, bounces, counts, said, worker_info())
+
+
+def run_starts(members, values: dict, rows_of: list) -> tuple[float, float]:
+    """Run the points ``members`` (``(position, driver.setup.Start)`` pairs) in one
+    compiled call per family (``run_group``): their summary columns into ``values``, their
+    bounce rows into ``rows_of[position]``.  The seconds of the compiled calls and of
+    loading their kernels."""
+    groups: dict = {}
+    for k, s in members:
+        cfg = s.config
+        key = (E.family(s.params()), cfg.rod.N, capacities(cfg, s.ctrl),
+               cfg.output.diagnostics_interval, cfg.time.t_end)
+        groups.setdefault(key, []).append((k, s))
+    compiled = loading = 0.0
+    for group in groups.values():
+        c, ld = run_group(group, values, rows_of)
+        compiled += c
+        loading += ld
+    return compiled, loading
 
 
 _LOADED: set = set()      # the families whose batch kernel this process has loaded
@@ -247,10 +251,10 @@ def _load_kernel(s: Start) -> float:
     cap_s, cap_d = capacities(cfg, s.ctrl)
     t0 = time.perf_counter()
     _batch_kernel(params)(np.zeros((0, len(E.pack(params)))), np.zeros((0, 2, n1)),
-                     np.zeros((0, L.CLOCK_SIZE)), np.zeros(0),
-                     *_scratch(n1, s.scheme, cap_s, cap_d, EV_CAP),
-                     np.zeros((BOUNCE_ROWS, E.BOUT_SIZE)),
-                     np.zeros((0, E.F_SIZE)), np.zeros((0, E.I_SIZE), dtype=np.int64), 1)
+                          np.zeros((0, L.CLOCK_SIZE)), np.zeros(0), 0,
+                          *_scratch(n1, s.scheme, cap_s, cap_d, EV_CAP),
+                          np.zeros((BOUNCE_ROWS, T.BOUT_SIZE)),
+                          np.zeros((0, T.F_SIZE)), np.zeros((0, T.I_SIZE), dtype=np.int64), 1)
     _LOADED.add(key)
     return time.perf_counter() - t0
 
@@ -261,10 +265,12 @@ def load_batch_kernel(config) -> float:
     return _load_kernel(start(config))
 
 
-def _run_group(members, values):
-    """One compiled call for points of one family; their columns into ``values``.
-    Returns ``(positions, bout, iout)`` for the bounce rows, the seconds of the compiled
-    call and of loading its kernel (0 after the first call of a family)."""
+def run_group(members, values: dict, rows_of: list) -> tuple[float, float]:
+    """Run points of one family (``(position, Start)`` pairs) in compiled calls: one, or
+    more where the bounce rows filled (a call returns at the point that stopped; after its
+    rows are taken out, the next goes on from it); their summary columns into ``values``
+    (``decode.summarize``), their bounce rows into ``rows_of``.  The seconds of the
+    compiled calls and of loading the kernel (0 after the first call of a family)."""
     _, s0 = members[0]
     cfg = s0.config
     n1 = cfg.rod.N + 1
@@ -278,114 +284,26 @@ def _run_group(members, values):
         clock0[j] = s.clock
         flight[j] = s.tau
     cap_s, cap_d = capacities(cfg, s0.ctrl)
-    fout = np.zeros((m, E.F_SIZE))
-    iout = np.zeros((m, E.I_SIZE), dtype=np.int64)
-    bout = np.zeros((BOUNCE_ROWS * m, E.BOUT_SIZE))
-    compile_time = _load_kernel(s0)
-    t0 = time.perf_counter()
-    _batch_kernel(s0.params())(params, init, clock0, flight,
-                               *_scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP), bout, fout, iout,
-                      int(max(1, NODE_STEPS_PER_CALL // n1)))
-    elapsed = time.perf_counter() - t0
+    scratch = _scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP)
+    fout = np.zeros((m, T.F_SIZE))
+    iout = np.zeros((m, T.I_SIZE), dtype=np.int64)
     pos = np.array([k for k, _ in members], dtype=np.int64)
-    res = iout[:, E.I_RESULT]
-    values["steps"][pos] = iout[:, E.I_STEPS]
-    values["rejected_steps"][pos] = iout[:, E.I_REJECTED]
-    values["min_u0"][pos] = fout[:, E.F_MIN_U0]
-    values["max_floor_force"][pos] = fout[:, E.F_MAX_FF]
-    values["min_strain"][pos] = fout[:, E.F_MIN_STRAIN]
-    values["energy_error"][pos] = fout[:, E.F_ENERGY_ERROR]
-    values["t_final"][pos] = fout[:, E.F_T_FINAL]
-    values["status"][pos] = np.where(res == E.R_COMPLETED, "completed", "failed")
-    impact_columns(values, pos, fout[:, E.F_IMPACT:E.F_IMPACT + S.OUT_SIZE],
-                   iout[:, E.I_IMPACT],
-                   lambda j: point_lift_energy(members[j][1].config, members[j][1].rod))
-    for j, (k, s) in enumerate(members):
-        if res[j] == E.R_FAILED:
-            values["message"][k] = failure_text(fout[j, E.F_FAIL:E.F_FAIL + L.FAIL_SIZE],
-                                                float(fout[j, E.F_T_END]), s.ctrl,
-                                                s.config, s.rod, s.floor)
-        elif res[j] == E.R_NONFINITE:
-            values["message"][k] = ("a non-finite diagnostic value was computed; refusing "
-                                    "to write it")
-        elif res[j] == E.R_OVERFLOW:
-            values["status"][k] = "overflow"
-    keep = res != E.R_OVERFLOW
-    return pos[keep], bout, iout[keep], elapsed, compile_time
-
-
-_LIFT: dict = {}
-
-
-def point_lift_energy(cfg, rod) -> float:
-    """``lift_energy`` of a point of configuration ``cfg`` and rod law parameters ``rod``
-    (a bisection in Python), cached by what it depends on: the rod law and its
-    parameters, gravity and N."""
-    key = (cfg.rod.law, rod, float(cfg.gravity.g), cfg.rod.N)
-    try:
-        return _LIFT[key]
-    except (KeyError, TypeError):
-        value = lift_energy(cfg)
-        try:
-            _LIFT[key] = value
-        except TypeError:
-            pass
-        return value
-
-
-def _assemble(n, pieces, per_point):
-    """The batch's bounce columns in point order, and each point's row count; with the
-    bounce-derived summary columns (``point.bounce_values``) filled in ``values``."""
-    counts = np.zeros(n, np.int64)
-    rows_of: dict[int, np.ndarray] = {}
-    for pos, bout, iout, _, _ in pieces:
-        for j, k in enumerate(pos):
-            s, c = int(iout[j, E.I_BSTART]), int(iout[j, E.I_BOUNCES])
-            counts[k] = c
-            rows_of[int(k)] = bout[s:s + c]
-    parts = {name: [] for name in BOUNCE_COLUMNS}
-    for k in range(n):
-        if k in per_point:
-            b = per_point[k].bounces
-            counts[k] = b["t_impact"].size
-            for name in BOUNCE_COLUMNS:
-                parts[name].append(np.asarray(b[name]))
-        elif k in rows_of:
-            r = rows_of[k]
-            for c, name in enumerate(BOUNCE_COLUMNS):
-                parts[name].append(r[:, c])
-    out = {}
-    for c, name in enumerate(BOUNCE_COLUMNS):
-        col = np.concatenate(parts[name]) if parts[name] else np.zeros(0)
-        if name == "n_episodes":
-            col = col.astype(np.int64)
-        elif name in ("open", "ambiguous"):
-            col = col != 0
-        out[name] = col
-    return out, counts
-
-
-def fill_bounce_values(values, bounces, counts, per_point=()) -> None:
-    """``point.bounce_values`` of every point from the batch's bounce columns."""
-    starts = np.cumsum(counts) - counts
-    done = ~bounces["open"]
-    sure = ~bounces["ambiguous"]
-    e, e_energy = bounces["restitution"], bounces["restitution_energy"]
-    for k in range(counts.size):
-        if k in per_point:
-            continue
-        s, c = int(starts[k]), int(counts[k])
-        sl = slice(s, s + c)
-        ok = sure[sl]
-        values["n_bounces"][k] = c
-        values["n_complete_bounces"][k] = int(done[sl].sum())
-        if ok.any():
-            values["restitution_mean"][k] = float(np.mean(e[sl][ok]))
-            values["restitution_energy_mean"][k] = float(np.mean(e_energy[sl][ok]))
-        if values["impact_status"][k] == "undefined" and c and not bounces["open"][s]:
-            values["restitution_first"][k] = float(e[s])
-            values["contact_time_first"][k] = float(bounces["t_release"][s]
-                                                    - bounces["t_impact"][s])
+    max_steps = int(max(1, NODE_STEPS_PER_CALL // n1))
+    loading = _load_kernel(s0)
+    call = _batch_kernel(s0.params())
+    elapsed = 0.0
+    first = 0
+    while first < m:
+        bout = np.empty((max(1, BOUNCE_ROWS * (m - first)), T.BOUT_SIZE))
+        t0 = time.perf_counter()
+        stop = int(call(params, init, clock0, flight, first, *scratch, bout, fout, iout,
+                        max_steps))
+        elapsed += time.perf_counter() - t0
+        last = min(stop + 1, m)
+        decode.take_rows(rows_of, pos[first:last], bout, iout[first:last])
+        first = stop
+    decode.summarize(values, pos, [s for _, s in members], fout, iout)
+    return elapsed, loading
 
 
 def split_bounces(result: BatchResult) -> list[dict]:
