@@ -36,3 +36,19 @@ def lower(p):
 LAW = register(Law(name="log-test", kind="rod", params=LogRod,
                    from_config=lambda rod: LogRod(float(rod.kappa)),
                    value=value, deriv=deriv, primitive=primitive, lower=lower))
+
+
+class RaiseRod(NamedTuple):
+    kappa: float
+
+
+def _raising_params(rod):
+    if rod.kappa == 13.0:
+        raise ValueError("this law refuses rod.kappa = 13")
+    return RaiseRod(float(rod.kappa))
+
+
+# the log law whose parameters cannot be made for rod.kappa = 13: a point that cannot start
+RAISING = register(Law(name="raise-test", kind="rod", params=RaiseRod,
+                       from_config=_raising_params, value=value, deriv=deriv,
+                       primitive=primitive, lower=lower))

@@ -10,27 +10,10 @@ import warnings
 import numpy as np
 
 import rodjit
-from custom_law import deriv, lower, primitive, value
+import custom_law  # noqa: F401  (registers the law "raise-test")
 from rodjit.config import ModelWarning
 from rodjit.driver import setup
-from rodjit.laws import Law, register
 from rodjit.sweeps.grid import Grid
-from typing import NamedTuple
-
-
-class RaiseRod(NamedTuple):
-    kappa: float
-
-
-def _raising_params(rod):
-    if rod.kappa == 13.0:
-        raise ValueError("this law refuses rod.kappa = 13")
-    return RaiseRod(float(rod.kappa))
-
-
-register(Law(name="setup-raise", kind="rod", params=RaiseRod,
-             from_config=_raising_params, value=value, deriv=deriv, primitive=primitive,
-             lower=lower))
 
 
 def _bits(a) -> bytes:
@@ -109,7 +92,7 @@ def test_a_grid_of_many_sections_starts_as_each_point_alone():
 
 
 def test_points_that_cannot_start_fail_as_they_would_alone():
-    base = rodjit.Config().override({"time.t_end": 0.3, "rod.law": "setup-raise"})
+    base = rodjit.Config().override({"time.t_end": 0.3, "rod.law": "raise-test"})
     got = _check((base, {"rod.kappa": [100.0, 13.0, 50.0], "rod.mu": [0.0, 5.0],
                          "initial.height": [0.5, 1e12]}))
     assert sum(isinstance(g, Exception) for g in got) == 8

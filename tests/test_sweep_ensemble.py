@@ -1,14 +1,12 @@
 """The ensemble engine: a batch of points in one compiled call gives each point's row and
 bounce table exactly as the per-point path (``point.run_point``, the NumPy observables)."""
 import math
-from typing import NamedTuple
 
 import numpy as np
 import pytest
 
 import rodjit
-from custom_law import deriv, lower, primitive, value
-from rodjit.laws import Law, register
+import custom_law  # noqa: F401  (registers the law "raise-test")
 from rodjit.presets import load_preset
 from rodjit.sweeps import ensemble
 from rodjit.sweeps.batch import BatchResult
@@ -70,20 +68,6 @@ def test_every_first_contact_status_and_a_failing_point_equal_the_per_point_path
     assert "failed" in set(v["status"]) and "completed" in set(v["status"])
     failed = v["status"] == "failed"
     assert all("fixed step time.dt = 0.001 failed" in m for m in v["message"][failed])
-
-
-class RaiseRod(NamedTuple):
-    kappa: float
-
-
-def _raising_params(rod):
-    if rod.kappa == 13.0:
-        raise ValueError("this law refuses rod.kappa = 13")
-    return RaiseRod(float(rod.kappa))
-
-
-register(Law(name="raise-test", kind="rod", params=RaiseRod, from_config=_raising_params,
-             value=value, deriv=deriv, primitive=primitive, lower=lower))
 
 
 @pytest.mark.slow
