@@ -354,11 +354,11 @@ def test_requested_buffers_below_a_steps_outputs_are_enlarged():
     assert run.arrays.snap_t.size == run.ctrl.dense_snapshots == control.DENSE_OUTPUTS_MAX
     assert run.arrays.diag.shape[0] == run.ctrl.dense_diagnostics == control.DENSE_OUTPUTS_MAX
     big = Run(cfg.override({"rod.N": 20_000}))        # the snapshot buffer's memory rule
-    assert big.ctrl.dense_snapshots == big.snap_t.size < control.DENSE_OUTPUTS_MAX
+    assert big.ctrl.dense_snapshots == big.arrays.snap_t.size < control.DENSE_OUTPUTS_MAX
     quiet = Run(cfg.override(QUIET), snapshot_capacity=1, diag_capacity=1)
-    assert quiet.snap_t.size == quiet.diag.shape[0] == 1       # no outputs, no rows
+    assert quiet.arrays.snap_t.size == quiet.arrays.diag.shape[0] == 1       # no outputs, no rows
     land = Run(cfg.override({"output.interpolate": False}), snapshot_capacity=3)
-    assert land.snap_t.size == 3 and land.ctrl.dense_snapshots == 0
+    assert land.arrays.snap_t.size == 3 and land.ctrl.dense_snapshots == 0
 
 
 @pytest.mark.parametrize("integrator", sorted(DENSE))
