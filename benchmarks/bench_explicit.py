@@ -111,10 +111,11 @@ def bare_step(cfg, dt, steps):
     from rodjit.driver.run import Run
     import time
     run = Run(cfg)
-    verlet.initial(run.scheme, run.system, run.rod, run.floor, run.state[0], run.state[1],
-                   run.state[2], run.work)
-    args = (Verlet(run.scheme.cfl), run.system, run.rod, run.floor, run.state.copy(),
-            run.trial.copy(), run.work, run.sstats, dt)
+    a = run.arrays
+    verlet.initial(run.scheme, run.system, run.rod, run.floor, a.state[0], a.state[1],
+                   a.state[2], a.work)
+    args = (Verlet(run.scheme.cfl), run.system, run.rod, run.floor, a.state.copy(),
+            a.trial.copy(), a.work, a.sstats, dt)
     _bare_loop(*args, 1)                           # compile (or load) outside the timing
     t0 = time.perf_counter()
     bad = _bare_loop(*args, steps // 2)

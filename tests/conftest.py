@@ -233,8 +233,8 @@ def assert_resume_is_bit_identical(cfg, max_steps) -> None:
     second = Run.from_checkpoint(cfg, first.checkpoint())
     while second.advance(MemorySink()) != L.DONE:
         pass
-    np.testing.assert_array_equal(second.state, one.state)
-    np.testing.assert_array_equal(second.sstats, one.sstats)
+    np.testing.assert_array_equal(second.arrays.state, one.arrays.state)
+    np.testing.assert_array_equal(second.arrays.sstats, one.arrays.sstats)
     assert second.steps == one.steps and second.rejected == one.rejected
     assert second.dissipated == one.dissipated
 
@@ -247,9 +247,10 @@ def trial_step(cfg, step, dt):
     run = Run(cfg)
     run.start(MemorySink())
     scheme, _, system, rod, floor = run._args()
-    before = run.state.copy()
-    trial = np.zeros_like(run.state)
-    r = step(scheme, system, rod, floor, run.state[0], run.state[1], run.state[2],
-             trial[0], trial[1], trial[2], run.work, run.sstats, dt)
-    np.testing.assert_array_equal(run.state, before)
+    a = run.arrays
+    before = a.state.copy()
+    trial = np.zeros_like(a.state)
+    r = step(scheme, system, rod, floor, a.state[0], a.state[1], a.state[2],
+             trial[0], trial[1], trial[2], a.work, a.sstats, dt)
+    np.testing.assert_array_equal(a.state, before)
     return run, trial, r

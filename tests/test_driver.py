@@ -135,7 +135,7 @@ def test_a_step_loop_that_stops_advancing_time_fails_in_one_line():
     run = Run(quiet(**{"time.t_end": 1.0}))
     sink = MemorySink()
     run.start(sink)
-    run.clock[L.T], run.clock[L.T_END] = 1e20, 2e20
+    run.arrays.clock[L.T], run.arrays.clock[L.T_END] = 1e20, 2e20
     with pytest.raises(SimulationError) as caught:
         for _ in range(3):
             run.advance(sink, max_steps=50)

@@ -61,7 +61,7 @@ def test_interrupt_in_contact_lists_open_bounce_then_drops_it(tmp_path, small_co
     state = {"sent": False}
 
     def progress(run):
-        if not state["sent"] and run.ev[L.IN_CONTACT]:
+        if not state["sent"] and run.arrays.ev[L.IN_CONTACT]:
             state["sent"] = True
             os.kill(os.getpid(), signal.SIGTERM)
     with pytest.raises(rodjit.RunInterrupted) as info:

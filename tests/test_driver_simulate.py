@@ -36,11 +36,11 @@ def test_a_run_gets_its_own_state_and_clock_not_the_kept_ones():
     state, clock = kept.state.copy(), kept.clock.copy()
     run = Run(cfg)
     assert setup.start(cfg).state is kept.state
-    assert not np.shares_memory(run.state, kept.state)
-    assert not np.shares_memory(run.clock, kept.clock)
+    assert not np.shares_memory(run.arrays.state, kept.state)
+    assert not np.shares_memory(run.arrays.clock, kept.clock)
     # the run starts from the kept arrays to the bit, and shares the parameter tuples
-    assert run.state[:2].tobytes() == state.tobytes() and not run.state[2].any()
-    assert run.clock.tobytes() == clock.tobytes() and run.ev.tobytes() == kept.ev().tobytes()
+    assert run.arrays.state[:2].tobytes() == state.tobytes() and not run.arrays.state[2].any()
+    assert run.arrays.clock.tobytes() == clock.tobytes() and run.arrays.ev.tobytes() == kept.ev().tobytes()
     assert all(a is b for a, b in zip(run._args(), kept.params()))
     run.start(None)
     while run.advance(MemorySink()) != L.DONE:

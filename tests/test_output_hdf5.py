@@ -226,10 +226,10 @@ def test_no_checkpoint_of_a_run_stopped_mid_drain(tmp_path, small_config):
     run.advance(writer, max_steps=300)
     writer.save(run)
     slot = writer.current
-    run.count[L.N_DIAG] = 3                # as if draining had failed half way
+    run.arrays.count[L.N_DIAG] = 3                # as if draining had failed half way
     writer.save(run)
     assert writer.current == slot
-    run.count[L.N_DIAG] = 0
+    run.arrays.count[L.N_DIAG] = 0
     writer.close(run, "completed")
     with h5py.File(tmp_path / "r.h5", "r") as f:
         assert f["checkpoint/current"][()] != slot

@@ -75,7 +75,7 @@ def _interrupt_when_in_contact():
     state = {"sent": False}
 
     def progress(run):
-        if not state["sent"] and run.ev[L.IN_CONTACT]:
+        if not state["sent"] and run.arrays.ev[L.IN_CONTACT]:
             state["sent"] = True
             os.kill(os.getpid(), signal.SIGTERM)
     return progress

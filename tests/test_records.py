@@ -99,7 +99,7 @@ def test_stats_of_a_run_and_of_its_file_agree(tmp_path, small_config):
         assert disk[key] == mem[key]
     run = Run(small_config)
     assert run.stats() == run_stats(steps=0, rejected=0, compile_time=0.0, run_time=0.0,
-                                    nodes=small_config.rod.N + 1, scheme_counts=run.sstats)
+                                    nodes=small_config.rod.N + 1, scheme_counts=run.arrays.sstats)
 
 
 def test_run_stats_fields():

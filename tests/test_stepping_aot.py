@@ -23,6 +23,7 @@ from rodjit.driver.run import Run
 from rodjit.records.result import MemorySink
 from rodjit.stepping import aot
 from rodjit.stepping import layout as L
+from rodjit.stepping.arrays import RunArrays
 from rodjit.stepping.registry import NAMES
 
 # the default run for a simulated second and a half: flight, contact, one bounce
@@ -73,13 +74,27 @@ def test_the_wrappers_rebuild_every_schemes_parameters(integrator):
     seen = {}
     glob.update(_save_thread=lambda: "token", _restore_thread=lambda ts: seen.setdefault(
         "restored", ts))
+    passed = {}
     for name in aot.ENTRIES:
-        glob[f"_{name}"] = lambda *a, _n=name: seen.setdefault(_n, a[:5]) and 7
+        glob[f"_{name}"] = lambda *a, _n=name: (seen.setdefault(_n, a[:5]),
+                                                passed.setdefault(_n, a[5:])) and 7
     exec(source, glob)
     p = aot.pack(args)
     assert p.dtype == np.float64 and p.ndim == 1
     for name, (_, extra) in aot.ENTRIES.items():
-        assert glob[name](p, *range(len(extra))) == 7
+        exported = aot._expand(extra)
+        assert glob[name](p, *range(len(exported))) == 7
+        # the exported function takes the run's arrays one by one, and the loop gets them
+        # as its one RunArrays, field for field
+        values = dict(zip((a for a, _ in exported), range(len(exported))))
+        got = passed[name]
+        assert len(got) == len(extra)
+        for a, value in zip(extra, got):
+            if a == aot.ARRAYS:
+                assert isinstance(value, RunArrays)
+                assert value == tuple(values[f] for f in RunArrays._fields)
+            else:
+                assert value == values[a[0]]
         rebuilt = seen[name]
         for a, b in zip(rebuilt, args):
             assert type(a) is type(b)
@@ -269,7 +284,7 @@ def test_a_run_paused_on_one_path_resumes_on_the_other_bit_for_bit(built, use):
         assert (resumed._aot is None) == (second is None)
         while resumed.advance(sink) != L.DONE:
             pass
-        np.testing.assert_array_equal(resumed.state[:2], np.stack([whole.u_final,
+        np.testing.assert_array_equal(resumed.arrays.state[:2], np.stack([whole.u_final,
                                                                    whole.v_final]))
         assert resumed.steps == whole.stats["steps"]
         assert resumed.dissipated == whole.dissipated

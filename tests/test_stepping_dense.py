@@ -62,22 +62,22 @@ def _one_step(integrator, h, thetas, **over):
     run = Run(_cfg(integrator, **FLIGHT, **over))
     run.start(MemorySink())
     scheme, _, system, rod, floor = run._args()
-    s = run.state
+    s = run.arrays.state
     new = np.zeros_like(s)
     mod = registry.load(registry.get(integrator))[0]
     r = mod.step(scheme, system, rod, floor, s[0], s[1], s[2], new[0], new[1], new[2],
-                 run.work, run.sstats, h)
+                 run.arrays.work, run.arrays.sstats, h)
     assert r.status in (erk.OK, erk.INACCURATE)    # a valid state (its error aside)
     status, _ = mod.dense_setup(scheme, system, rod, floor, s[0], s[1], s[2], new[0], new[1],
-                                new[2], run.work, h)
+                                new[2], run.arrays.work, h)
     assert status == erk.OK
     out, diss = [], []
     for theta in thetas:
         y = np.zeros((2, s.shape[1]))
-        mod.dense(scheme, s[0], s[1], s[2], new[0], new[1], new[2], run.work, h, theta,
+        mod.dense(scheme, s[0], s[1], s[2], new[0], new[1], new[2], run.arrays.work, h, theta,
                   y[0], y[1])
         out.append(y)
-        diss.append(mod.dense_dissipated(scheme, system, s[1], new[1], run.work, h, theta))
+        diss.append(mod.dense_dissipated(scheme, system, s[1], new[1], run.arrays.work, h, theta))
     return s[:2].copy(), new[:2], out, diss, r.dissipated
 
 
@@ -351,14 +351,14 @@ def test_a_run_cut_into_calls_and_small_buffers_is_bitwise_the_same(integrator, 
 def test_requested_buffers_below_a_steps_outputs_are_enlarged():
     cfg = _paper("dp54", **{"output.diagnostics_interval": 1e-4})
     run = Run(cfg, snapshot_capacity=3, diag_capacity=5)
-    assert run.snap_t.size == run.ctrl.dense_snapshots == control.DENSE_OUTPUTS_MAX
-    assert run.diag.shape[0] == run.ctrl.dense_diagnostics == control.DENSE_OUTPUTS_MAX
+    assert run.arrays.snap_t.size == run.ctrl.dense_snapshots == control.DENSE_OUTPUTS_MAX
+    assert run.arrays.diag.shape[0] == run.ctrl.dense_diagnostics == control.DENSE_OUTPUTS_MAX
     big = Run(cfg.override({"rod.N": 20_000}))        # the snapshot buffer's memory rule
-    assert big.ctrl.dense_snapshots == big.snap_t.size < control.DENSE_OUTPUTS_MAX
+    assert big.ctrl.dense_snapshots == big.arrays.snap_t.size < control.DENSE_OUTPUTS_MAX
     quiet = Run(cfg.override(QUIET), snapshot_capacity=1, diag_capacity=1)
-    assert quiet.snap_t.size == quiet.diag.shape[0] == 1       # no outputs, no rows
+    assert quiet.arrays.snap_t.size == quiet.arrays.diag.shape[0] == 1       # no outputs, no rows
     land = Run(cfg.override({"output.interpolate": False}), snapshot_capacity=3)
-    assert land.snap_t.size == 3 and land.ctrl.dense_snapshots == 0
+    assert land.arrays.snap_t.size == 3 and land.ctrl.dense_snapshots == 0
 
 
 @pytest.mark.parametrize("integrator", sorted(DENSE))

@@ -39,12 +39,14 @@ def energy_config(**over):
 
 # ---- the real loop, one step at a time ------------------------------------------------------
 @numba.njit
-def _record(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats, clock,
-            count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail, out,
-            max_bounces):
+def _record(scheme, ctrl, system, rod, floor, arrays, out, max_bounces):
     """Call the compiled loop for one step at a time; per step record dt, E before/after,
     the loop's dissipation increment, μ dt Σ h (Δv̄/h)² recomputed from the two states, the
     rounding scale of E, u_0, the bounces so far and t.  Returns the number of steps."""
+    state = arrays.state
+    work = arrays.work
+    clock = arrays.clock
+    count = arrays.count
     n = system.n
     h = system.h
     v_old = np.empty(n + 1)
@@ -57,9 +59,7 @@ def _record(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         t0 = clock[L.T]
         d0 = clock[L.DISSIPATED]
         v_old[:] = state[1]
-        code = advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats,
-                       clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes,
-                       bounces, fail, 1)
+        code = advance(scheme, ctrl, system, rod, floor, arrays, 1)
         count[L.N_EP] = 0        # drain the event buffers (their rows are not needed)
         count[L.N_BOUNCE] = 0
         if code == L.FAILED:
@@ -90,9 +90,7 @@ def record_steps(cfg, max_steps, max_bounces=10**9, u0=None, v0=None):
     run = Run(cfg, u0=u0, v0=v0)
     run.start(MemorySink())
     out = np.zeros((max_steps, 9))
-    k = _record(*run._args(), run.state, run.trial, run.work, run.interp, run.sstats,
-                run.clock, run.count, run.ev, run.snap_t, run.snap_step, run.snap_u,
-                run.snap_v, run.diag, run.episodes, run.bounces, run.fail, out, max_bounces)
+    k = _record(*run._args(), run.arrays, out, max_bounces)
     assert k > 0, run.failure_message()
     return run, out[:k]
 
@@ -122,7 +120,7 @@ def test_energy_identity_holds_at_every_step_over_many_bounces(mu):
         assert diss.sum() > 0.3 * abs(e0[0])           # a dissipative run, not a no-op
     else:
         assert diss.sum() == 0.0
-    assert run.sstats[0] > 0                           # Newton iterations were counted
+    assert run.arrays.sstats[0] > 0                           # Newton iterations were counted
 
 
 def test_energy_identity_with_bending_on_a_stiff_floor():
@@ -146,10 +144,10 @@ def test_step_solves_the_discrete_gradient_equations_of_the_numpy_spec():
     run = Run(cfg)
     run.start(MemorySink())
     run.advance(MemorySink(), max_steps=1)             # into the floor
-    u, v, a = (x.copy() for x in run.state)
+    u, v, a = (x.copy() for x in run.arrays.state)
     assert u[0] < 0
     u2, v2, a2 = np.zeros_like(u), np.zeros_like(u), np.zeros_like(u)
-    work = np.zeros_like(run.work)
+    work = np.zeros_like(run.arrays.work)
     ss = np.zeros(2, np.int64)
     dt = 2e-3
     status, *_, dissipated = EN.step(run.scheme, run.system, run.rod, run.floor, u, v, a,
@@ -207,7 +205,7 @@ def test_chord_updates_reach_the_same_root(gamma):
     run = Run(cfg)
     run.start(MemorySink())
     run.advance(MemorySink(), max_steps=1)             # into the floor
-    u, v, a = (x.copy() for x in run.state)
+    u, v, a = (x.copy() for x in run.arrays.state)
     assert u[0] < 0
     dt = 1e-3
     ends = {}
@@ -215,7 +213,7 @@ def test_chord_updates_reach_the_same_root(gamma):
         out = [np.zeros_like(u) for _ in range(3)]
         ss = np.zeros(2, np.int64)
         status = EN.step(run.scheme._replace(chord=chord), run.system, run.rod, run.floor,
-                         u, v, a, *out, np.zeros_like(run.work), ss, dt)[0]
+                         u, v, a, *out, np.zeros_like(run.arrays.work), ss, dt)[0]
         assert status in (OK, INACCURATE) and ss[0] >= 2 and ss[1] == 0
         r_u, r_v = ref.discrete_gradient_residual(u, v, out[0], out[1], dt, run.system,
                                                   run.rod, run.floor)
@@ -402,19 +400,19 @@ def test_newton_failure_is_reported_and_shrinks_the_step():
                            "floor.kappa_b": 1e6, "floor.beta": 1e-3})
     run = Run(cfg)
     run.start(MemorySink())
-    u, v, a = run.state
+    u, v, a = run.arrays.state
     out = [np.zeros_like(u) for _ in range(3)]
     ss = np.zeros(2, np.int64)
     status = EN.step(run.scheme._replace(max_newton=1), run.system, run.rod, run.floor,
-                     u, v, a, *out, np.zeros_like(run.work), ss, 1e-2)[0]
+                     u, v, a, *out, np.zeros_like(run.arrays.work), ss, 1e-2)[0]
     assert status == NO_CONVERGENCE and ss[1] == 1
     status = EN.step(run.scheme, run.system, run.rod, run.floor, u, v, a, *out,
-                     np.zeros_like(run.work), ss, 1e-2)[0]
+                     np.zeros_like(run.arrays.work), ss, 1e-2)[0]
     assert status == INACCURATE                     # converged, but far too inaccurate
     assert out[0][0] > -1e-3 and np.all(np.diff(out[0]) > 0)
-    run.fail[:] = [NO_CONVERGENCE, 0.1, 0.5, 0, 1e-3]
+    run.arrays.fail[:] = [NO_CONVERGENCE, 0.1, 0.5, 0, 1e-3]
     assert "Newton iteration did not converge" in run.failure_message()
-    run.fail[:] = [INACCURATE, 0.1, 7.0, 0, 1e-3]
+    run.arrays.fail[:] = [INACCURATE, 0.1, 7.0, 0, 1e-3]
     assert "error estimate is 7" in run.failure_message()
 
 

@@ -177,7 +177,7 @@ def test_step_is_ok_and_fsal():
     assert r.status == OK
     _, _, system, rod, floor = run._args()
     a = np.zeros_like(trial[2])
-    full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1], False)
+    full_accel(system, rod, floor, trial[0], trial[1], a, run.arrays.work[0], run.arrays.work[1], False)
     np.testing.assert_array_equal(a, trial[2])
 
 
@@ -265,7 +265,7 @@ def test_resume_through_bounces_and_outputs_is_bit_identical(integrator):
         run = Run.from_checkpoint(cfg, run.checkpoint())
     while run.advance(MemorySink()) != L.DONE:
         pass
-    np.testing.assert_array_equal(run.state, one.state)
+    np.testing.assert_array_equal(run.arrays.state, one.arrays.state)
     assert run.steps == one.steps and run.rejected == one.rejected
 
 

@@ -32,25 +32,25 @@ def _flight(integrator, mu=0.0, gamma=0.0):
     run = Run(cfg)
     n1 = cfg.rod.N + 1
     x = np.linspace(0.0, 1.0, n1)
-    u = run.state[0]
+    u = run.arrays.state[0]
     u += 0.02 * np.sin(np.pi * x)          # a non-uniform strain: internal motion
-    run.state[1] += 0.3 * np.cos(2 * np.pi * x)
+    run.arrays.state[1] += 0.3 * np.cos(2 * np.pi * x)
     run.start(MemorySink())
     return run
 
 
 def _one_step(run, scheme, dt):
-    u, v, a = (r.copy() for r in run.state)
+    u, v, a = (r.copy() for r in run.arrays.state)
     u2, v2, a2 = np.zeros_like(u), np.zeros_like(u), np.zeros_like(u)
-    work = np.zeros_like(run.work)
+    work = np.zeros_like(run.arrays.work)
     r = kdk.step(scheme, run.system, run.rod, run.floor, u, v, a, u2, v2, a2, work,
                  np.zeros(4, np.int64), dt)
     return r, u, v, a, u2, a2
 
 
 def _exact_u(run, dt):
-    n1 = run.state.shape[1]
-    y0 = np.concatenate([run.state[0], run.state[1]])
+    n1 = run.arrays.state.shape[1]
+    y0 = np.concatenate([run.arrays.state[0], run.arrays.state[1]])
     sol = solve_ivp(lambda t, y: ref.rhs(t, y, run.system, run.rod, run.floor), (0.0, dt),
                     y0, method="DOP853", rtol=1e-13, atol=1e-15)
     return sol.y[:n1, -1]

@@ -111,7 +111,7 @@ def test_transformed_solves_invert_lambda_minus_the_jacobian(gamma):
     run = Run(cfg)
     run.start(MemorySink())
     scheme, _, system, rod, floor = run._args()
-    u, v = run.state[0].copy(), run.state[1].copy()
+    u, v = run.arrays.state[0].copy(), run.arrays.state[1].copy()
     u[3] += 0.01
     J = _dense_jacobian(u, v, system, rod, floor)
     n1 = u.size
@@ -223,10 +223,10 @@ def test_step_leaves_the_full_acceleration_of_the_new_state():
     assert r.status == OK
     _, _, system, rod, floor = run._args()
     a = np.zeros_like(trial[2])
-    full_accel(system, rod, floor, trial[0], trial[1], a, run.work[0], run.work[1],
+    full_accel(system, rod, floor, trial[0], trial[1], a, run.arrays.work[0], run.arrays.work[1],
                       False)
     np.testing.assert_array_equal(a, trial[2])
-    assert run.sstats[registry.counter_index("newton_iterations")] >= 2
+    assert run.arrays.sstats[registry.counter_index("newton_iterations")] >= 2
 
 
 def test_resume_is_bit_identical():

@@ -31,7 +31,7 @@ from ..stepping import aot
 from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
-from ..stepping.schemes import SCHEME_STATS, work_rows
+from ..stepping.arrays import allocate
 from .setup import parameters, positions, rows_needed, snapshot_bound, tolerance
 from .setup import start as set_up
 
@@ -81,16 +81,17 @@ class Block:
     return code of the last call; ``Run.drain`` hands them to a sink."""
 
     def __init__(self, run, code: int):
-        k, n_diag, n_ep, n_bounce = run.count[_ROWS].tolist()
+        a = run.arrays
+        k, n_diag, n_ep, n_bounce = a.count[_ROWS].tolist()
         self.code = code
-        self.snapshots = (run.snap_t[:k], run.snap_step[:k], run.snap_u[:k], run.snap_v[:k])
-        self.diagnostics = run.diag[:n_diag]
-        self.episodes = run.episodes[:n_ep]
-        self.bounces = run.bounces[:n_bounce]
+        self.snapshots = (a.snap_t[:k], a.snap_step[:k], a.snap_u[:k], a.snap_v[:k])
+        self.diagnostics = a.diag[:n_diag]
+        self.episodes = a.episodes[:n_ep]
+        self.bounces = a.bounces[:n_bounce]
         self.finite = _all_finite(self.diagnostics)
         # the loop's contact state at the block's end (``Sink.block``)
-        self.in_contact = bool(run.ev[L.IN_CONTACT] != 0.0)
-        self.contact_start = float(run.ev[L.EP_START])
+        self.in_contact = bool(a.ev[L.IN_CONTACT] != 0.0)
+        self.contact_start = float(a.ev[L.EP_START])
 
 
 def _all_finite(rows: np.ndarray) -> bool:
@@ -181,26 +182,16 @@ class Run:
         s = set_up(config, u0, v0)
         self.scheme, self.ctrl, self.system, self.rod, self.floor = s.params()
         n1 = config.rod.N + 1
-        self.state = np.zeros((3, n1))
-        self.state[:2] = s.state
-        self.trial = np.zeros((3, n1))
-        self.work = np.zeros((work_rows(self.scheme), n1))
-        self.interp = np.zeros((2, n1))   # a dense output's interpolated (u, v)
-        self.sstats = np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64)
-        self.clock = s.clock.copy()       # t_end, the output intervals and tolerance set
-        self.count = np.zeros(L.COUNT_SIZE, dtype=np.int64)
-        self.ev = s.ev()
-        self.fail = np.zeros(L.FAIL_SIZE)
         snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
                                                       diag_capacity)
-        cap = snapshot_capacity
-        self.snap_t = np.zeros(cap)
-        self.snap_step = np.zeros(cap, dtype=np.int64)
-        self.snap_u = np.zeros((cap, n1))
-        self.snap_v = np.zeros((cap, n1))
-        self.diag = np.zeros((diag_capacity, len(L.DIAG_COLUMNS)))
-        self.episodes = np.zeros((event_capacity, len(L.EPISODE_COLUMNS)))
-        self.bounces = np.zeros((event_capacity, len(L.BOUNCE_ROW_COLUMNS)))
+        # the loop's arrays and buffers (``stepping.arrays``): zeros, then the state's u and
+        # v rows, the clock row (t_end, the output intervals and tolerance set) and ``ev``
+        # (the flight time)
+        self.arrays = a = allocate(n1, self.scheme, snapshot_capacity, diag_capacity,
+                                   event_capacity)
+        a.state[:2] = s.state
+        a.clock[:] = s.clock
+        a.ev[:] = s.ev()
         self._undrained = 0         # blocks taken but not drained yet
         self.max_steps = max(1, NODE_STEPS_PER_CALL // n1)
         self.compile_time = 0.0
@@ -215,56 +206,56 @@ class Run:
     # ---- properties --------------------------------------------------------------------
     @property
     def t(self) -> float:
-        return float(self.clock[L.T])
+        return float(self.arrays.clock[L.T])
 
     @property
     def t_end(self) -> float:
-        return float(self.clock[L.T_END])
+        return float(self.arrays.clock[L.T_END])
 
     @property
     def steps(self) -> int:
-        return int(self.count[L.STEP])
+        return int(self.arrays.count[L.STEP])
 
     @property
     def rejected(self) -> int:
-        return int(self.count[L.REJECTED])
+        return int(self.arrays.count[L.REJECTED])
 
     @property
     def bounces_total(self) -> int:
-        return int(self.count[L.BOUNCES_TOTAL])
+        return int(self.arrays.count[L.BOUNCES_TOTAL])
 
     @property
     def dissipated(self) -> float:
-        return float(self.clock[L.DISSIPATED])
+        return float(self.arrays.clock[L.DISSIPATED])
 
     @property
     def energy0(self) -> float:
-        return float(self.clock[L.E0])
+        return float(self.arrays.clock[L.E0])
 
     @property
     def drained(self) -> bool:
         """Every row computed so far has gone to the sink: the state a checkpoint matches."""
         return self._undrained == 0 and not any(
-            self.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE))
+            self.arrays.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE))
 
     @property
     def u(self) -> np.ndarray:
-        return self.state[0]
+        return self.arrays.state[0]
 
     @property
     def v(self) -> np.ndarray:
-        return self.state[1]
+        return self.arrays.state[1]
 
     def set_t_end(self, t_end: float) -> None:
         """Move the end of the run (e.g. to extend a resumed run)."""
         if not (math.isfinite(t_end) and t_end > self.t):
             raise ValueError(f"time.t_end = {t_end!r} is out of range (must be > the current "
                              f"time {self.t!r})")
-        self.clock[L.T_END] = t_end
+        self.arrays.clock[L.T_END] = t_end
         self._set_tolerance()
 
     def _set_tolerance(self):
-        self.clock[L.TOL] = tolerance(self.clock)
+        self.arrays.clock[L.TOL] = tolerance(self.arrays.clock)
 
     # ---- stepping ----------------------------------------------------------------------
     def _args(self):
@@ -274,20 +265,17 @@ class Run:
         """Compile (or load from cache) the kernels, then evaluate the initial state; its
         outputs (at t0) are drained into ``sink``, or stay in the buffers if it is None.
         A run resumed from a checkpoint only compiles."""
-        if self.count[L.STARTED]:
+        if self.arrays.count[L.STARTED]:
             if not self._warm:
                 self.warm_up()
             return
-        arrays = (self.state, self.work, self.clock, self.count, self.ev, self.snap_t,
-                  self.snap_step, self.snap_u, self.snap_v, self.diag, self.fail)
         if self._aot is not None:
-            call = self._aot.start
+            call, args = self._aot.start, (self.arrays,)
         else:
-            args = (*self._args(), *arrays)
+            args = (*self._args(), self.arrays)
             call = self._entry("start", start, args)    # its compile time counted there
-            arrays = args
         t0 = time.perf_counter()
-        code = call(*arrays)
+        code = call(*args)
         # the initial evaluation is no step: it counts with the start-up, once
         self.compile_time += time.perf_counter() - t0
         self.warm_up()
@@ -325,12 +313,10 @@ class Run:
         return self._key
 
     def _advance_arrays(self, max_steps: int) -> tuple:
-        """The arguments of ``advance`` after the parameter tuples.  Always arrays the run
-        allocated itself (``__init__``) and an int: the compiled entry point relies on
+        """The arguments of ``advance`` after the parameter tuples.  Always the arrays the
+        run allocated itself (``__init__``) and an int: the compiled entry point relies on
         these types."""
-        return (self.state, self.trial, self.work, self.interp, self.sstats, self.clock,
-                self.count, self.ev, self.snap_t, self.snap_step, self.snap_u, self.snap_v,
-                self.diag, self.episodes, self.bounces, self.fail, int(max_steps))
+        return (self.arrays, int(max_steps))
 
     def _call(self, max_steps):
         arrays = self._advance_arrays(max_steps)
@@ -344,7 +330,7 @@ class Run:
         Returns layout.DONE, FULL or PAUSED (call again); raises SimulationError on failure
         after draining everything computed up to it.
         """
-        if not self.count[L.STARTED]:
+        if not self.arrays.count[L.STARTED]:
             self.start(sink)
         code = self.compute(max_steps)
         self.drain(self.take(code), sink)
@@ -357,16 +343,17 @@ class Run:
         (layout.FAILED included).  Needs ``start``; releases the GIL while it runs."""
         if not self._warm:
             self.warm_up()
+        clock, count = self.arrays.clock, self.arrays.count
         t0 = time.perf_counter()
-        t, steps = self.clock[L.T], self.count[L.STEP]
+        t, steps = clock[L.T], count[L.STEP]
         code = self._call(self.max_steps if max_steps is None else max_steps)
         self.run_time += time.perf_counter() - t0
-        if code in (L.PAUSED, L.FULL) and self.count[L.STEP] > steps and self.clock[L.T] <= t:
+        if code in (L.PAUSED, L.FULL) and count[L.STEP] > steps and clock[L.T] <= t:
             # every step of the call left t where it was (a step below the resolution of
             # t): calling again would loop for ever
-            f = self.fail
-            f[L.F_CODE], f[L.F_T], f[L.F_DT] = L.NO_PROGRESS, t, self.clock[L.DT]
-            f[L.F_VALUE] = self.count[L.STEP] - steps
+            f = self.arrays.fail
+            f[L.F_CODE], f[L.F_T], f[L.F_DT] = L.NO_PROGRESS, t, clock[L.DT]
+            f[L.F_VALUE] = count[L.STEP] - steps
             code = L.FAILED
         return code
 
@@ -374,7 +361,7 @@ class Run:
         """The rows in the buffers as a Block (``code``: that of the call that filled them);
         the loop starts the next block empty, in the same buffers (drain the block first)."""
         block = Block(self, code)
-        self.count[_ROWS] = 0
+        self.arrays.count[_ROWS] = 0
         self._undrained += 1
         return block
 
@@ -403,31 +390,32 @@ class Run:
 
         It is *open* if its last episode has not ended (the rod is on the floor).
         """
-        if self.ev[L.B_NEP] <= 0:
+        if self.arrays.ev[L.B_NEP] <= 0:
             return None
         row = np.zeros(len(L.BOUNCE_ROW_COLUMNS))
-        is_open = bool(self.ev[L.IN_CONTACT])
+        is_open = bool(self.arrays.ev[L.IN_CONTACT])
         # copies and one division: the kernel's Python function (``_jit.python_function``)
-        _WRITE_BOUNCE(row, self.ev, is_open)
+        _WRITE_BOUNCE(row, self.arrays.ev, is_open)
         return row, is_open
 
     def stats(self) -> dict:
         """``Result.stats`` of the run so far (``records.stats.run_stats``)."""
         return run_stats(steps=self.steps, rejected=self.rejected,
                          compile_time=self.compile_time, run_time=self.run_time,
-                         nodes=self.system.n + 1, scheme_counts=self.sstats)
+                         nodes=self.system.n + 1, scheme_counts=self.arrays.sstats)
 
     # ---- failure -------------------------------------------------------------------------
     def failure_message(self) -> str:
-        return failure_text(self.fail, float(self.clock[L.T_END]), self.ctrl, self.config,
-                            self.rod, self.floor)
+        return failure_text(self.arrays.fail, float(self.arrays.clock[L.T_END]), self.ctrl,
+                            self.config, self.rod, self.floor)
 
     # ---- checkpoint ------------------------------------------------------------------------
     _CHECKPOINT_ARRAYS = ("state", "clock", "count", "ev", "sstats")
 
     def checkpoint(self) -> dict[str, np.ndarray]:
         """Copies of everything needed to continue (taken when the run is ``drained``)."""
-        ck = {name: getattr(self, name).copy() for name in self._CHECKPOINT_ARRAYS}
+        ck = {name: getattr(self.arrays, name).copy()
+              for name in self._CHECKPOINT_ARRAYS}
         ck["compile_time"] = np.float64(self.compile_time)
         ck["run_time"] = np.float64(self.run_time)
         return ck
@@ -438,7 +426,7 @@ class Run:
         run = cls(config, u0=np.asarray(ck["state"])[0], v0=np.asarray(ck["state"])[1], **kwargs)
         for name in cls._CHECKPOINT_ARRAYS:
             src = np.asarray(ck[name])
-            dst = getattr(run, name)
+            dst = getattr(run.arrays, name)
             if src.shape != dst.shape:
                 raise ValueError(f"checkpoint array {name!r} has shape {src.shape}, expected "
                                  f"{dst.shape} for this configuration")

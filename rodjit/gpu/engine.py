@@ -29,7 +29,7 @@ from ..driver.run import NODE_STEPS_PER_CALL
 from ..driver.setup import start, starts
 from ..model.laws import get_law
 from .._jit import Kernel
-from ..stepping import layout as L
+from ..stepping.arrays import BUFFERS, SPEC, shape
 from ..stepping import trajectory as T
 from ..stepping.packing import pack
 from ..sweeps import decode
@@ -132,12 +132,10 @@ def _launch(runs, cuda):
     ev0 = np.stack([r.ev() for r in runs])
     k = make_kernel(fam)
     d = cuda.to_device
-    out = [d(params), d(state0), d(clock0), d(ev0),
-           cuda.device_array((n, cs)), cuda.device_array((n, cs), np.int64),
-           cuda.device_array((n, cs, n1)), cuda.device_array((n, cs, n1)),
-           cuda.device_array((n, cd, len(L.DIAG_COLUMNS))),
-           cuda.device_array((n, EVENT_ROWS, len(L.EPISODE_COLUMNS))),
-           cuda.device_array((n, EVENT_ROWS, len(L.BOUNCE_ROW_COLUMNS))),
+    # the output buffers of the points' arrays (``stepping.arrays``): a row of each per point
+    size = {"n1": n1, "snapshots": cs, "diagnostics": cd, "events": EVENT_ROWS}
+    buffers = [cuda.device_array((n, *shape(name, size)), SPEC[name][0]) for name in BUFFERS]
+    out = [d(params), d(state0), d(clock0), d(ev0), *buffers,
            cuda.device_array((n, BOUNCE_ROWS, T.BOUT_SIZE)),
            cuda.device_array((n, T.F_SIZE)), d(np.zeros((n, T.I_SIZE), np.int64))]
     threads = min(THREADS, n) if not simulated() else min(32, n)
@@ -146,7 +144,7 @@ def _launch(runs, cuda):
     _compile(k, fam, runs[0].config)
     t1 = time.perf_counter()
     k[(n + threads - 1) // threads, threads](*out, max_steps)
-    fout, iout, brows = out[12].copy_to_host(), out[13].copy_to_host(), out[11].copy_to_host()
+    brows, fout, iout = (a.copy_to_host() for a in out[-3:])
     t2 = time.perf_counter()
     return fout, iout, brows, t1 - t0, t2 - t1
 
@@ -269,9 +267,10 @@ def run_batch(configs, index) -> BatchResult:
 def _bytes_per_point(run) -> int:
     cs, cd = _capacities(run)
     n1 = run.system.n + 1
-    return 8 * (cs * (2 + 2 * n1) + cd * len(L.DIAG_COLUMNS)
-                + EVENT_ROWS * (len(L.EPISODE_COLUMNS) + len(L.BOUNCE_ROW_COLUMNS))
-                + BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1)
+    size = {"n1": n1, "snapshots": cs, "diagnostics": cd, "events": EVENT_ROWS}
+    buffers = sum(SPEC[name][0].itemsize * int(np.prod(shape(name, size)))
+                  for name in BUFFERS)
+    return buffers + 8 * (BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1)
 
 
 def _worker(cuda) -> dict:

@@ -27,7 +27,8 @@ from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping import packing as P
 from ..stepping import trajectory as T
-from ..stepping.schemes import SCHEME_STATS, work_rows
+from ..stepping.arrays import BUFFERS, SPEC, RunArrays, shape
+from ..stepping.schemes import work_rows
 from ._cuda import import_cuda
 
 __all__ = ["Family", "family_of", "make_kernel", "compile_ptx", "simulated",
@@ -67,52 +68,52 @@ def _source(family: Family) -> str:
     fields = [f"    t{k} = {x}"
               for k, x in enumerate(P.rebuild_source(family.kinds, "p", names))]
     n1 = family.n1
-    zero = "\n".join(f"    for j in range({size}):\n        {name}[j] = 0"
-                     for name, size in (("sstats", max(1, len(SCHEME_STATS))),
-                                        ("count", L.COUNT_SIZE), ("fail", L.FAIL_SIZE)))
+    # the run's arrays (``stepping.arrays``): the output buffers are the point's rows of
+    # the kernel's arguments, the others local arrays, zeroed, then the state's u and v
+    # rows, the clock and ev rows from the point's
+    size = {"n1": n1, "work": family.work_rows}
+    local = []
+    for name in RunArrays._fields:
+        if name in BUFFERS:
+            continue
+        dt, _ = SPEC[name]
+        dims = shape(name, size)
+        local.append(f"    {name} = cuda.local.array({dims}, {dt.name})")
+        index = ", ".join(f"j{d}" for d in range(len(dims)))
+        for d, n in enumerate(dims):
+            local.append(f"    {'    ' * d}for j{d} in range({n}):")
+        local.append(f"    {'    ' * len(dims)}{name}[{index}] = 0")
+    buffers = ", ".join(BUFFERS)
+    fields_of = ", ".join(f"{name}[i]" if name in BUFFERS else name
+                          for name in RunArrays._fields)
+    nl = "\n"
     return f"""
-def sweep_kernel(params, state0, clock0, ev0, snap_t, snap_step, snap_u, snap_v, diag,
-                 episodes, bounces, bounce_out, fout, iout, max_steps):
+def sweep_kernel(params, state0, clock0, ev0, {buffers},
+                 bounce_out, fout, iout, max_steps):
     i = cuda.grid(1)
     if i >= params.shape[0]:
         return
     p = params[i]
-{chr(10).join(fields)}
-    state = cuda.local.array((3, {n1}), float64)
-    trial = cuda.local.array((3, {n1}), float64)
-    work = cuda.local.array(({family.work_rows}, {n1}), float64)
-    interp = cuda.local.array((2, {n1}), float64)
-    sstats = cuda.local.array({max(1, len(SCHEME_STATS))}, int64)
-    clock = cuda.local.array({L.CLOCK_SIZE}, float64)
-    count = cuda.local.array({L.COUNT_SIZE}, int64)
-    ev = cuda.local.array({L.EV_SIZE}, float64)
-    fail = cuda.local.array({L.FAIL_SIZE}, float64)
+{nl.join(fields)}
+{nl.join(local)}
     imp = cuda.local.array({S.SIZE}, float64)
     for j in range({n1}):
         state[0, j] = state0[i, 0, j]
         state[1, j] = state0[i, 1, j]
-        state[2, j] = 0.0
-        for r in range(3):
-            trial[r, j] = 0.0
-        for r in range(2):
-            interp[r, j] = 0.0
-        for r in range({family.work_rows}):
-            work[r, j] = 0.0
     for j in range({L.CLOCK_SIZE}):
         clock[j] = clock0[i, j]
     for j in range({L.EV_SIZE}):
         ev[j] = ev0[i, j]
-{zero}
-    run_one(t0, t1, t2, t3, t4, state, trial, work, interp, sstats, clock, count, ev,
-            snap_t[i], snap_step[i], snap_u[i], snap_v[i], diag[i], episodes[i], bounces[i],
-            fail, imp, bounce_out[i], fout[i], iout[i], max_steps)
+    arrays = RunArrays({fields_of})
+    run_one(t0, t1, t2, t3, t4, arrays, imp, bounce_out[i], fout[i], iout[i], max_steps)
 """
 
 
 def _namespace(family: Family, cuda, run_one) -> dict:
     from numba import float64, int64
 
-    ns = {"cuda": cuda, "float64": float64, "int64": int64, "run_one": run_one}
+    ns = {"cuda": cuda, "float64": float64, "int64": int64, "run_one": run_one,
+          "RunArrays": RunArrays}
     ns.update({f"C{k}": cls for k, cls in enumerate(family.classes)})
     return ns
 
@@ -153,7 +154,12 @@ def _simulated_run_one(*args):
     """``run_one`` in the simulator: its device arrays unwrapped to the NumPy arrays they
     hold, so the loop's kernels run compiled for the CPU (they cannot take the simulator's
     array objects), on the thread's own rows."""
-    return T.run_one(*(getattr(a, "_ary", a) for a in args))
+    def host(a):
+        if isinstance(a, RunArrays):
+            return RunArrays(*map(host, a))
+        return getattr(a, "_ary", a)
+
+    return T.run_one(*map(host, args))
 
 
 # A GPU compile nests deeply: each device function is typed and compiled inside its
@@ -236,13 +242,17 @@ def _compute_capability(cc):
 
 
 def signature(family: Family):
-    """The Numba signature of a family's kernel (for ``compile_ptx``)."""
-    from numba import float64, int64, void
+    """The Numba signature of a family's kernel (for ``compile_ptx``): its arguments as
+    ``_source`` makes them, the output buffers as a row of each per point."""
+    from numba import float64, int64, types, void
+
+    def rows(name):
+        dt, dims = SPEC[name]
+        return types.Array(float64 if dt.name == "float64" else int64, len(dims) + 1, "C")
 
     return void(float64[:, ::1], float64[:, :, ::1], float64[:, ::1], float64[:, ::1],
-                float64[:, ::1], int64[:, ::1], float64[:, :, ::1], float64[:, :, ::1],
-                float64[:, :, ::1], float64[:, :, ::1], float64[:, :, ::1],
-                float64[:, :, ::1], float64[:, ::1], int64[:, ::1], int64)
+                *map(rows, BUFFERS), float64[:, :, ::1], float64[:, ::1], int64[:, ::1],
+                int64)
 
 
 def compile_ptx(family: Family, cc=(9, 0)) -> str:

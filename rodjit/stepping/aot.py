@@ -23,7 +23,8 @@ options as the JIT (``_jit.JIT_OPTIONS``: fused multiply-adds, no reference coun
 for the host CPU as the JIT does, so both paths give the same bits
 (tests/test_stepping_aot.py).  Its exported functions take arrays and scalars only, so a
 run's five parameter tuples travel as one float64 row (``pack``, ``stepping.packing``) and
-the generated wrappers (``wrapper_source``) rebuild them inside compiled code; the wrappers
+the generated wrappers (``wrapper_source``) rebuild them inside compiled code, and take the
+run's arrays one by one and pass them on as the loop's one ``arrays.RunArrays``; the wrappers
 release the GIL around the loop, as a JIT call does (``nogil``), so the process's other
 threads keep running while it computes.
 
@@ -45,6 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import arrays as A
 from . import packing as P
 from .._jit import SOURCES_DIGEST
 from .ensemble import run_batch
@@ -59,28 +61,38 @@ _OFF = ("0", "false", "no", "off")
 
 # the entry points: name, the loop function, the arguments after the parameter tuples
 # (as the driver passes them: ``driver.run.Run``; the sweeps' batches: ``sweeps.ensemble``)
-# with their types; each returns an int64
-_F3, _F2, _F1, _I2, _I1 = "f8[:,:,::1]", "f8[:,::1]", "f8[::1]", "i8[:,::1]", "i8[::1]"
+# with their types; each returns an int64.  ARRAYS stands for the run's arrays
+# (``arrays.RunArrays``), which an exported function takes field by field (``_expand``)
+# and its wrapper passes on as the NamedTuple
+ARRAYS = "arrays"
+_F3, _F2, _F1, _I2 = "f8[:,:,::1]", "f8[:,::1]", "f8[::1]", "i8[:,::1]"
 ENTRIES = {
-    "start": (start, (("state", _F2), ("work", _F2), ("clock", _F1), ("count", _I1),
-                      ("ev", _F1), ("snap_t", _F1), ("snap_step", _I1), ("snap_u", _F2),
-                      ("snap_v", _F2), ("diag", _F2), ("fail", _F1))),
-    "advance": (advance, (("state", _F2), ("trial", _F2), ("work", _F2), ("interp", _F2),
-                          ("sstats", _I1), ("clock", _F1), ("count", _I1), ("ev", _F1),
-                          ("snap_t", _F1), ("snap_step", _I1), ("snap_u", _F2),
-                          ("snap_v", _F2), ("diag", _F2), ("episodes", _F2),
-                          ("bounces", _F2), ("fail", _F1), ("max_steps", "i8"))),
+    "start": (start, (ARRAYS,)),
+    "advance": (advance, (ARRAYS, ("max_steps", "i8"))),
     "run_batch": (run_batch, (("params", _F2), ("init", _F3), ("clock0", _F2),
-                              ("flight", _F1), ("first", "i8"), ("state", _F2),
-                              ("trial", _F2), ("work", _F2), ("interp", _F2),
-                              ("sstats", _I1), ("clock", _F1),
-                              ("count", _I1), ("ev", _F1), ("snap_t", _F1),
-                              ("snap_step", _I1), ("snap_u", _F2), ("snap_v", _F2),
-                              ("diag", _F2), ("episodes", _F2), ("bounces", _F2),
-                              ("fail", _F1), ("imp", _F1), ("bout", _F2),
-                              ("fout", _F2), ("iout", _I2),
+                              ("flight", _F1), ("first", "i8"), ARRAYS, ("imp", _F1),
+                              ("bout", _F2), ("fout", _F2), ("iout", _I2),
                               ("max_steps", "i8"))),
 }
+
+
+def _expand(args) -> list[tuple[str, str]]:
+    """An entry's arguments (``ENTRIES``) with ARRAYS as the fields of ``RunArrays``."""
+    out: list[tuple[str, str]] = []
+    for a in args:
+        out.extend([(f, A.aot_type(f)) for f in A.RunArrays._fields] if a == ARRAYS else [a])
+    return out
+
+
+def _flat(args) -> list:
+    """Call arguments with a ``RunArrays`` as its fields: what an exported function takes."""
+    out: list = []
+    for a in args:
+        if isinstance(a, A.RunArrays):
+            out.extend(a)
+        else:
+            out.append(a)
+    return out
 
 
 def key(args) -> tuple:
@@ -131,20 +143,23 @@ def wrapper_source(args) -> tuple[str, dict]:
         names.append(f"_P{j}")
         glob[f"_P{j}"] = type(p)
     fields = P.rebuild_source(P.kinds(args, exact=True), "p", names)
+    glob["_RunArrays"] = A.RunArrays
+    run_arrays = f"_RunArrays({', '.join(A.RunArrays._fields)})"
     lines = []
     for name, (_, extra) in ENTRIES.items():
-        arrays = ", ".join(a for a, _ in extra)
+        arrays = ", ".join(a for a, _ in _expand(extra))
+        passed = ", ".join(run_arrays if a == ARRAYS else a[0] for a in extra)
         lines += [f"def {name}(p, {arrays}):",
                   f"    a0, a1, a2, a3, a4 = {', '.join(fields)}",
                   "    ts = _save_thread()",
-                  f"    code = _{name}(a0, a1, a2, a3, a4, {arrays})",
+                  f"    code = _{name}(a0, a1, a2, a3, a4, {passed})",
                   "    _restore_thread(ts)",
                   "    return code", ""]
     return "\n".join(lines), glob
 
 
 def _signature(name: str) -> str:
-    return f"i8(f8[::1], {', '.join(t for _, t in ENTRIES[name][1])})"
+    return f"i8(f8[::1], {', '.join(t for _, t in _expand(ENTRIES[name][1]))})"
 
 
 def _cpu() -> str:
@@ -263,11 +278,11 @@ class AotLoop:
         self._start, self._advance = module.start, module.advance
         self.p = pack(args)
 
-    def start(self, *arrays):
+    def start(self, arrays):
         return self._start(self.p, *arrays)
 
-    def advance(self, *arrays_and_max_steps):
-        return self._advance(self.p, *arrays_and_max_steps)
+    def advance(self, arrays, max_steps):
+        return self._advance(self.p, *arrays, max_steps)
 
 
 def _module_for(args, args_key: tuple | None):
@@ -299,7 +314,7 @@ def batch_for(args, args_key: tuple | None = None):
     p = pack(args)
     entry = module.run_batch
 
-    def call(*arrays_and_max_steps):
-        return entry(p, *arrays_and_max_steps)
+    def call(*args):
+        return entry(p, *_flat(args))
 
     return call

@@ -23,13 +23,11 @@ from .._jit import kernel
 
 @kernel
 def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, flight, first,
-              state, trial, work, interp, sstats, clock, count, ev, snap_t, snap_step,
-              snap_u, snap_v, diag, episodes, bounces, fail, imp, bout, fout, iout,
-              max_steps):
+              arrays, imp, bout, fout, iout, max_steps):
     """Run the points (rows) of ``params`` from ``first`` on; ``init[i]`` holds a point's u
-    and v rows, ``clock0[i]`` its clock, ``flight[i]`` its flight time τ.  The other arrays
-    are one point's (reused: ``Run``'s arrays and buffers, ``imp`` its first-impact state
-    of ``impact_stream.SIZE`` doubles), ``bout`` the batch's bounce rows
+    and v rows, ``clock0[i]`` its clock, ``flight[i]`` its flight time τ.  ``arrays`` and
+    ``imp`` are one point's (reused: a ``Run``'s ``arrays.RunArrays``, and its first-impact
+    state of ``impact_stream.SIZE`` doubles), ``bout`` the batch's bounce rows
     (``trajectory.BOUT_SIZE`` columns), ``fout`` and ``iout`` the points' results
     (``trajectory.F_*``, ``I_*``; ``iout`` zero before a point's first call), a point's
     rows in ``bout`` from ``iout[i, I_BSTART]``.  Returns the point that stopped with
@@ -40,11 +38,9 @@ def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, fligh
     for i in range(first, params.shape[0]):
         scheme, ctrl, system, rod, floor = rebuild(protos, params[i])
         if iout[i, T.I_STOPPED] == 0:
-            _set_up(init[i], clock0[i], flight[i], state, trial, work, interp, sstats, clock,
-                    count, ev, fail)
-        T.run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats,
-                  clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes,
-                  bounces, fail, imp, bout[nbo:], fout[i], iout[i], max_steps)
+            _set_up(init[i], clock0[i], flight[i], arrays)
+        T.run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout[nbo:], fout[i],
+                  iout[i], max_steps)
         iout[i, T.I_BSTART] = nbo
         nbo += iout[i, T.I_BOUNCES]
         if iout[i, T.I_STOPPED] != 0:
@@ -53,8 +49,18 @@ def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, fligh
 
 
 @kernel
-def _set_up(init, clock0, tau, state, trial, work, interp, sstats, clock, count, ev, fail):
-    """A point's arrays as ``Run.__init__`` leaves them."""
+def _set_up(init, clock0, tau, arrays):
+    """A point's arrays as ``Run.__init__`` leaves them (the output buffers as they are:
+    the loop writes a row before it reads it)."""
+    state = arrays.state
+    trial = arrays.trial
+    work = arrays.work
+    interp = arrays.interp
+    sstats = arrays.sstats
+    clock = arrays.clock
+    count = arrays.count
+    ev = arrays.ev
+    fail = arrays.fail
     n1 = state.shape[1]
     for r in range(state.shape[0]):
         for j in range(n1):

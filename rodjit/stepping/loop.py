@@ -92,10 +92,21 @@ def _sides_ov(scheme, floor):
 
 
 @kernel
-def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
-          snap_t, snap_step, snap_u, snap_v, diag, fail):
+def start(scheme, ctrl, system, rod, floor, arrays):
     """Initial acceleration, energy, first step proposal, contact state and the outputs
-    at t0.  Returns OK or a failure code (then ``fail`` says why)."""
+    at t0, in the run's ``arrays`` (``arrays.RunArrays``).  Returns OK or a failure code
+    (then ``arrays.fail`` says why)."""
+    state = arrays.state
+    work = arrays.work
+    clock = arrays.clock
+    count = arrays.count
+    ev = arrays.ev
+    snap_t = arrays.snap_t
+    snap_step = arrays.snap_step
+    snap_u = arrays.snap_u
+    snap_v = arrays.snap_v
+    diag = arrays.diag
+    fail = arrays.fail
     u = state[0]
     v = state[1]
     a = state[2]
@@ -124,15 +135,29 @@ def start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
 
 
 @kernel
-def advance(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats, clock,
-            count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail,
-            max_steps):
-    """Step from the state in ``state`` (u, v, a rows) and leave the new state there;
-    ``trial`` (3 rows) holds the trial states, ``interp`` (2 rows) the interpolated (u, v)
-    of a dense output (module docstring).
+def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
+    """Step from the state in ``arrays.state`` (u, v, a rows) and leave the new state
+    there; ``arrays.trial`` (3 rows) holds the trial states, ``arrays.interp`` (2 rows) the
+    interpolated (u, v) of a dense output (module docstring; ``arrays.RunArrays``).
 
     Returns layout.DONE, FULL, PAUSED or FAILED.
     """
+    state = arrays.state
+    trial = arrays.trial
+    work = arrays.work
+    interp = arrays.interp
+    sstats = arrays.sstats
+    clock = arrays.clock
+    count = arrays.count
+    ev = arrays.ev
+    snap_t = arrays.snap_t
+    snap_step = arrays.snap_step
+    snap_u = arrays.snap_u
+    snap_v = arrays.snap_v
+    diag = arrays.diag
+    episodes = arrays.episodes
+    bounces = arrays.bounces
+    fail = arrays.fail
     cur = state
     nxt = trial
     swapped = False

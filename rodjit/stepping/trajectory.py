@@ -137,13 +137,20 @@ def _finite(x):
 
 
 @kernel
-def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats, clock,
-            count, ev, snap_t, snap_step, snap_u, snap_v, diag, episodes, bounces, fail,
-            imp, bout, fo, io, max_steps):
-    """Run one point from its arrays as ``Run.__init__`` leaves them (``io`` zero) to
-    t_end or its failure, or on from where it stopped (``io[I_STOPPED]``); its results in
-    ``fo``, ``io`` and the first ``io[I_BOUNCES]`` rows of ``bout`` (module docstring).
-    ``imp`` holds the first-impact state (``impact_stream.SIZE`` doubles)."""
+def run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout, fo, io, max_steps):
+    """Run one point from its ``arrays`` (``arrays.RunArrays``) as ``Run.__init__`` leaves
+    them (``io`` zero) to t_end or its failure, or on from where it stopped
+    (``io[I_STOPPED]``); its results in ``fo``, ``io`` and the first ``io[I_BOUNCES]`` rows
+    of ``bout`` (module docstring).  ``imp`` holds the first-impact state
+    (``impact_stream.SIZE`` doubles)."""
+    state = arrays.state
+    clock = arrays.clock
+    count = arrays.count
+    ev = arrays.ev
+    diag = arrays.diag
+    episodes = arrays.episodes
+    bounces = arrays.bounces
+    fail = arrays.fail
     nb = 0
     again = io[I_STOPPED] != 0
     if not again:
@@ -154,8 +161,7 @@ def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
         fo[F_MIN_STRAIN] = math.inf
         fo[F_MIN_U0] = math.inf
         fo[F_MAX_FF] = -math.inf
-        code = start(scheme, ctrl, system, rod, floor, state, work, clock, count, ev,
-                     snap_t, snap_step, snap_u, snap_v, diag, fail)
+        code = start(scheme, ctrl, system, rod, floor, arrays)
         # the outputs at t0 stay in the buffers: the first drain takes them with the first
         # call's (``sweeps.point``: ``run.start(None)``)
         io[I_CODE] = L.FAILED if code == L.FAILED else L.PAUSED
@@ -167,9 +173,7 @@ def run_one(scheme, ctrl, system, rod, floor, state, trial, work, interp, sstats
                 break
             t = clock[L.T]
             steps = count[L.STEP]
-            code = advance(scheme, ctrl, system, rod, floor, state, trial, work, interp,
-                           sstats, clock, count, ev, snap_t, snap_step, snap_u, snap_v, diag,
-                           episodes, bounces, fail, max_steps)
+            code = advance(scheme, ctrl, system, rod, floor, arrays, max_steps)
             if ((code == L.PAUSED or code == L.FULL) and count[L.STEP] > steps
                     and clock[L.T] <= t):
                 # every step of the call left t where it was (``Run.compute``)

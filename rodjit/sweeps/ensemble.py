@@ -39,7 +39,7 @@ from ..stepping import ensemble as E
 from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping import trajectory as T
-from ..stepping.schemes import SCHEME_STATS, work_rows
+from ..stepping.arrays import allocate
 from . import decode
 from .batch import BatchResult
 from .point import SUMMARY_COLUMNS, died, empty_columns, pass_on, run_point, worker_info
@@ -212,17 +212,9 @@ _LOADED: set = set()      # the families whose batch kernel this process has loa
 
 
 def _scratch(n1, scheme, cap_s, cap_d, ev_cap) -> tuple:
-    """One point's arrays of ``run_batch``, from ``state`` to ``imp`` (reused by every
-    point of the call): a Run's arrays and buffers, and the first-impact state."""
-    return (np.zeros((3, n1)), np.zeros((3, n1)), np.zeros((work_rows(scheme), n1)),
-            np.zeros((2, n1)), np.zeros(max(1, len(SCHEME_STATS)), dtype=np.int64),
-            np.zeros(L.CLOCK_SIZE), np.zeros(L.COUNT_SIZE, dtype=np.int64),
-            np.zeros(L.EV_SIZE), np.zeros(cap_s), np.zeros(cap_s, dtype=np.int64),
-            np.zeros((cap_s, n1)), np.zeros((cap_s, n1)),
-            np.zeros((cap_d, len(L.DIAG_COLUMNS))),
-            np.zeros((ev_cap, len(L.EPISODE_COLUMNS))),
-            np.zeros((ev_cap, len(L.BOUNCE_ROW_COLUMNS))), np.zeros(L.FAIL_SIZE),
-            np.zeros(S.SIZE))
+    """One point's arrays of ``run_batch`` (reused by every point of the call): a Run's
+    arrays and buffers (``stepping.arrays``), and the first-impact state."""
+    return allocate(n1, scheme, cap_s, cap_d, ev_cap), np.zeros(S.SIZE)
 
 
 EV_CAP = 1024    # event rows of a point's scratch
