@@ -34,19 +34,14 @@ def _death_message(pid: int, code: int | None) -> str:
 
 def _die_with_parent() -> None:
     """End this worker the moment the sweep's process dies, even by SIGKILL, whatever the
-    worker is doing: on Linux the kernel kills a spawned worker with its parent
-    (``PR_SET_PDEATHSIG``); and a thread waits on the parent's sentinel (closed by its
-    death) and exits the process then.  The thread is what ends a worker forked from the
-    fork server, whose parent is the server: the server outlives the sweep's process while
-    any of its workers lives.  The batch kernel releases the GIL, so the thread runs
-    while the worker computes."""
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, signal.SIGKILL)       # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
+    worker is doing: a thread waits on the parent's sentinel (closed by its death) and
+    exits the process then.  It ends a worker forked from the fork server, whose parent
+    is the sweep's process for ``multiprocessing`` (the sentinel) though the server is
+    its parent for the kernel, and a spawned one alike; the batch kernel releases the GIL,
+    so the thread runs while the worker computes.  The kernel's parent-death signal
+    (``PR_SET_PDEATHSIG``) is not used: for a forked worker it fires at the server's
+    death, not the sweep's, and the thread serves both kinds of worker
+    (tests/test_sweep_start_method.py kills a sweep outright)."""
     parent = mp.parent_process()
     if parent is None:
         return
