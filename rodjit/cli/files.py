@@ -61,16 +61,11 @@ def check_picture(output: str, overwrite: bool, source: str | None = None) -> No
     a special file, and an existing file only with --overwrite
     (``output.h5files.check_output``); never the file drawn (``source``) nor any HDF5
     file, whatever its name: a picture replaces only a picture."""
-    from ..output.h5files import check_output
+    from ..output.h5files import check_output, looks_hdf5
 
     if source is not None and _same_file(output, source):
         raise UsageError(f"-o {output!r} is the file being drawn; choose another name")
-    try:
-        with open(output, "rb") as f:
-            hdf5 = f.read(8) == b"\x89HDF\r\n\x1a\n"
-    except OSError:
-        hdf5 = False
-    if hdf5:
+    if looks_hdf5(output):
         raise UsageError(f"-o {output!r} is an HDF5 file, not a picture; rodjit does not "
                          f"replace it with one (choose another name)")
     try:

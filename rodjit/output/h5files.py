@@ -28,7 +28,7 @@ from .lock import FileBusy, held_here, is_link, is_locked, left_behind
 from .writer_id import find_writer, process_tag, stamp_writer, writer_attrs
 
 __all__ = ["NotARunFile", "FileMissing", "FileCutShort", "FileLeftOpen", "FileBusy",
-           "OutputExists",
+           "OutputExists", "looks_hdf5",
            "OutputNotRegular", "OutputOtherKind", "open_file", "file_kind", "check_kind",
            "open_for_writing", "now", "history_with", "process_tag", "writer_attrs",
            "stamp_writer", "writer_alive", "writer_pid", "is_live", "check_output",
@@ -100,15 +100,24 @@ class FileLeftOpen(NotARunFile):
 _SIGNATURE = b"\x89HDF\r\n\x1a\n"
 
 
+def _head(path, size: int) -> bytes:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(size)
+    except OSError:
+        return b""
+
+
+def looks_hdf5(path) -> bool:
+    """Whether the file at ``path`` starts with HDF5's signature (read without h5py)."""
+    return _head(path, 8) == _SIGNATURE
+
+
 def left_open(path) -> bool:
     """Whether the file at ``path`` is HDF5 with a superblock (version 2 or 3, at the
     start) that still says "open for writing", not in SWMR mode: its writer never closed
     it (``FileLeftOpen``)."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(12)
-    except OSError:
-        return False
+    head = _head(path, 12)
     return (len(head) == 12 and head[:8] == _SIGNATURE and head[8] in (2, 3)
             and head[11] & 0x01 != 0 and head[11] & 0x04 == 0)
 
