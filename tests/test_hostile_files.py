@@ -60,25 +60,34 @@ def _same(got, ref) -> bool:
         np.array_equal(got[k], ref[k], equal_nan=True) for k in ref)
 
 
+def refusal(r, path, before, what: str = "") -> str | None:
+    """A command on a hostile file: never a Traceback; exit 2 is one ``Error:`` line with
+    the file as it was (``before``, its sha), returned; None where it did not refuse."""
+    assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
+    assert "Traceback" not in r.output
+    if r.exit_code != 2:
+        return None
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("Error: "), r.stderr
+    assert sha(path) == before, f"a refused {what} changed the file"
+    return lines[0]
+
+
 def check_contract(path, refs, expect_refusal: bool | None = None, info_ok=None):
     """Resume ``path`` to T_NEXT and show it: refused in one line (exit 2, the file
     untouched) or identical to an uninterrupted run.  ``expect_refusal``: True/False
     where the outcome is certain."""
     before = sha(path)
     r = invoke("run", "--resume", path, "--t-end", T_NEXT, "-q")
-    assert r.exception is None or isinstance(r.exception, SystemExit), repr(r.exception)
-    assert "Traceback" not in r.output
-    if r.exit_code == 2:
-        lines = r.stderr.strip().splitlines()
-        assert len(lines) == 1 and lines[0].startswith("Error: "), r.stderr
-        assert sha(path) == before, "a refused resume changed the file"
-        assert expect_refusal is not False, lines[0]
+    line = refusal(r, path, before, "resume")
+    if line is not None:
+        assert expect_refusal is not False, line
         i = invoke("info", path)
         assert i.exit_code in (0, 2) and (i.exception is None or
                                           isinstance(i.exception, SystemExit))
         if i.exit_code == 2:
             assert len(i.stderr.strip().splitlines()) == 1
-        return lines[0]
+        return line
     assert r.exit_code == 0, r.output
     assert expect_refusal is not True, "a corrupted checkpoint was believed"
     got = datasets(path)
