@@ -317,10 +317,10 @@ def _when_free(write: Callable[[], object], table: SweepTable, points: int, stop
                said: bool) -> bool:
     """Run ``write`` (a write of the sweep file at the sweep's end), waiting as long as
     another process holds the file open (said once, FileHeldOpen, unless ``said``
-    already; returns whether it is said).  A SIGINT or SIGTERM while it waits ends the
-    wait: SweepInterrupted, the ``points`` finished points held for the file not written
-    (``resume=True`` runs them again)."""
-    seen = stop.count
+    already; returns whether it is said).  A SIGINT or SIGTERM ends the wait, one that
+    came while it waits or before it (the sweep was told to stop: it does not wait on a
+    reader for ever): SweepInterrupted, the ``points`` finished points held for the file
+    not written (``resume=True`` runs them again)."""
     while True:
         try:
             write()
@@ -329,7 +329,7 @@ def _when_free(write: Callable[[], object], table: SweepTable, points: int, stop
             if not said:
                 _say_held(table.path)
                 said = True
-            if stop.count != seen:
+            if stop.count:
                 signum = stop.signum
                 table.status = "interrupted"
                 table.message = (f"interrupted by {signal.Signals(signum).name} while "
