@@ -3,6 +3,7 @@ existing, ``--overwrite`` or ``--resume``: exactly one writes, the other is refu
 line (exit 2) and the file stays intact."""
 from __future__ import annotations
 
+import os
 import signal
 import subprocess
 import sys
@@ -117,3 +118,22 @@ def test_the_lock_file_names_its_holder_and_is_dropped_on_release(tmp_path):
     assert not lock.is_locked(out)
     assert lock.lock_path(out).name == ".x.h5.lock"
     assert not lock.lock_path(out).exists()      # removed on release
+
+
+def test_a_second_writer_names_a_holder_that_has_just_taken_the_lock(tmp_path):
+    """The holder writes its id just after it takes the lock; a writer refused in between
+    still names it (it was told "another process" by chance)."""
+    import fcntl
+    import threading
+
+    out = tmp_path / "x.h5"
+    fd = os.open(lock.lock_path(out), os.O_RDWR | os.O_CREAT, 0o644)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)   # taken, no id written yet
+        late = threading.Timer(0.2, lambda: os.pwrite(fd, b"4242\n", 0))
+        late.start()
+        with pytest.raises(lock.FileBusy, match="being written by process 4242 "):
+            lock.WriterLock(out).acquire()
+        late.join()
+    finally:
+        os.close(fd)

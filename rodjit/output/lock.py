@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import fcntl
 import os
+import time
 from pathlib import Path
 
 __all__ = ["FileBusy", "lock_path", "WriterLock", "is_locked", "held_here", "left_behind",
@@ -69,7 +70,7 @@ class WriterLock:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
-                holder = _holder(fd)
+                holder = _holder(fd, wait=1.0)
                 os.close(fd)
                 raise FileBusy(f"{str(self.path)!r} is being written by "
                                f"{f'process {holder}' if holder else 'another process'} (a "
@@ -115,13 +116,21 @@ class WriterLock:
         self.release()
 
 
-def _holder(fd: int) -> str:
-    """The process id the lock file's holder wrote into it ("" if none)."""
-    try:
-        text = os.pread(fd, 32, 0).decode().strip()
-    except (OSError, UnicodeDecodeError):
-        return ""
-    return text if text.isdigit() else ""
+def _holder(fd: int, wait: float = 0.0) -> str:
+    """The process id the lock file's holder wrote into it ("" if none).
+
+    A holder writes its id just after it takes the lock, so a second writer that finds the
+    lock taken waits up to ``wait`` seconds for the id to appear: without it, two writers
+    started together were told "another process" or "process N" by chance."""
+    deadline = time.monotonic() + wait
+    while True:
+        try:
+            text = os.pread(fd, 32, 0).decode().strip()
+        except (OSError, UnicodeDecodeError):
+            return ""
+        if text.isdigit() or time.monotonic() >= deadline:
+            return text if text.isdigit() else ""
+        time.sleep(0.01)
 
 
 def is_locked(path) -> bool:
