@@ -7,14 +7,16 @@ import pytest
 import rodjit
 
 
-@pytest.mark.slow
 def test_default_run_keeps_energy_over_200_s_at_mu_0():
     cfg = rodjit.Config().override({"time.t_end": 200.0, "output.snapshot_interval": 0.0,
                                     "output.diagnostics_interval": 0.05})
-    assert cfg.rod.mu == 0.0 and cfg.time.integrator == "energy"
+    # "auto" chooses dop853 with its tolerances divided by the run's length
+    assert cfg.rod.mu == 0.0 and cfg.time.integrator == "auto"
+    assert cfg.resolve().time.integrator == "dop853"
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", rodjit.config.ModelWarning)
         res = rodjit.simulate(cfg)
+    assert res.config.time.rtol == cfg.time.rtol / 200.0
     e = np.asarray(res.diagnostics["energy_total"])
     assert res.t_final == pytest.approx(200.0)
     assert res.n_bounces > 100

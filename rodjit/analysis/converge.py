@@ -356,6 +356,8 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
     base = Config() if config is None else config
     if not isinstance(base, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(base).__name__}")
+    # "auto" chooses once: every rung runs the base's integrator
+    base = base.resolve()
     ladder = {"rod.N": [25, 50, 100, 200, 400]} if ladder is None else ladder
     key, values = check_ladder("ladder", ladder, base)
     check_time_key("ladder", key, base)

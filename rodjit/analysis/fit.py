@@ -262,6 +262,8 @@ def fit(key: str, target: Mapping[str, float], config: Config | None = None, *,
     base = Config() if config is None else config
     if not isinstance(base, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(base).__name__}")
+    # "auto" chooses once: every trial runs the base's integrator
+    base = base.resolve()
     name, goal = _check_target(target)
     try:
         lo, hi = (float(b) for b in bracket)

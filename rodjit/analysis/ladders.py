@@ -44,7 +44,7 @@ def step_keys(base) -> tuple[str, ...]:
     ``Scheme.step_keys`` under its ``time.control`` and ``time.dt``)."""
     from ..stepping.registry import get
 
-    return get(base.time.integrator).steps_of(base.time)
+    return get(base.resolve().time.integrator).steps_of(base.time)
 
 
 def check_time_key(name: str, key: str, base) -> None:
@@ -54,7 +54,7 @@ def check_time_key(name: str, key: str, base) -> None:
     keys = step_keys(base)
     if key in keys:
         return
-    tc = base.time
+    tc = base.resolve().time
     why = ("with the fixed step time.dt" if tc.dt is not None else
            f"under time.control = {tc.control!r}")
     raise ValueError(f"{name}: {key} does not set the steps of time.integrator = "
@@ -77,7 +77,7 @@ def cap_key(base, t_key):
     the time ladder was over a tolerance and a cap can bind; None otherwise."""
     from ..stepping.registry import get
 
-    entry = get(base.time.integrator)
+    entry = get(base.resolve().time.integrator)
     if t_key not in ("time.rtol", "time.atol") or base.time.dt is not None:
         return None
     return next((k for k in entry.cap_keys if k != t_key), None)
@@ -86,7 +86,7 @@ def cap_key(base, t_key):
 def cap_text(base) -> str:
     from ..stepping.registry import get
 
-    return "its step cap (" + get(base.time.integrator).cap + ")"
+    return "its step cap (" + get(base.resolve().time.integrator).cap + ")"
 
 
 def default_time_ladder(base) -> dict:

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
+from ..stepping.registry import AUTO, choose
 from .checks import CROSS_CHECKS, RUN_CHECKS, model_warnings, setup_warnings
 from .errors import ConfigError
 from .keys import FIELDS, parse_value, strip_quotes, unknown_key_error
@@ -68,6 +69,10 @@ class Config:
     initial: InitialConfig = field(default_factory=InitialConfig)
     time: TimeConfig = field(default_factory=TimeConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    # How ``time.integrator`` was chosen where the user asked for "auto" (``resolve``): one
+    # line naming the row of the registry's table; "" otherwise.  Not a key: it travels
+    # beside the configuration (the summary, ``rodjit info``, run and sweep files)
+    choice: str = field(default="", compare=False, repr=False)
 
     def __post_init__(self) -> None:
         for name, cls in SECTIONS.items():
@@ -89,7 +94,7 @@ class Config:
             the rod never comes down to the floor (no impact), a ``floor.beta`` at least
             the rod's length.
         """
-        return (model_warnings(self.rod.mu, self.rod.gamma, self.time.integrator)
+        return (model_warnings(self.rod.mu, self.rod.gamma, self.resolve().time.integrator)
                 + setup_warnings(self.gravity.g, self.initial.height, self.initial.velocity,
                                  self.floor.beta))
 
@@ -107,8 +112,47 @@ class Config:
         ValueError
             Such a configuration, naming the key that does set its steps.
         """
+        resolved = self.resolve()
         for keys, check in RUN_CHECKS:
-            check(*(self.get(key) for key in keys))
+            check(*(resolved.get(key) for key in keys))
+
+    def chosen(self, choice: str) -> "Config":
+        """This configuration with ``choice`` as its record of how "auto" chose the
+        integrator (as a file stores it beside the configuration)."""
+        return dataclasses.replace(self, choice=choice) if choice != self.choice else self
+
+    def resolve(self) -> "Config":
+        """The configuration a run takes: ``time.integrator = "auto"`` replaced by the
+        integrator the registry's table picks for this rod (``registry.choose``: by rod.mu,
+        rod.gamma and rod.N; on a conservative rod, μ = γ = 0, the tolerances divided by
+        the run's length in seconds, so the energy stays within 1e-6 over long runs), with
+        ``choice`` saying which row chose it; any other configuration as it is.
+
+        A study resolves its base configuration once, so its points, rungs and trials (and
+        a resume) keep one integrator: a ``rod.mu`` sweep from μ = 0 to 10 runs the
+        integrator chosen at μ = 0 throughout.
+
+        Returns
+        -------
+        Config
+            ``self`` when ``time.integrator`` names an integrator, else a new configuration.
+
+        Examples
+        --------
+        >>> Config().resolve().time.integrator
+        'dop853'
+        >>> Config().override({"rod.mu": 100.0}).resolve().time.integrator
+        'radau5'
+        """
+        t = self.time
+        if t.integrator != AUTO:
+            return self
+        name, rtol, atol, why = choose(self.rod.mu, self.rod.gamma, self.rod.N, t.t_end,
+                                       t.rtol, t.atol)
+        changes: dict[str, Any] = {"time.integrator": name}
+        if rtol != t.rtol:
+            changes.update({"time.rtol": rtol, "time.atol": atol})
+        return self._replaced(changes, text=False).chosen(why)
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "Config":
@@ -255,7 +299,9 @@ class Config:
         rebuilt: dict[str, Any] = {name: (cls(**sections[name]) if name in sections
                                           else getattr(self, name))
                                    for name, cls in SECTIONS.items()}
-        return Config(**rebuilt)
+        # the choice of "auto" holds while the keys it set are the ones it chose
+        keep = self.choice and not _CHOSEN_KEYS.intersection(changes)
+        return Config(**rebuilt, choice=self.choice if keep else "")
 
     # ---- export -------------------------------------------------------------------------
     def to_dict(self) -> dict[str, dict[str, Any]]:
@@ -330,6 +376,9 @@ class Config:
     def _repr_html_(self) -> str:
         from .._display import html_table
         return html_table(*self._overview())
+
+
+_CHOSEN_KEYS = frozenset({"time.integrator", "time.rtol", "time.atol"})
 
 
 def _short(value: Any) -> str:

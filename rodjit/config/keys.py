@@ -28,9 +28,11 @@ COMPRESSIONS = ("gzip", "lzf", "none")
 
 
 def registered_integrators() -> tuple[str, ...]:
-    """The integrators registered now (``registry.register`` adds to the built-in ones)."""
+    """The values ``time.integrator`` takes: ``"auto"`` (the registry's choice per study,
+    ``registry.AUTO_TABLE``) and the integrators registered now (``registry.register``
+    adds to the built-in ones)."""
     from ..stepping import registry
-    return registry.NAMES
+    return (registry.AUTO,) + registry.NAMES
 
 
 class KeySpec:
@@ -252,7 +254,9 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
     },
     "time": {
         "t_end": KeySpec("float", "> 0", _pos, meaning="time at which the run ends", unit="s"),
-        "integrator": KeySpec("str", choices=registered_integrators, meaning="time integrator"),
+        "integrator": KeySpec("str", choices=registered_integrators,
+                              meaning="time integrator; 'auto' picks the fastest for the "
+                                      "regime (rod.mu, rod.gamma, rod.N) once per study"),
         "cfl": KeySpec("float", "in (0, 1]", lambda c: 0 < c <= 1, unit="1",
                        meaning="fraction of the stability limit taken as the step (verlet, "
                                "semi-implicit with time.control = 'cfl')"),

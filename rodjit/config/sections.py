@@ -118,7 +118,8 @@ class InitialConfig(Section):
 class TimeConfig(Section):
     """Time span and stepping; ``dt`` set means fixed steps, unset means adaptive.
 
-    ``integrator`` is one of ``INTEGRATORS`` (see *Choosing an integrator*); ``control``
+    ``integrator`` is ``"auto"`` (``Config.resolve`` picks one from the registry's table)
+    or one of ``INTEGRATORS`` (see *Choosing an integrator*); ``control``
     (``verlet`` and ``semi-implicit``) is ``"tolerance"`` (steps from ``rtol``/``atol``,
     stability as a cap) or ``"cfl"`` (``cfl`` times the stability limit); ``dt_min`` must
     be below ``dt_max``."""
@@ -126,7 +127,7 @@ class TimeConfig(Section):
     SECTION: ClassVar[str] = "time"
 
     t_end: float = 5.0
-    integrator: str = "energy"
+    integrator: str = "auto"
     cfl: float = 0.05
     control: str = "tolerance"
     dt_max: float | None = None

@@ -180,7 +180,8 @@ class RunPlan:
         lines.append(f"memory       about {format_size(e.memory_bytes)}")
         lines.append(f"steps        {e.steps:.6g} fixed steps of time.dt = {c.time.dt:g}"
                      if e.steps is not None else
-                     f"steps        adaptive ({c.time.integrator})")
+                     f"steps        adaptive ({c.time.integrator}"
+                     + (f", {c.choice})" if c.choice else ")"))
         return "\n".join(lines)
 
 
@@ -225,6 +226,7 @@ def plan_run(config: Config | None = None, path: str | os.PathLike[str] | None =
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     if t_end is not None:
         config = config.override({"time.t_end": t_end})
+    config = config.resolve()        # "auto": the integrator this run takes, chosen once
     _check_interval(flush_interval)
     replaces = False
     if path is not None:

@@ -176,10 +176,11 @@ class Run:
 
     def __init__(self, config, *, u0=None, v0=None, snapshot_capacity=None,
                  diag_capacity=None, event_capacity=1024):
-        self.config = config
-        # its parameter tuples, initial state (checked admissible), clock row at the start
-        # and flight time (``driver.setup``): the arrays are copied, the tuples shared
+        # its configuration (``Config.resolve``: an "auto" integrator chosen), parameter
+        # tuples, initial state (checked admissible), clock row at the start and flight
+        # time (``driver.setup``): the arrays are copied, the tuples shared
         s = set_up(config, u0, v0)
+        self.config = config = s.config
         self.scheme, self.ctrl, self.system, self.rod, self.floor = s.params()
         n1 = config.rod.N + 1
         snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,

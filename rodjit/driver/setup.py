@@ -197,7 +197,10 @@ def start(config, u0=None, v0=None) -> Start:
     """A point's ``Start`` (module docstring), raising what its set-up raises, in the order
     of its checks: the run checks (``Config.check_runnable``), the laws' parameters, the
     flight time, the scheme and control, the initial state (from ``u0``/``v0`` where given,
-    checked admissible under the name ``u0`` then, and not kept), the clock row."""
+    checked admissible under the name ``u0`` then, and not kept), the clock row.  A
+    configuration with ``time.integrator = "auto"`` starts as ``Config.resolve`` makes it
+    (``Start.config``): a study resolves its base before, so its points agree."""
+    config = config.resolve()
     n = config.rod.N
     rod_t, time_t = _token(config.rod), _token(config.time)
     _get("runnable", (time_t, rod_t), config.check_runnable)
@@ -241,6 +244,7 @@ def _stepping(config, time_t) -> tuple:
 def parameters(config) -> tuple:
     """``(scheme, control, system, rod law, floor law)``: the parameter tuples the compiled
     loop takes for ``config`` (no run checks, no initial state)."""
+    config = config.resolve()
     system, rod, floor, _ = _body(config, _token(config.rod))
     return (*_stepping(config, _token(config.time)), system, rod, floor)
 

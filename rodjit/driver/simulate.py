@@ -62,6 +62,7 @@ def simulate(config: Config | None = None, *, u0: ArrayLike | None = None,
         config = Config()
     elif not isinstance(config, Config):
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
+    config = config.resolve()       # "auto": the integrator this run takes
     # the one estimate of every run (``rodjit run``'s): refused before anything is allocated
     check_run(config, None, max_output=max_output, max_steps=max_steps,
               what="the run's result (in memory)")

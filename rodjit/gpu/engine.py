@@ -83,6 +83,7 @@ def check_device() -> None:
 
 def check_point(config) -> None:
     """GpuUnsupported (one line) for a point the GPU engine does not run."""
+    config = config.resolve()
     n = config.rod.N
     if n > N_MAX:
         raise GpuUnsupported(f"rod.N = {n} is out of range for device = 'cuda' (1 to "

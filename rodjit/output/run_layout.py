@@ -223,6 +223,8 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
             "config_toml": config.to_toml(), "status": "running", "message": "",
             **writer_attrs(),
             **cf.root_attrs(f"rodjit run: rod of {config.rod.N} segments dropped on a floor")}
+    if config.choice:         # how "auto" chose the integrator (``Config.resolve``)
+        base["integrator_choice"] = config.choice
     base.update(attrs)
     for key, value in base.items():
         _attr(f, key, value)

@@ -57,10 +57,12 @@ def check_run_file(f: h5py.File, path=None) -> None:
 
 
 def read_config(f: h5py.File) -> Config:
-    """The configuration the file's run runs (root attribute ``config_toml``)."""
+    """The configuration the file's run runs (root attribute ``config_toml``; with the
+    ``integrator_choice`` of a run whose integrator "auto" chose, ``Config.choice``)."""
     with damaged(f.filename):
         text = f.attrs["config_toml"]
-    return Config.from_stored_toml(text)
+        choice = f.attrs.get("integrator_choice", "")
+    return Config.from_stored_toml(text).chosen(str(choice))
 
 
 def read_checkpoint(f: h5py.File) -> dict:

@@ -50,6 +50,8 @@ class RunFacts:
         bounces = f"{n}" + (f" (restitution {', '.join(e)}{', ...' if n > len(e) else ''})"
                             if n else "")
         rows = [("time", f"{self.t_start:.6g} to {self.t:.6g} of {self.t_end:.6g} s"),
+                *((("integrator", f"{self.config.time.integrator}, {self.config.choice}"),)
+                  if self.config.choice else ()),
                 ("bounces", bounces),
                 (energy_label(self.config.rod.mu), number(self.energy_error, ".3g")),
                 ("steps", f"{self.steps} ({self.rejected} rejected)"),
@@ -83,6 +85,8 @@ class RunFacts:
         c = self.config
         lines = [f"{self.name}: {self.status} at t = {self.t:.6g} of {self.t_end:.6g} "
                  f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
+        if c.choice:
+            lines.append(f"  integrator {c.time.integrator}, {c.choice}")
         if self.message:
             lines.append(f"  {self.message}")
         lines.extend(f"  warning: {w}" for w in self.warnings)

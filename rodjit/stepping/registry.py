@@ -23,6 +23,7 @@ from typing import Any, Callable
 from . import workspace
 
 __all__ = ["Scheme", "SCHEMES", "NAMES", "SCHEME_STATS", "TIME_KEYS", "get", "entry_of",
+           "AUTO", "AUTO_TABLE", "AUTO_SPAN", "AUTO_RTOL_MIN", "Choice", "choose",
            "load", "make_scheme", "counter_index", "register"]
 
 # the configuration keys that can set the length of a step
@@ -221,3 +222,61 @@ def make_scheme(time_config):
     entry = get(time_config.integrator)
     _, params = load(entry)
     return entry.build(time_config, params)
+
+
+# ---- time.integrator = "auto" ---------------------------------------------------------
+AUTO = "auto"
+
+# A conservative rod (μ = γ = 0) keeps its energy only as well as its steps do: the drift
+# of a local tolerance grows with the run (dop853 at rtol 1e-6 drifts 3.2e-4 of the energy
+# over 200 s of the default run), so ``auto`` divides the tolerances by the run's length in
+# units of AUTO_SPAN (at 200 s: 5e-9, drift 4e-7; benchmarks/energy_drift.py).
+AUTO_SPAN = 1.0          # s: about one bounce period of the paper's drop from 1 m
+AUTO_RTOL_MIN = 1e-12    # not below: the pairs' error estimates drown in round-off there
+
+
+@dataclass(frozen=True)
+class Choice:
+    """One row of the table ``time.integrator = "auto"`` reads (``AUTO_TABLE``): the
+    integrator it picks in a regime, and the measurement that justifies the row."""
+
+    when: str                                       # the regime, in configuration keys
+    integrator: str
+    evidence: str                                   # the benchmark that measured it
+    test: Callable[[float, float, int], bool]       # (rod.mu, rod.gamma, rod.N)
+
+
+AUTO_TABLE: tuple[Choice, ...] = (
+    Choice("rod.mu = 0 and rod.gamma = 0", "dop853",
+           "work_precision.py: the explicit pairs are fastest at every N and floor measured "
+           "(dop853, or dp54 within 1.2–1.7× of it)",
+           lambda mu, gamma, n: mu == 0.0 and gamma == 0.0),
+    Choice("rod.mu ≤ 1, rod.gamma = 0 and rod.N ≤ 5", "dop853",
+           "work_precision.py: at μ = 1, N = 5 the pairs beat radau5 (within 1.0–1.4× of "
+           "each other)",
+           lambda mu, gamma, n: mu <= 1.0 and gamma == 0.0 and n <= 5),
+    Choice("the other rods (rod.mu > 0 or rod.gamma > 0)", "radau5",
+           "work_precision.py: radau5 is fastest at μ = 1 (N ≥ 20) and μ = 100 at every N "
+           "and floor (the runner-up 1.4–33× dearer); the pairs' steps are capped by the "
+           "viscous and γ/h⁴ stiffness",
+           lambda mu, gamma, n: True),
+)
+
+
+def choose(mu: float, gamma: float, n: int, t_end: float, rtol: float,
+           atol: float) -> tuple[str, float, float, str]:
+    """What ``time.integrator = "auto"`` runs: ``(integrator, rtol, atol, why)``.
+
+    The first row of ``AUTO_TABLE`` whose regime holds picks the integrator; on a
+    conservative rod (μ = γ = 0) the tolerances are divided by ``t_end / AUTO_SPAN``
+    when the run is longer than that (not below ``AUTO_RTOL_MIN``), so the energy's drift
+    stays bounded over long runs.
+    ``why`` is one line for the summary and the file.
+    """
+    row = next(c for c in AUTO_TABLE if c.test(mu, gamma, n))
+    why = f"chosen by 'auto' for {row.when}"
+    if mu == 0.0 and gamma == 0.0 and t_end > AUTO_SPAN:
+        factor = min(t_end / AUTO_SPAN, max(1.0, rtol / AUTO_RTOL_MIN))
+        rtol, atol = rtol / factor, atol / factor
+        why += f"; tolerances / {factor:.3g} to hold the energy over {t_end:g} s"
+    return row.integrator, rtol, atol, why

@@ -151,7 +151,8 @@ def plan_sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | No
         raise TypeError(f"config must be a rodjit.Config, not {type(config).__name__}")
     if grid is None:
         raise ValueError("a sweep needs a grid, e.g. {'rod.mu': [0, 1, 10]}")
-    base = config if config is not None else Config()
+    # "auto" chooses once for the study: every point runs the base's integrator
+    base = (config if config is not None else Config()).resolve()
     grid = Grid.from_spec(grid, max_points=max_points)
     grid.validate(base)
     worst_index, worst, runs_bytes = _points(base, grid, max_steps)

@@ -72,7 +72,7 @@ def _open_resume(output, config, grid, max_points):
         raise FileBusy(f"{str(output)!r} is being written by a running sweep on this machine "
                        f"(process {pid}); stop it before resuming")
     base, file_grid = header["base"], header["grid"]
-    if config is not None and config != base:
+    if config is not None and config.resolve() != base:
         differ = sorted(k for k, v in config.flat().items() if base.flat()[k] != v)
         raise ResumeMismatch(output, "configuration", ", ".join(differ))
     if grid is not None and Grid.from_spec(grid, max_points=max_points) != file_grid:

@@ -245,6 +245,7 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
         for key, value in {"rodjit_kind": KIND, "format_version": FORMAT_VERSION,
                            "rodjit_version": __version__, "created": now(),
                            "command": command, "base_config_toml": base.to_toml(),
+                           "base_integrator_choice": base.choice,
                            "grid": grid.to_json(), "grid_keys": list(grid.keys),
                            "n_points": n,
                            "header_digest": digest,
@@ -443,7 +444,9 @@ def read_header(f: h5py.File) -> dict:
     if int(n) != len(grid):
         raise NotARunFile(f"{name!r} fails its integrity check: it claims {int(n)} points, "
                           f"its grid has {len(grid)}")
-    return {"base": Config.from_stored_toml(base_toml), "grid": grid, "attrs": attrs,
+    base = Config.from_stored_toml(base_toml).chosen(
+        str(attrs.get("base_integrator_choice", "")))
+    return {"base": base, "grid": grid, "attrs": attrs,
             "row_digests": rows}
 
 
