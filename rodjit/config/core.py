@@ -49,6 +49,10 @@ class Config:
         Time span, integrator and step control (``time.*``).
     output : OutputConfig
         Output schedule and compression (``output.*``).
+    choice : str
+        How ``time.integrator`` was chosen where the user asked for ``"auto"``
+        (``resolve``): one line naming the row of the registry's table, "" otherwise.  Not
+        a configuration key and not compared: it travels beside the configuration.
 
     Raises
     ------
@@ -117,8 +121,18 @@ class Config:
             check(*(resolved.get(key) for key in keys))
 
     def chosen(self, choice: str) -> "Config":
-        """This configuration with ``choice`` as its record of how "auto" chose the
-        integrator (as a file stores it beside the configuration)."""
+        """This configuration with another record of how "auto" chose its integrator.
+
+        Parameters
+        ----------
+        choice : str
+            The record (``Config.choice``), as a file stores it beside the configuration.
+
+        Returns
+        -------
+        Config
+            ``self`` if it already holds ``choice``, else a copy that does.
+        """
         return dataclasses.replace(self, choice=choice) if choice != self.choice else self
 
     def resolve(self) -> "Config":
