@@ -1,4 +1,5 @@
-"""The ahead-of-time compiled loop of the default run and the sweeps' batch kernel for its
+"""The ahead-of-time compiled loops of the integrators the default run chooses from
+(``aot.schemes``: the registry's ``Scheme.aot`` rows) and the sweeps' batch kernel for their
 types (``rodjit.stepping.aot``), built at install.  Everything else about the package is in
 pyproject.toml.
 
@@ -9,7 +10,8 @@ It is optional: if the compile fails (no C compiler, say), the install goes on a
 use the JIT.  An extension already in the source tree that was built from the same
 sources for this host (an earlier editable install of this checkout) is kept instead of
 compiled again (``aot.reusable``): a second ``pip install -e ".[extra]"`` took 49 s with
-the compile and 2.5 s without (2 cores, no build isolation).
+the compile of one integrator's loop (two take 73–107 s to compile, ``stepping.aot``) and
+2.5 s without (2 cores, no build isolation).
 """
 import os
 import shutil
@@ -30,9 +32,10 @@ package = types.ModuleType("rodjit")
 package.__path__ = [root]
 sys.modules["rodjit"] = package
 from rodjit.config import Config
-from rodjit.driver.run import Run
+from rodjit.driver.setup import parameters
 from rodjit.stepping import aot
-print(aot.build(out, Run(Config())._args()))
+print(aot.build(out, [parameters(Config().override({"time.integrator": name}))
+                      for name in aot.schemes()]))
 """
 
 

@@ -144,7 +144,12 @@ if aot._extension()[0] is None and hasattr(aot, "build"):
     from rodjit.config import Config
     from rodjit.driver.run import Run
     from pathlib import Path
-    aot.build(Path(aot.__file__).parent, Run(Config())._args())
+    if hasattr(aot, "schemes"):      # entries per scheme it names (setup.py); older: one set
+        from rodjit.driver.setup import parameters
+        aot.build(Path(aot.__file__).parent, [parameters(Config().override(
+            {"time.integrator": name})) for name in aot.schemes()])
+    else:
+        aot.build(Path(aot.__file__).parent, Run(Config())._args())
     print("built")
 """
 

@@ -5,12 +5,13 @@ Per integrator (``time.integrator`` of the default run, data/paper_mu0.toml): a 
 process runs ``rodjit run paper-mu0 --t-end 0.01`` with NUMBA_CACHE_DIR an empty temporary
 directory (cold), then twice more with the cache it filled (warm); the process wall time is
 measured from outside.  Where the install built the loop ahead of time
-(``rodjit.stepping.aot``: the default integrator, ``energy``), its runs use it and compile
-nothing; ``energy/jit`` runs the same integrator on the JIT (``RODJIT_AOT=0``), which is
-what every other integrator does.  The table says which loop each run used.  A second cold process per integrator records Numba's compile events
-(``numba.core.event``, "numba:compile"): each compiled function's inclusive time, and its
-exclusive time (inclusive minus the compiles nested inside it, i.e. of the functions it
-calls), so the table shows where the time goes.
+(``rodjit.stepping.aot``: the integrators ``time.integrator = "auto"`` chooses, ``dop853``
+and ``radau5``), their runs use it and compile nothing; ``dop853/jit`` runs the same
+integrator on the JIT (``RODJIT_AOT=0``), which is what every other integrator does.  The
+table says which loop each run used.  A second cold process per integrator records
+Numba's compile events (``numba.core.event``, "numba:compile"): each compiled function's
+inclusive time, and its exclusive time (inclusive minus the compiles nested inside it, i.e.
+of the functions it calls), so the table shows where the time goes.
 
 The baseline, measured in the same run: the *Numba floor*, a process that imports Numba and
 calls one cached one-line kernel (warm: loaded from the cache), the least any Numba program
@@ -21,7 +22,7 @@ Numba imports SciPy's linear algebra (``numba.np.linalg.ensure_blas``) the first
 compiled function is used, whenever SciPy is installed, so the floor and the warm starts
 depend on whether it is; the header says which (rodjit itself does not need SciPy).
 
-    python benchmarks/cold_start.py [--integrators verlet,semi-implicit,energy] [--out NAME]
+    python benchmarks/cold_start.py [--integrators dop853,radau5,energy] [--out NAME]
 """
 from __future__ import annotations
 
@@ -148,7 +149,7 @@ def recorded(cache: Path, case: str, out: Path) -> dict:
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--integrators", default="energy,energy/jit,verlet,semi-implicit",
+    ap.add_argument("--integrators", default="dop853,dop853/jit,radau5,radau5/jit,energy",
                     help="integrators (NAME/jit: on the JIT even where the install built "
                          "the ahead-of-time loop)")
     ap.add_argument("--top", type=int, default=12)

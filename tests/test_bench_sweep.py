@@ -52,6 +52,20 @@ def test_a_baseline_without_its_extension_gets_it_compiled_once(tmp_path, capsys
     assert capsys.readouterr().out == ""
 
 
+def test_a_checkout_that_names_its_schemes_gets_one_entry_set_per_scheme(tmp_path, capsys):
+    """A checkout whose ``aot`` names the schemes it compiles (``aot.schemes``) gets the
+    default run's parameters with each, as its setup.py builds them."""
+    tree = _checkout(tmp_path / "base")
+    (tree / "rodjit/stepping/aot.py").write_text(
+        _STUB["rodjit/stepping/aot.py"] + "def schemes():\n    return ('a', 'b')\n")
+    (tree / "rodjit/config.py").write_text(
+        "class Config:\n    def override(self, over):\n        return over\n")
+    (tree / "rodjit/driver/setup.py").write_text("def parameters(config):\n    return config\n")
+    bench_sweep.ahead_of_time(str(tree))
+    assert (tree / "rodjit/stepping/built").read_text() == repr(
+        [{"time.integrator": "a"}, {"time.integrator": "b"}])
+
+
 def test_a_baseline_that_cannot_compile_it_says_it_runs_on_the_jit(tmp_path, capsys):
     tree = _checkout(tmp_path / "FAIL")
     bench_sweep.ahead_of_time(str(tree))

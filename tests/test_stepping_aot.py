@@ -20,33 +20,51 @@ from conftest import assert_same_files
 import rodjit
 from rodjit.driver import run as run_module
 from rodjit.driver.run import Run
+from rodjit.driver.setup import parameters
 from rodjit.records.result import MemorySink
 from rodjit.stepping import aot
 from rodjit.stepping import layout as L
 from rodjit.stepping.arrays import RunArrays
-from rodjit.stepping.registry import NAMES
+from rodjit.stepping.registry import NAMES, SCHEMES
 
-# the default run for a simulated second and a half: flight, contact, one bounce
+# a simulated second and a half: flight, contact, one bounce
 SHORT = {"time.t_end": 1.5}
+
+
+def _scheme(name: str) -> dict:
+    return {"time.integrator": name}
+
+
+# the runs the install compiles ahead of time: the default run's types with each of the
+# registry's ``aot`` schemes (setup.py)
+def _install_runs() -> list:
+    return [parameters(rodjit.Config().override(_scheme(n))) for n in aot.schemes()]
+
+
+# paper-mu0 on dop853 and paper-mu100 on radau5, what ``time.integrator = "auto"`` chooses
+MU0 = rodjit.load_preset("paper-mu0").override({**SHORT, **_scheme("dop853")})
+MU100 = rodjit.load_preset("paper-mu100").override({**SHORT, **_scheme("radau5")})
 
 
 @pytest.fixture(scope="module")
 def built(tmp_path_factory):
-    """``(module, key, directory)`` of an extension built for the default run's types."""
+    """``(module, {key: suffix}, directory)`` of an extension built as the install builds
+    it."""
     directory = tmp_path_factory.mktemp("aot")
-    path = aot.build(directory, Run(rodjit.Config())._args())
+    path = aot.build(directory, _install_runs())
     spec = importlib.util.spec_from_file_location(aot.EXTENSION, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     record = aot.extension_record(directory)
-    return module, tuple((c, tuple(t)) for c, t in record["key"]), directory
+    tags = {tuple((c, tuple(t)) for c, t in k): suffix for suffix, k in record["entries"]}
+    return module, tags, directory
 
 
 @pytest.fixture
 def use(monkeypatch):
     """``use(built)`` makes runs find that extension; ``use(None)``: none (the JIT)."""
     def _use(ext):
-        monkeypatch.setattr(aot, "_EXT", [ext[:2] if ext is not None else (None, None)])
+        monkeypatch.setattr(aot, "_EXT", [ext[:2] if ext is not None else (None, {})])
     return _use
 
 
@@ -70,7 +88,7 @@ def test_the_wrappers_rebuild_every_schemes_parameters(integrator):
     """``pack`` and the generated wrappers round-trip each parameter tuple: same classes,
     same field values, same Python field types (what fixes the compiled signature)."""
     args = Run(rodjit.Config().override({"time.integrator": integrator}))._args()
-    source, glob = aot.wrapper_source(args)
+    source, glob = aot.wrapper_source(args, "x")
     seen = {}
     glob.update(_save_thread=lambda: "token", _restore_thread=lambda ts: seen.setdefault(
         "restored", ts))
@@ -83,7 +101,7 @@ def test_the_wrappers_rebuild_every_schemes_parameters(integrator):
     assert p.dtype == np.float64 and p.ndim == 1
     for name, (_, extra) in aot.ENTRIES.items():
         exported = aot._expand(extra)
-        assert glob[name](p, *range(len(exported))) == 7
+        assert glob[f"{name}_x"](p, *range(len(exported))) == 7
         # the exported function takes the run's arrays one by one, and the loop gets them
         # as its one RunArrays, field for field
         values = dict(zip((a for a, _ in exported), range(len(exported))))
@@ -131,8 +149,12 @@ def test_a_field_without_a_compiled_form_is_refused():
 
 
 def test_the_record_decides_its_use(monkeypatch):
-    record = {"key": [], "sources": aot.SOURCES_DIGEST, **aot._host()}
+    record = {"entries": [], "sources": aot.SOURCES_DIGEST, **aot._host()}
     assert aot._usable(record)
+    # a record of one entry set (an extension of one scheme's types, before the entries
+    # were named per scheme) is not this module's
+    old = {k: v for k, v in record.items() if k != "entries"}
+    assert not aot._usable({**old, "key": []})
     for field, other in (("sources", "0" * 40), ("numba", "0.0"), ("llvmlite", "0.0"),
                          ("cpu", "i486"), ("python", "cpython-20")):
         assert not aot._usable({**record, field: other}), field
@@ -147,8 +169,8 @@ def test_no_record_no_extension_and_the_switch(monkeypatch, tmp_path):
         monkeypatch.setattr(aot, "_EXT", [])
         monkeypatch.setenv("RODJIT_AOT", off)
         monkeypatch.setattr(aot, "extension_record", lambda directory=None: {
-            "key": [], "sources": aot.SOURCES_DIGEST, **aot._host()})
-        assert aot._extension() == (None, None)
+            "entries": [], "sources": aot.SOURCES_DIGEST, **aot._host()})
+        assert aot._extension() == (None, {})
 
 
 def test_a_failed_build_leaves_no_record(monkeypatch, tmp_path):
@@ -160,7 +182,7 @@ def test_a_failed_build_leaves_no_record(monkeypatch, tmp_path):
     (tmp_path / aot.RECORD).write_text("{}")         # a record of an earlier build
     monkeypatch.setattr(CC, "compile", fail)
     with pytest.raises(RuntimeError, match="no C compiler"):
-        aot.build(tmp_path, Run(rodjit.Config())._args())
+        aot.build(tmp_path, [Run(rodjit.Config())._args()])
     assert aot.extension_record(tmp_path) is None
 
 
@@ -171,9 +193,10 @@ def test_numba_pycc_still_builds_the_loop(built):
     from numba.pycc import CC
 
     assert callable(CC.export) and callable(CC.compile)
-    module, _, directory = built
+    module, tags, directory = built
     assert aot.reusable(directory) is not None
-    assert all(callable(getattr(module, name)) for name in aot.ENTRIES)
+    assert all(callable(getattr(module, f"{name}_{suffix}")) for name in aot.ENTRIES
+               for suffix in tags.values())
 
 
 def test_an_extension_is_reused_only_where_its_record_and_file_say_so(tmp_path):
@@ -182,7 +205,7 @@ def test_an_extension_is_reused_only_where_its_record_and_file_say_so(tmp_path):
     import sysconfig
 
     so = tmp_path / (aot.EXTENSION + sysconfig.get_config_var("EXT_SUFFIX"))
-    record = {"key": [], "sources": aot.SOURCES_DIGEST, **aot._host()}
+    record = {"entries": [], "sources": aot.SOURCES_DIGEST, **aot._host()}
     assert aot.reusable(tmp_path) is None                       # nothing there
     (tmp_path / aot.RECORD).write_text(json.dumps(record))
     assert aot.reusable(tmp_path) is None                       # a record, no file
@@ -236,19 +259,29 @@ def test_an_install_keeps_the_extension_built_for_its_sources(built, tmp_path):
 # ---- the built extension ------------------------------------------------------------------
 
 def test_the_build_records_what_it_is_tied_to(built):
-    _, key, directory = built
+    _, tags, directory = built
     record = json.loads((directory / aot.RECORD).read_text())
     assert record["sources"] == aot.SOURCES_DIGEST
     assert aot._usable(record)
-    assert key == aot.key(Run(rodjit.Config())._args())
+    # one entry set per scheme of the registry's aot rows, for the default run's types
+    assert aot.schemes() == tuple(s.name for s in SCHEMES if s.aot)
+    assert tags == {aot.key(parameters(rodjit.Config().override(_scheme(n)))): n
+                    for n in aot.schemes()}
+
+
+def test_the_integrators_built_are_the_ones_auto_chooses_from():
+    """The install builds dop853 (μ = 0) and radau5 (μ > 0), not the others."""
+    assert aot.schemes() == ("dop853", "radau5")
 
 
 @pytest.mark.parametrize("cfg", [
-    rodjit.Config().override(SHORT),
-    rodjit.load_preset("paper-mu100").override(SHORT),
-    rodjit.Config().override({**SHORT, "time.dt": 2e-4}),              # fixed steps
-    rodjit.Config().override({**SHORT, "rod.N": 40, "floor.kappa_b": 3e4}),
-], ids=["default", "paper-mu100", "fixed-dt", "N40-stiff-floor"])
+    MU0,
+    MU100,
+    rodjit.Config().override({**SHORT, **_scheme("dop853"), "time.dt": 2e-4}),  # fixed steps
+    rodjit.Config().override({**SHORT, **_scheme("radau5"), "rod.N": 40,
+                              "floor.kappa_b": 3e4}),
+], ids=["paper-mu0-dop853", "paper-mu100-radau5", "fixed-dt-dop853",
+        "N40-stiff-floor-radau5"])
 def test_the_ahead_of_time_loop_gives_the_jits_bits(built, use, cfg):
     use(built)
     run = Run(cfg)
@@ -261,14 +294,22 @@ def test_the_ahead_of_time_loop_gives_the_jits_bits(built, use, cfg):
     _assert_same_results(a, b)
 
 
-def test_other_types_run_on_the_jit(built, use):
+def test_each_run_takes_the_entries_of_its_scheme_and_others_the_jit(built, use):
+    module, _, _ = built
     use(built)
-    for over in ({"time.integrator": "dp54"}, {"time.integrator": "radau5"}):
-        assert Run(rodjit.Config().override(over))._aot is None
+    for name in aot.schemes():
+        for base in (rodjit.Config(), rodjit.load_preset("paper-mu100")):
+            loop = Run(base.override(_scheme(name)))._aot
+            assert loop is not None
+            assert loop._start is getattr(module, f"start_{name}")
+            assert loop._advance is getattr(module, f"advance_{name}")
+    for name in ("energy", "verlet", "dp54"):
+        assert Run(rodjit.Config().override(_scheme(name)))._aot is None
+        assert aot.batch_for(parameters(rodjit.Config().override(_scheme(name)))) is None
 
 
-def test_a_run_paused_on_one_path_resumes_on_the_other_bit_for_bit(built, use):
-    cfg = rodjit.Config().override(SHORT)
+@pytest.mark.parametrize("cfg", [MU0, MU100], ids=["dop853", "radau5"])
+def test_a_run_paused_on_one_path_resumes_on_the_other_bit_for_bit(built, use, cfg):
     use(None)
     whole = rodjit.simulate(cfg)
     for first, second in ((built, None), (None, built)):
@@ -276,7 +317,7 @@ def test_a_run_paused_on_one_path_resumes_on_the_other_bit_for_bit(built, use):
         run = Run(cfg)
         sink = MemorySink()
         run.start(sink)
-        run.advance(sink, max_steps=1500)
+        run.advance(sink, max_steps=whole.stats["steps"] // 2)
         assert not np.isclose(run.t, cfg.time.t_end)
         ck = run.checkpoint()
         use(second)
@@ -296,7 +337,9 @@ def test_the_loop_releases_the_gil_while_it_computes(built, use, monkeypatch):
     (each wake-up needs it)."""
     use(built)
     monkeypatch.setattr(run_module, "NODE_STEPS_PER_CALL", 10**12)
-    run = Run(rodjit.Config().override({"time.t_end": 200.0, "output.snapshot_interval": 0.0,
+    # radau5: dop853 fills the event buffers in a tenth of a second here
+    run = Run(rodjit.Config().override({**_scheme("radau5"), "time.t_end": 200.0,
+                                        "output.snapshot_interval": 0.0,
                                         "output.diagnostics_interval": 0.0}))
     assert run._aot is not None
     run.start(None)
@@ -314,10 +357,10 @@ def test_the_loop_releases_the_gil_while_it_computes(built, use, monkeypatch):
     assert wakes > 0.2 * took / 0.01, (wakes, took)
 
 
-def _without_numba(module, key) -> str:
+def _without_numba(module, tags) -> str:
     """Python that makes an import of Numba or llvmlite end the process with that message,
-    then points the loader at the built extension ``module`` (of ``key``): the start of a
-    child process that must run on the extension alone."""
+    then points the loader at the built extension ``module`` (its entries' suffixes by key,
+    ``tags``): the start of a child process that must run on the extension alone."""
     return ("import importlib.abc, importlib.util, sys\n"
             "class Refuse(importlib.abc.MetaPathFinder):\n"
             "    def find_spec(self, name, path=None, target=None):\n"
@@ -328,24 +371,28 @@ def _without_numba(module, key) -> str:
             "spec = importlib.util.spec_from_file_location(aot.EXTENSION, "
             f"{str(module.__file__)!r})\n"
             "m = importlib.util.module_from_spec(spec); spec.loader.exec_module(m)\n"
-            f"aot._EXT[:] = [(m, {key!r})]\n")
+            f"aot._EXT[:] = [(m, {tags!r})]\n")
 
 
-def test_the_default_command_never_imports_numba(built, tmp_path):
-    """``rodjit run`` of the default on the extension: Numba and llvmlite are never
+# ``rodjit run`` of paper-mu0 on dop853 (what the default chooses), from "-o"
+_COMMAND = ["run", "paper-mu0", "--set", "time.integrator=dop853", "--t-end", "1.5", "-o"]
+
+
+def test_the_command_never_imports_numba(built, tmp_path):
+    """``rodjit run`` of paper-mu0 on dop853 on the extension: Numba and llvmlite are never
     imported (nothing is compiled or loaded from the JIT's cache), and the file is the
     JIT's, bit for bit."""
-    module, key, directory = built
-    code = _without_numba(module, key) + (
-        "sys.argv = ['rodjit', 'run', '--t-end', '1.5', '-o', 'aot.h5']\n"
+    module, tags, directory = built
+    code = _without_numba(module, tags) + (
+        f"sys.argv = ['rodjit', *{_COMMAND!r}, 'aot.h5']\n"
         "from rodjit.entry import main\n"
         "main()\n")
     done = subprocess.run([sys.executable, "-c", code], cwd=tmp_path,
                           env={**os.environ, "RODJIT_AOT": "1"},
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr
-    jit = subprocess.run([sys.executable, "-m", "rodjit", "run", "--t-end", "1.5", "-o",
-                          "jit.h5"], cwd=tmp_path, env={**os.environ, "RODJIT_AOT": "0"},
+    jit = subprocess.run([sys.executable, "-m", "rodjit", *_COMMAND, "jit.h5"],
+                         cwd=tmp_path, env={**os.environ, "RODJIT_AOT": "0"},
                          capture_output=True, text=True, timeout=600)
     assert jit.returncode == 0, jit.stderr
     assert_same_files(tmp_path / "aot.h5", tmp_path / "jit.h5")
@@ -355,11 +402,10 @@ def test_a_run_on_the_ahead_of_time_loop_gets_no_compiling_notice(built, use):
     from rodjit.driver.progress import kernels_cold
 
     use(built)
-    assert kernels_cold(rodjit.Config()) is False
-    assert kernels_cold(rodjit.load_preset("paper-mu100")) is False
+    assert kernels_cold(MU0) is False
+    assert kernels_cold(MU100) is False
     # any other run: the disk cache decides, as without a configuration
-    assert kernels_cold(rodjit.Config().override({"time.integrator": "dp54"})) == \
-        kernels_cold()
+    assert kernels_cold(rodjit.Config().override(_scheme("energy"))) == kernels_cold()
 
 
 # ---- the sweeps' batch kernel ------------------------------------------------------------
@@ -368,11 +414,11 @@ _GRID = {"rod.mu": [0.0, 40.0, 100.0], "floor.beta": [0.03, 0.1]}
 
 
 def test_the_ahead_of_time_batch_kernel_gives_the_jits_table(built, use, monkeypatch):
-    """A sweep's batches on the extension (paper-mu100 is the default's family) and on the
-    JIT: the same table to the bit, timings apart; the batches took the extension's entry."""
+    """A sweep's batches on the extension (paper-mu100 on radau5) and on the JIT: the same
+    table to the bit, timings apart; the batches took the extension's entry."""
     from test_sweep_driver import same_values
 
-    cfg = rodjit.load_preset("paper-mu100").override(SHORT)
+    cfg = MU100
     use(built)
     assert aot.batch_for(run_module.parameters(cfg)) is not None
     taken = []
@@ -394,14 +440,15 @@ def test_the_ahead_of_time_batch_kernel_gives_the_jits_table(built, use, monkeyp
 
 
 def test_a_sweep_on_the_extension_never_imports_numba(built, tmp_path):
-    """A sweep of the default's family, batches and file included, on the extension: Numba
+    """A sweep of paper-mu100 on radau5, batches and file included, on the extension: Numba
     and llvmlite are never imported (a worker that loaded them would spend half a second on
     it before its first point)."""
-    module, key, directory = built
-    code = _without_numba(module, key) + (
+    module, tags, directory = built
+    code = _without_numba(module, tags) + (
         "import rodjit\n"
         "from rodjit.sweeps.workers import start_worker\n"
-        "cfg = rodjit.load_preset('paper-mu100').override({'time.t_end': 1.5})\n"
+        "cfg = rodjit.load_preset('paper-mu100').override({'time.t_end': 1.5,\n"
+        "                                                  'time.integrator': 'radau5'})\n"
         "info = start_worker(cfg, batched=True)\n"
         "t = rodjit.sweep(cfg, {'rod.mu': [0.0, 50.0]}, scheduler='inline', output='s.h5')\n"
         "print(t.status, t.counts['completed'], info['numba_threads'])\n")

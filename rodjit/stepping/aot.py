@@ -1,19 +1,33 @@
-"""The compiled loop of the built-in default run, and the sweeps' batch kernel for the
-same types, compiled ahead of time at install.
+"""The compiled loops of the integrators the default run chooses from, and the sweeps'
+batch kernel for the same types, compiled ahead of time at install.
 
 Numba compiles ``loop.start`` and ``loop.advance`` the first time a process calls them:
-about half a minute for the default integrator on a fresh install, and a later process,
-which loads them from Numba's disk cache, still pays Numba's own start-up (its import,
-typing and target machinery, about a second here) before its first step.  So ``pip install``
-builds, where it can, an extension module ``rodjit.stepping._aot_loop``: the two functions
-and the batch kernel of the sweeps' ensemble engine (``stepping.ensemble.run_batch``, which
-steps many points in one call: ``batch_for``; a sweep worker on it starts without Numba)
-compiled by Numba's ahead-of-time compiler (``numba.pycc``) for the argument types of the
-built-in default run (the ``energy`` integrator, the Aiki–Kosugi laws; ``build`` takes
-them from the default Config).  A run whose parameters have those types (``key``: their classes and
-the Python types of their fields, whatever the values) calls the extension instead of the
-JIT: its first step needs no compiling, and the process never imports Numba (its
-kernels are made on first use, ``_jit.Kernel``).  Every other run uses the JIT as before.
+20–40 s for ``dop853`` or ``radau5`` on a fresh install, and a later process, which loads
+them from Numba's disk cache, still pays Numba's own start-up (its import, typing and
+target machinery, about a second here) before its first step.  So ``pip install`` builds,
+where it can, an extension module ``rodjit.stepping._aot_loop``: the two functions and the
+batch kernel of the sweeps' ensemble engine (``stepping.ensemble.run_batch``, which steps
+many points in one call: ``batch_for``; a sweep worker on it starts without Numba)
+compiled by Numba's ahead-of-time compiler (``numba.pycc``), once per integrator that
+``time.integrator = "auto"`` chooses (``dop853`` at μ = 0, ``radau5`` at μ > 0: the
+registry's ``Scheme.aot`` rows, ``schemes``), for the argument types of the built-in
+default run with that integrator (the Aiki–Kosugi laws, its control and system; ``build``
+takes them from the default Config).  Each integrator's functions carry its name
+(``advance_dop853``, ``tag``).  A run whose parameters have the types of one of them
+(``key``: their classes and the Python types of their fields, whatever the values) calls
+the extension instead of the JIT: its first step needs no compiling, and the process never
+imports Numba (its kernels are made on first use, ``_jit.Kernel``).  Every other run uses
+the JIT as before; ``energy``, ``verlet`` and the rest compile on first use.
+
+Which integrators, measured by calling ``build`` as setup.py does (a fresh interpreter and
+Numba cache, 2 cores shared with other work, load average 2–5): ``energy`` alone (the
+build before ``auto``) 37 s of wall time (34 s of CPU); ``dop853`` and ``radau5`` in one
+module 73–107 s (66–70 s of CPU); ``energy`` with them 151 s (88 s of CPU), so ``energy``
+is left to the JIT, which compiles it in its first run (24–33 s).  One module rather than
+one per integrator built in two processes at once: the two took 179 s of wall (87 s of
+CPU: the laws, forces and loop helpers the integrators share are compiled once in one
+module, twice in two), and two cores shared with other work did not run them side by
+side.
 
 Why not the JIT cache: it cannot be filled at install (its files are keyed by the source
 files' paths and times, which an install changes), and loading from it is what costs the
@@ -28,11 +42,12 @@ run's arrays one by one and pass them on as the loop's one ``arrays.RunArrays``;
 release the GIL around the loop, as a JIT call does (``nogil``), so the process's other
 threads keep running while it computes.
 
-It is used only where its record (``_aot_loop.json``, beside it) matches the process:
-the digest of the compiled sources (``_jit.SOURCES_DIGEST``: an edited checkout falls
-back to the JIT), Numba's and llvmlite's versions, and the CPU, its model and feature flags (an
-environment copied to another machine falls back too).  ``RODJIT_AOT=0`` turns it off.
-An install that cannot build it (no C compiler, a failed compile) goes on without it.
+It is used only where its record (``_aot_loop.json``, beside it: each integrator's suffix
+and ``key``) matches the process: the digest of the compiled sources
+(``_jit.SOURCES_DIGEST``: an edited checkout falls back to the JIT), Numba's and
+llvmlite's versions, and the CPU, its model and feature flags (an environment copied to
+another machine falls back too).  ``RODJIT_AOT=0`` turns it off.  An install that cannot
+build it (no C compiler, a failed compile) goes on without it.
 """
 from __future__ import annotations
 
@@ -40,6 +55,7 @@ import hashlib
 import importlib.metadata
 import json
 import os
+import re
 import sys
 from itertools import chain
 from pathlib import Path
@@ -48,12 +64,13 @@ import numpy as np
 
 from . import arrays as A
 from . import packing as P
+from . import registry
 from .._jit import SOURCES_DIGEST
 from .ensemble import run_batch
 from .loop import advance, start
 
-__all__ = ["EXTENSION", "AotLoop", "key", "pack", "wrapper_source", "build", "loop_for",
-           "batch_for", "extension_record"]
+__all__ = ["EXTENSION", "AotLoop", "schemes", "tag", "key", "pack", "wrapper_source", "build",
+           "loop_for", "batch_for", "extension_record"]
 
 EXTENSION = "_aot_loop"                  # the module rodjit.stepping._aot_loop
 RECORD = EXTENSION + ".json"
@@ -74,6 +91,18 @@ ENTRIES = {
                               ("bout", _F2), ("fout", _F2), ("iout", _I2),
                               ("max_steps", "i8"))),
 }
+
+
+def schemes() -> tuple[str, ...]:
+    """The integrators the install compiles ahead of time: the registry's ``Scheme.aot``
+    rows (the ones ``time.integrator = "auto"`` chooses from)."""
+    return tuple(s.name for s in registry.SCHEMES if s.aot)
+
+
+def tag(args) -> str:
+    """The suffix of the exported functions for parameter tuples ``args``
+    (``advance_dop853``): the name of their scheme, as an identifier."""
+    return re.sub(r"\W", "_", registry.entry_of(type(args[0])).name)
 
 
 def _expand(args) -> list[tuple[str, str]]:
@@ -132,11 +161,12 @@ def pack(args) -> np.ndarray:
     return np.array(P.pack(args, exact=True), dtype=np.float64)
 
 
-def wrapper_source(args) -> tuple[str, dict]:
+def wrapper_source(args, suffix: str) -> tuple[str, dict]:
     """Python source of the exported functions for parameter tuples of the types of
-    ``args``, and the globals it needs: each rebuilds the tuples from the row ``p``
-    (``pack``, ``packing.rebuild_source``), releases the GIL, calls the loop function and
-    takes the GIL back."""
+    ``args`` (each entry's name with ``_suffix``: ``advance_dop853``), and the globals it
+    needs: each rebuilds the tuples from the row ``p`` (``pack``,
+    ``packing.rebuild_source``), releases the GIL, calls the loop function and takes the GIL
+    back."""
     glob = {f"_{name}": function for name, (function, _) in ENTRIES.items()}
     names = []
     for j, p in enumerate(args):
@@ -149,7 +179,7 @@ def wrapper_source(args) -> tuple[str, dict]:
     for name, (_, extra) in ENTRIES.items():
         arrays = ", ".join(a for a, _ in _expand(extra))
         passed = ", ".join(run_arrays if a == ARRAYS else a[0] for a in extra)
-        lines += [f"def {name}(p, {arrays}):",
+        lines += [f"def {name}_{suffix}(p, {arrays}):",
                   f"    a0, a1, a2, a3, a4 = {', '.join(fields)}",
                   "    ts = _save_thread()",
                   f"    code = _{name}(a0, a1, a2, a3, a4, {passed})",
@@ -199,29 +229,34 @@ def _host() -> dict:
             "python": f"{sys.implementation.cache_tag}"}
 
 
-def build(directory: Path, args) -> Path:
-    """Compile the extension for parameter tuples of the types of ``args`` into
-    ``directory`` (its record beside it) and return its path.  Needs a C compiler."""
+def build(directory: Path, runs) -> Path:
+    """Compile the extension for each of ``runs`` (parameter tuples, one set per scheme:
+    the entries for their types, suffixed with their ``tag``) into ``directory`` (its
+    record beside it) and return its path.  Needs a C compiler."""
     from numba import types
     from numba.pycc import CC
 
     directory = Path(directory)
-    source, glob = wrapper_source(args)
-    glob["_save_thread"] = types.ExternalFunction("PyEval_SaveThread", types.voidptr())
-    glob["_restore_thread"] = types.ExternalFunction("PyEval_RestoreThread",
-                                                     types.void(types.voidptr))
-    exec(compile(source, f"<rodjit.{EXTENSION} wrappers>", "exec"), glob)
     cc = CC(EXTENSION)
     cc.output_dir = str(directory)
     cc.target_cpu = "host"
     cc.verbose = False
-    for name in ENTRIES:
-        cc.export(name, _signature(name))(glob[name])
+    entries = []
+    for args in runs:
+        suffix = tag(args)
+        source, glob = wrapper_source(args, suffix)
+        glob["_save_thread"] = types.ExternalFunction("PyEval_SaveThread", types.voidptr())
+        glob["_restore_thread"] = types.ExternalFunction("PyEval_RestoreThread",
+                                                         types.void(types.voidptr))
+        exec(compile(source, f"<rodjit.{EXTENSION} wrappers, {suffix}>", "exec"), glob)
+        for name in ENTRIES:
+            cc.export(f"{name}_{suffix}", _signature(name))(glob[f"{name}_{suffix}"])
+        entries.append([suffix, key(args)])
     record = directory / RECORD
     record.unlink(missing_ok=True)       # no record, no use: a failed build leaves none
     cc.compile()
     tmp = record.with_suffix(f".{os.getpid()}.tmp")
-    tmp.write_text(json.dumps({"key": key(args), "sources": SOURCES_DIGEST, **_host()},
+    tmp.write_text(json.dumps({"entries": entries, "sources": SOURCES_DIGEST, **_host()},
                               indent=1))
     os.replace(tmp, record)
     return directory / cc.output_file
@@ -249,33 +284,40 @@ def reusable(directory: Path) -> Path | None:
 
 
 def _usable(record: dict | None) -> bool:
-    return (record is not None and record.get("sources") == SOURCES_DIGEST
+    return (record is not None and isinstance(record.get("entries"), list)
+            and record.get("sources") == SOURCES_DIGEST
             and all(record.get(k) == v for k, v in _host().items()))
 
 
-_EXT: list = []      # [(module, key)] once looked up (module None: not usable)
+# [(module, {key: tag})] once looked up: the extension and the suffix of its entries for
+# each key it was built for (module None, no keys: not usable)
+_EXT: list = []
 
 
 def _extension():
     if not _EXT:
-        module, k = None, None
+        module, tags = None, {}
         record = extension_record()
         if os.environ.get("RODJIT_AOT", "1").strip().lower() not in _OFF and _usable(record):
             try:
                 from . import _aot_loop as module   # noqa: F811
             except ImportError:
                 module = None
-            k = tuple((c, tuple(t)) for c, t in record["key"])
-        _EXT.append((module, k))
+            else:
+                tags = {tuple((c, tuple(t)) for c, t in k): suffix
+                        for suffix, k in record["entries"]}
+        _EXT.append((module, tags))
     return _EXT[0]
 
 
 class AotLoop:
-    """``start`` and ``advance`` of the extension for one run's parameter tuples: the
-    driver's calls, with the tuples' fields packed once."""
+    """``start`` and ``advance`` of the extension for one run's parameter tuples (the
+    entries with the suffix ``suffix``): the driver's calls, with the tuples' fields packed
+    once."""
 
-    def __init__(self, module, args):
-        self._start, self._advance = module.start, module.advance
+    def __init__(self, module, suffix: str, args):
+        self._start = getattr(module, f"start_{suffix}")
+        self._advance = getattr(module, f"advance_{suffix}")
         self.p = pack(args)
 
     def start(self, arrays):
@@ -285,21 +327,23 @@ class AotLoop:
         return self._advance(self.p, *arrays, max_steps)
 
 
-def _module_for(args, args_key: tuple | None):
-    """The extension if it is usable and was built for the types of ``args`` (whose
-    ``key`` the caller may already have), else None."""
-    module, k = _extension()
-    if module is None or (key(args) if args_key is None else args_key) != k:
+def _entries_for(args, args_key: tuple | None):
+    """``(extension, suffix)`` of the entries built for the types of ``args`` (whose
+    ``key`` the caller may already have) if the extension is usable and has them, else
+    None."""
+    module, tags = _extension()
+    if module is None:
         return None
-    return module
+    suffix = tags.get(key(args) if args_key is None else args_key)
+    return None if suffix is None else (module, suffix)
 
 
 def loop_for(args, args_key: tuple | None = None) -> AotLoop | None:
     """The ahead-of-time loop for parameter tuples ``args`` (whose ``key`` the caller may
-    already have), or None (the JIT's turn): no usable extension, or one built for other
-    types."""
-    module = _module_for(args, args_key)
-    return None if module is None else AotLoop(module, args)
+    already have), or None (the JIT's turn): no usable extension, or none of its entries
+    built for these types."""
+    found = _entries_for(args, args_key)
+    return None if found is None else AotLoop(*found, args)
 
 
 def batch_for(args, args_key: tuple | None = None):
@@ -308,11 +352,12 @@ def batch_for(args, args_key: tuple | None = None):
     of the kernel's arguments after the tuples; or None (the JIT's turn), as ``loop_for``.
     A sweep's worker on it loads no JIT code: the half second of Numba's import and of
     loading the batch kernel from the JIT's cache, at each worker's start."""
-    module = _module_for(args, args_key)
-    if module is None:
+    found = _entries_for(args, args_key)
+    if found is None:
         return None
+    module, suffix = found
     p = pack(args)
-    entry = module.run_batch
+    entry = getattr(module, f"run_batch_{suffix}")
 
     def call(*args):
         return entry(p, *_flat(args))

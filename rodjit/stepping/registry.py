@@ -43,6 +43,8 @@ class Scheme:
     continuous extension, see ``schemes``); with ``output.interpolate`` on and adaptive
     steps the loop then steps toward ``time.t_end`` only and interpolates every output
     time inside a step (``loop.advance``).
+    ``aot``: the install compiles the scheme's loop ahead of time for the default run's
+    other types (``stepping.aot``), so that a run of it compiles nothing.
     """
 
     name: str
@@ -60,6 +62,7 @@ class Scheme:
     cap_keys: tuple[str, ...] = ()
     error_norm: str = ""
     viscous_mu_max: float = float("inf")
+    aot: bool = False
 
     def step_keys(self, control: str, fixed: bool = False) -> tuple[str, ...]:
         """The configuration keys that set the steps under ``time.control = control``
@@ -117,12 +120,12 @@ SCHEMES: tuple[Scheme, ...] = (
            cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
     Scheme("dop853", "rodjit.stepping.integrators.erk", "DOP853",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 40, gap_control=False,
-           step_rules="pair-dop853", dense=True, order=8, error_norm=_PAIR_NORM,
+           step_rules="pair-dop853", dense=True, order=8, error_norm=_PAIR_NORM, aot=True,
            cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
     Scheme("radau5", "rodjit.stepping.integrators.radau", "Radau5",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
            counters=("newton_iterations", "newton_failures"), gap_control=False,
-           dense=True, order=5, error_norm=_RADAU_NORM),
+           dense=True, order=5, error_norm=_RADAU_NORM, aot=True),
 )
 
 NAMES: tuple[str, ...] = tuple(s.name for s in SCHEMES)
