@@ -1,6 +1,6 @@
 """Work–precision of rodjit's six integrators over the regimes a default must cover: which
-one is fastest at a given error, and what the default (the preset's integrator at its
-tolerances) costs against it.
+one is fastest at a given error, and what the default (the preset as a user runs it:
+``time.integrator = "auto"`` at its tolerances) costs against it.
 
 Settings (24): μ ∈ {0, 1, 100} × N ∈ {5, 20, 80, 320} × κ_b ∈ {1e3, 1e7}, named
 ``mu<μ>-N<N>-kb1e3`` / ``-kb1e7``.  κ_b = 1e3 is the preset's soft floor with its β = 0.05;
@@ -43,8 +43,9 @@ An integrator whose configuration a run refuses (``Config.check_runnable``) is r
 At each target error E ∈ {1e-3, 1e-4, 1e-6} an integrator's cost is interpolated in
 log-log along its cost–error Pareto front (bench_peers' ``front``/``cost_at``); the
 fastest integrator is the one of least cost, and every other's ratio is its cost over the
-fastest's.  The default is the preset as a user runs it (``energy`` at rtol = 1e-6,
-atol = 1e-9, the TimeConfig defaults): its error E_d and cost are measured like a rung's,
+fastest's.  The default is the preset as a user runs it (``auto``, which picks its
+integrator per setting, at rtol = 1e-6, atol = 1e-9, the TimeConfig defaults): its error
+E_d and cost are measured like a rung's,
 and its ratio is its cost over the cheapest cost at E_d among all fronts (the default's
 own point included, so the ratio is ≥ 1).
 
@@ -338,8 +339,9 @@ def run_setting(name, quick, budget, long_run):
     # the default: the preset as a user runs it
     d = measure(pb, {}, ref, e_ref, long_run)
     default = default_ratio(fronts, d["error"], d["best"])
-    default.update({"integrator": cfg.time.integrator, "rtol": cfg.time.rtol,
-                    "atol": cfg.time.atol, "steps": d["steps"], "times": d["times"],
+    ran = cfg.resolve()          # what "auto" picked for this setting
+    default.update({"integrator": ran.time.integrator, "rtol": ran.time.rtol,
+                    "atol": ran.time.atol, "steps": d["steps"], "times": d["times"],
                     "state_error": d["state_error"],
                     "restitution_error": d["restitution_error"]})
     at = {}
@@ -358,7 +360,7 @@ def run_setting(name, quick, budget, long_run):
                              "", "", "", "", ""])
         if s["status"] != "ok":
             rows.append([integ, "", s["status"], "", "", "", "", ""])
-    rows.append([f"default ({cfg.time.integrator})", f"rtol {cfg.time.rtol:g}, atol "
+    rows.append([f"default ({ran.time.integrator})", f"rtol {cfg.time.rtol:g}, atol "
                  f"{cfg.time.atol:g}", f"{d['error']:.1e}", f"{d['state_error']:.1e}",
                  _e(d["restitution_error"]), d["steps"], d["rejected"],
                  f"{d['best'] * 1e3:.3g}"])
@@ -421,7 +423,7 @@ def main(argv=None):
                            "load_average_end": list(os.getloadavg()),
                            "wall_seconds": time.perf_counter() - t0, "settings": results})
     print("\nfastest integrator per setting and target (runner-up and its cost ratio); the "
-          "default (the preset: energy, rtol 1e-6, atol 1e-9), its error and its cost over "
+          "default (the preset: auto, rtol 1e-6, atol 1e-9), its error and its cost over "
           "the cheapest at that error:\n")
     print(markdown(regime_rows(results), ["setting"] + [f"{e:.0e}" for e in TARGETS]
                    + ["default error", "default / cheapest"]))
