@@ -91,7 +91,8 @@ def many_calls(monkeypatch):
     """Cut runs into many short compiled calls, so a test can stop one anywhere."""
     import rodjit.driver.run as run_module
 
-    monkeypatch.setattr(run_module, "NODE_STEPS_PER_CALL", 600)
+    # ten steps a call at N = 5: the default run's first second is some thirty calls
+    monkeypatch.setattr(run_module, "NODE_STEPS_PER_CALL", 60)
 
 
 def module_runs(cfg):

@@ -30,7 +30,7 @@ def test_result_repr_is_a_few_lines_with_the_headline_numbers(result):
     lines = text.split("\n")
     assert 3 <= len(lines) <= 8 and len(text) < 600
     assert lines[0] == (f"rodjit.Result: completed, N = 5, mu = 0, "
-                        f"{result.config.time.integrator}")
+                        f"{result.config.time.integrator} (auto)")
     e = result.bounces["restitution"][0]
     assert f"{result.n_bounces} (restitution {e:.4f}" in text
     assert f"{result.energy_error():.3g}" in text
@@ -45,7 +45,7 @@ def test_result_report_matches_the_file_summary(result, run_file):
     body = lambda text: [l for l in text.split("\n")[1:] if "time" not in l]
     assert body(result.report()) == body(s.report())
     assert repr(s).split("\n")[0].endswith(f"completed, N = 5, mu = 0, "
-                                            f"{result.config.time.integrator}")
+                                            f"{result.config.time.integrator} (auto)")
     assert "<table>" in s._repr_html_()
 
 

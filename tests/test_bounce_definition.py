@@ -104,7 +104,9 @@ def test_a_pending_bounce_is_ambiguous_and_the_means_skip_it():
     assert table["restitution_mean"][0] == pytest.approx(got["restitution"][sure].mean())
     assert table["restitution_energy_mean"][0] == pytest.approx(
         got["restitution_energy"][sure].mean())
-    assert table["restitution_first"][0] == pytest.approx(got["restitution"][0], rel=1e-12)
+    # the first-impact observer and the bounce table take w at release from the same step
+    # by two sums: they agree to round-off (2e-12 under dop853)
+    assert table["restitution_first"][0] == pytest.approx(got["restitution"][0], rel=1e-10)
 
 
 # ---- files of the apex definition (run-file and sweep-file format 2) ------------------------

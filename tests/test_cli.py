@@ -47,7 +47,9 @@ def test_readme_command_runs_the_default(tmp_path, monkeypatch):
     assert r.stderr == f"warning: {rodjit.config.SHOCK_WARNING}\n"
     assert "warning" not in r.stdout            # said once: on stderr, not in the summary too
     res = rodjit.load_file(tmp_path / "default.h5")
-    assert res.config == rodjit.Config() and res.status == "completed"
+    # the default as it ran: "auto" resolved (dop853), and why
+    assert res.config == rodjit.Config().resolve() and res.status == "completed"
+    assert res.config.choice.startswith("chosen by 'auto'")
     with h5py.File(tmp_path / "default.h5") as f:
         assert f.attrs["command"] == "rodjit run -o default.h5 --overwrite"
     assert invoke("run", "-o", "default.h5", "--overwrite").exit_code == 0
@@ -312,7 +314,7 @@ def test_run_dry_run_prints_the_estimate_and_writes_nothing(tmp_path, monkeypatc
     assert sorted(p.name for p in tmp_path.iterdir()) == ["old.h5"]
     r = invoke("run", "--dry-run", "-o", "old.h5", "--overwrite")
     assert r.exit_code == 0 and "replaces the existing run file" in r.output
-    assert "steps        adaptive (energy)" in r.output
+    assert "steps        adaptive (dop853, chosen by 'auto' for rod.mu = 0" in r.output
     assert sorted(p.name for p in tmp_path.iterdir()) == ["old.h5"]
 
 

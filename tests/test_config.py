@@ -13,7 +13,7 @@ def test_defaults_are_the_paper_first_figure():
     assert (c.rod.N, c.rod.kappa, c.rod.gamma, c.rod.mu) == (5, 100.0, 0.0, 0.0)
     assert (c.floor.kappa_b, c.floor.beta, c.gravity.g) == (1000.0, 0.05, -9.81)
     assert (c.initial.height, c.initial.velocity, c.initial.strain) == (1.0, 0.0, 0.0)
-    assert c.time.t_end == 5.0 and c.time.integrator == "energy" and c.time.dt is None
+    assert c.time.t_end == 5.0 and c.time.integrator == "auto" and c.time.dt is None
     assert c.time.control == "tolerance"
     assert c.output.snapshot_interval == 0.005
 
@@ -57,7 +57,7 @@ def test_presets_ship_the_paper_settings():
     ("initial.height", -0.06, r"initial\.height = -0\.06 is out of range \(float > -floor\.beta = -0\.05"),
     ("time.cfl", 1.5, r"time\.cfl = 1\.5 is out of range \(float in \(0, 1\]\)"),
     ("time.t_end", 0.0, r"time\.t_end = 0\.0 is out of range"),
-    ("time.integrator", "rk4", r"time\.integrator = 'rk4' is not allowed \(one of 'verlet', 'semi-implicit', 'energy', 'dp54', 'dop853', 'radau5'\)"),
+    ("time.integrator", "rk4", r"time\.integrator = 'rk4' is not allowed \(one of 'auto', 'verlet', 'semi-implicit', 'energy', 'dp54', 'dop853', 'radau5'\)"),
     ("time.dt", -1.0, r"time\.dt = -1\.0 is out of range"),
     ("time.dt_min", 1.0, r"time\.dt_min = 1\.0 is out of range \(float > 0 and < time\.dt_max"),
     ("output.snapshot_interval", -1.0, r"output\.snapshot_interval = -1\.0 is out of range"),

@@ -42,7 +42,7 @@ def test_each_key_is_commented_with_meaning_unit_default_and_range():
     i = text.index("# dt is unset")
     assert "fixed time step; unit s; default unset; float > 0" in text[i - 1]
     i = text.index(f'integrator = "{Config().time.integrator}"')
-    assert "one of 'verlet'" in text[i - 1]
+    assert "one of 'auto', 'verlet'" in text[i - 1]
 
 
 def test_defaults_in_comments_come_from_the_dataclasses():

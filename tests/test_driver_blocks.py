@@ -42,7 +42,8 @@ def test_a_block_refused_at_its_drain_keeps_its_rows_and_no_new_checkpoint(tmp_p
     computed beyond it and no new checkpoint."""
     # rtol 1e-3: the energy step's error per unit step then takes about the steps per
     # output interval that these block counts were laid out for
-    cfg = rodjit.Config().override({"time.t_end": 1.0, "time.rtol": 1e-3})
+    cfg = rodjit.Config().override({"time.t_end": 1.0, "time.rtol": 1e-3,
+                                    "time.integrator": "energy"})
     take = Run.take
 
     def poisoned(self, code=L.PAUSED):
@@ -115,7 +116,9 @@ def test_a_signal_before_the_first_call_still_leaves_a_checkpointed_file(tmp_pat
 def test_the_compiled_call_releases_the_gil():
     """While a long compiled call runs in another thread, this thread keeps running Python
     (it could not if the call held the GIL: Python cannot take it back from native code)."""
+    # energy: 200 000 steps of it fill no buffer (dop853's events would)
     run = Run(rodjit.Config().override({"rod.N": 200, "time.t_end": 100.0,
+                                        "time.integrator": "energy",
                                         "output.snapshot_interval": 0.0,
                                         "output.diagnostics_interval": 0.0}))
     run.start(None)

@@ -90,15 +90,26 @@ def test_resume_truncates_rows_written_after_the_checkpoint(tmp_path, small_conf
     assert_same_files(cut, ref)
 
 
-def test_extend_a_completed_run(tmp_path, small_config):
+@pytest.mark.parametrize("integrator", ["energy", "auto"])
+def test_extend_a_completed_run(tmp_path, small_config, integrator):
+    """An extension equals a run to the new end at once, bit for bit, for an integrator
+    that lands on the output times; auto's (dop853, dense output) steps toward t_end, so
+    its extension continues from the 1 s run's own last step: the same to its tolerance."""
+    small_config = small_config.override({"time.integrator": integrator})
     short, long_ = tmp_path / "short.h5", tmp_path / "long.h5"
-    rodjit.run_to_file(small_config.override({"time.t_end": 2.0}), long_)
+    # the extension keeps what "auto" chose for the 1 s run (its tolerances): so does this
+    rodjit.run_to_file(small_config.resolve().override({"time.t_end": 2.0}), long_)
     rodjit.run_to_file(small_config, short)
     with pytest.raises(ValueError, match="already complete at t = 1; give a later t_end"):
         rodjit.resume_file(short)
     rodjit.resume_file(short, t_end=2.0)
     assert rodjit.load_file(short).config.time.t_end == 2.0
     a, b = datasets(short), datasets(long_)
+    if integrator == "auto":
+        assert rodjit.load_file(short).config.time.integrator == "dop853"
+        assert np.array_equal(a["snapshots/t"], b["snapshots/t"])
+        assert np.abs(a["snapshots/u"] - b["snapshots/u"]).max() < 1e-5
+        return
     # t = 1 is on both output grids, so the extension takes the same steps
     for name in b:
         assert np.array_equal(a[name], b[name], equal_nan=True), name
@@ -156,6 +167,7 @@ def test_resume_maps_the_scheme_counters_by_name(tmp_path, small_config, many_ca
     count is dropped, and the run continues bit for bit."""
     from rodjit.stepping.registry import SCHEME_STATS
 
+    small_config = small_config.override({"time.integrator": "energy"})   # Newton counters
     ref, cut = tmp_path / "ref.h5", tmp_path / "cut.h5"
     rodjit.run_to_file(small_config, ref)
     with pytest.raises(rodjit.RunInterrupted):
@@ -207,8 +219,8 @@ from rodjit.output import h5files, hdf5, writer_id
 from rodjit.stepping import layout as L
 cfg = rodjit.Config().override({"time.t_end": 1.0})
 run = Run(cfg)
-run.max_steps = 100
-writer = hdf5.create_run_file(sys.argv[1], cfg, run, command="test")
+run.max_steps = 20
+writer = hdf5.create_run_file(sys.argv[1], run.config, run, command="test")
 run.start(writer)
 calls = 0
 while run.advance(writer) != L.DONE and calls < int(sys.argv[2]):

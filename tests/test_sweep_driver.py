@@ -56,7 +56,7 @@ def test_each_row_is_its_point_run_alone(inline_table):
     assert list(t["rod.mu"]) == [0.0, 0.0, 10.0, 10.0]
     assert list(t["floor.beta"]) == [0.01, 0.05, 0.01, 0.05]
     for i in range(len(t)):
-        alone = run_point(PointTask(i, grid.config(BASE, i), None, ()))
+        alone = run_point(PointTask(i, grid.config(t.base, i), None, ()))
         row = {name: t[name][i] for name in SUMMARY_COLUMNS}
         same_values({k: [v] for k, v in row.items()}, {k: [v] for k, v in alone.values.items()})
         for name in BOUNCE_COLUMNS:
@@ -76,7 +76,7 @@ def test_process_pool_writes_the_same_table_to_the_file(tmp_path, inline_table):
         a = f.attrs
         assert a["rodjit_kind"] == "sweep" and a["format_version"] == sweep_file.FORMAT_VERSION
         assert a["status"] == "completed" and a["command"] == "test sweep"
-        assert rodjit.Config.from_toml_string(a["base_config_toml"]) == BASE
+        assert rodjit.Config.from_toml_string(a["base_config_toml"]) == BASE.resolve()
         assert Grid.from_json(a["grid"]) == Grid.from_spec(GRID)
         assert list(a["grid_keys"]) == ["rod.mu", "floor.beta"] and a["n_points"] == 4
         s = f["summary"]
@@ -295,7 +295,7 @@ def test_save_runs_writes_each_points_run_file(tmp_path, inline_table):
     assert list(table["run_file"]) == names
     for i, name in enumerate(names):
         ref = tmp_path / f"ref{i}.h5"
-        rodjit.run_to_file(grid.config(BASE, i), ref)
+        rodjit.run_to_file(grid.config(table.base, i), ref)
         assert_same_files(runs / name, ref)
     with h5py.File(tmp_path / "s.h5", "r") as f:
         assert f.attrs["save_runs"] == str(runs.resolve())

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from ..stepping.registry import get as registry_get
+from ..stepping.registry import AUTO, get as registry_get
 from .errors import ConfigError
 from .sections import check_dt_range
 
@@ -111,6 +111,8 @@ CROSS_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., None]], ...] = (
 
 def _check_tolerance_honoured(integrator: str, control: str, dt: float | None,
                               mu: float) -> None:
+    if integrator == AUTO:     # it chooses among the integrators that honour them
+        return
     entry = registry_get(integrator)
     if control == "tolerance" and dt is None and mu > entry.viscous_mu_max:
         raise ConfigError(

@@ -242,7 +242,11 @@ def resume_file(path: str | os.PathLike[str], *, t_end: float | None = None,
                 handle_signals: bool = True, max_output: float = MAX_OUTPUT,
                 max_steps: float = MAX_STEPS) -> RunSummary:
     """Continue the run in ``path`` from its checkpoint (to ``t_end`` if given, which also
-    extends a completed run); the result equals an uninterrupted run bit for bit.
+    extends a completed run); the result equals an uninterrupted run bit for bit.  An
+    extension continues from the end state: for the integrators that land on the output
+    times it equals a run made to the new end at once, bit for bit; those with a dense
+    output (``dp54``, ``dop853``, ``radau5``: ``auto``'s) step toward ``time.t_end``, so the
+    first run's last step, which ended on its end, is one a longer run did not take.
 
     A file whose writer was killed (SIGKILL, power loss) is first rebuilt from its last
     checkpoint.  Errors and return value as in ``run_to_file``.

@@ -38,8 +38,9 @@ class RunFacts:
     # ---- the short overview (repr) ------------------------------------------------------
     def title(self) -> str:
         c = self.config
+        # "(auto)": ``report`` and ``config.choice`` give the row of the table that chose it
         return (f"{self.name}: {self.status}, N = {c.rod.N}, mu = {c.rod.mu:g}, "
-                f"{c.time.integrator}")
+                f"{c.time.integrator}" + (" (auto)" if c.choice else ""))
 
     def rows(self) -> list[tuple[str, str]]:
         b = self.bounces
@@ -50,8 +51,6 @@ class RunFacts:
         bounces = f"{n}" + (f" (restitution {', '.join(e)}{', ...' if n > len(e) else ''})"
                             if n else "")
         rows = [("time", f"{self.t_start:.6g} to {self.t:.6g} of {self.t_end:.6g} s"),
-                *((("integrator", f"{self.config.time.integrator}, {self.config.choice}"),)
-                  if self.config.choice else ()),
                 ("bounces", bounces),
                 (energy_label(self.config.rod.mu), number(self.energy_error, ".3g")),
                 ("steps", f"{self.steps} ({self.rejected} rejected)"),

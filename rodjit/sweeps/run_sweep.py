@@ -72,8 +72,11 @@ def _open_resume(output, config, grid, max_points):
         raise FileBusy(f"{str(output)!r} is being written by a running sweep on this machine "
                        f"(process {pid}); stop it before resuming")
     base, file_grid = header["base"], header["grid"]
-    if config is not None and config.resolve() != base:
-        differ = sorted(k for k, v in config.flat().items() if base.flat()[k] != v)
+    # the configurations as they run ("auto" resolved): the file's base is resolved already
+    # unless an older version or a caller of sweep_file.create wrote it unresolved
+    if config is not None and config.resolve() != base.resolve():
+        was = base.resolve().flat()
+        differ = sorted(k for k, v in config.resolve().flat().items() if was[k] != v)
         raise ResumeMismatch(output, "configuration", ", ".join(differ))
     if grid is not None and Grid.from_spec(grid, max_points=max_points) != file_grid:
         raise ResumeMismatch(output, "grid", file_grid.to_json())
