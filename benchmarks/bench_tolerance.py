@@ -1,13 +1,23 @@
-"""What a tolerance buys: the first restitution's error of each integrator under tolerance
-control, against dop853 at rtol 1e-12, with its steps and time.
+"""What a tolerance buys: the first restitution's error and the delivered state error of
+each integrator under tolerance control, against dop853 at rtol 1e-12, with its steps and
+time.
 
     python benchmarks/bench_tolerance.py [--no-docs]
 
 Six integrators × tol ∈ {1e-3, 1e-5, 1e-7} (rtol = tol, atol = 1e-3·tol), paper-mu0 and
-paper-mu100 at T = 2 (no snapshots).  The error is that of ``rodjit.observables``'s
-``restitution_first``; a cell above 10 × tol is marked ``!``; an integrator that refuses the
-tolerance (``Config.check_runnable``) is ``refused``.  Writes
-benchmarks/results/tolerance.json and the table between the markers of
+paper-mu100.  Two measurements per cell:
+
+* the first restitution at T = 2 (no snapshots): the error of ``rodjit.observables``'s
+  ``restitution_first``, with the accepted steps and the wall time; a cell above 10 × tol
+  is marked ``!``;
+* the state over the first second (T = 1, the preset's snapshots): the largest error of
+  the snapshot heights (m) and of the snapshot velocities divided by the impact speed
+  √(v₀² + 2|g|·height), against dop853 at rtol 1e-12, atol 1e-15 with the same snapshots,
+  with the accepted steps.  Below each preset's state table, per tolerance, the spread of
+  the integrators' errors (the largest over the smallest of max(heights, velocities)).
+
+An integrator that refuses the tolerance (``Config.check_runnable``) is ``refused``.
+Writes benchmarks/results/tolerance.json and the tables between the markers of
 docs/integrators.md.
 """
 import json
@@ -16,6 +26,8 @@ import sys
 import time
 import warnings
 from pathlib import Path
+
+import numpy as np
 
 import rodjit
 from rodjit.presets import load_preset
@@ -40,10 +52,31 @@ def _restitution(cfg):
     return rodjit.observables(res)["restitution_first"], res.stats["steps"], wall
 
 
+def _state_config(preset, integrator, rtol, atol):
+    return _config(preset, integrator, rtol, atol).override({
+        "time.t_end": 1.0,
+        "output.snapshot_interval": load_preset(preset).output.snapshot_interval})
+
+
+def _impact_speed(cfg):
+    return math.sqrt(cfg.initial.velocity ** 2 + 2.0 * abs(cfg.gravity.g) * cfg.initial.height)
+
+
+def _state(cfg, ref):
+    """(heights error m, velocities error / impact speed, accepted steps) over the
+    snapshots of the first second against ``ref``'s."""
+    res = rodjit.simulate(cfg)
+    if not np.array_equal(res.t, ref.t):
+        raise RuntimeError(f"{cfg.time.integrator}: snapshot times differ from the reference")
+    return (float(np.abs(res.u - ref.u).max()),
+            float(np.abs(res.v - ref.v).max() / _impact_speed(cfg)), res.stats["steps"])
+
+
 def measure():
     rows = []
     for preset in PRESETS:
         ref, _, _ = _restitution(_config(preset, "dop853", 1e-12, 1e-15))
+        ref_state = rodjit.simulate(_state_config(preset, "dop853", 1e-12, 1e-15))
         for integrator in INTEGRATORS:
             for tol in TOLS:
                 cfg = _config(preset, integrator, tol, 1e-3 * tol)
@@ -56,12 +89,51 @@ def measure():
                 _restitution(cfg)                      # compiled and warm
                 e, steps, wall = _restitution(cfg)
                 err = abs(e - ref)
+                du, dv, state_steps = _state(_state_config(preset, integrator, tol, 1e-3 * tol),
+                                             ref_state)
                 rows.append(dict(preset=preset, integrator=integrator, tol=tol, refused=False,
                                  restitution=e, reference=ref, error=err, steps=steps,
-                                 seconds=wall, over=err > 10 * tol))
+                                 seconds=wall, over=err > 10 * tol, state_heights=du,
+                                 state_velocities=dv, state_steps=state_steps))
                 print(f"{preset} {integrator:13s} {tol:.0e} err {err:.2g} steps {steps} "
-                      f"{wall:.3f} s", flush=True)
+                      f"{wall:.3f} s; state: heights {du:.2g} velocities {dv:.2g} "
+                      f"steps {state_steps}", flush=True)
     return rows
+
+
+def _row(rows, preset, integrator, tol):
+    return next(r for r in rows if (r["preset"], r["integrator"], r["tol"]) ==
+                (preset, integrator, tol))
+
+
+def spread(rows, preset, tol) -> float:
+    """The largest over the smallest of the integrators' state errors max(heights,
+    velocities) at one tolerance."""
+    errs = [max(r["state_heights"], r["state_velocities"]) for r in rows
+            if (r["preset"], r["tol"]) == (preset, tol) and not r["refused"]]
+    return max(errs) / min(errs)
+
+
+def state_table(rows) -> list[str]:
+    lines = []
+    for preset in PRESETS:
+        lines += [f"`{preset}`, t ≤ 1 s: largest snapshot error of the heights (m) / of the "
+                  f"velocities ÷ the impact speed against dop853 at rtol 1e-12 / accepted "
+                  f"steps", "",
+                  "| integrator | " + " | ".join(f"tol {t:.0e}" for t in TOLS) + " |",
+                  "|---|" + "---|" * len(TOLS)]
+        for integrator in INTEGRATORS:
+            cells = []
+            for tol in TOLS:
+                r = _row(rows, preset, integrator, tol)
+                cells.append("refused" if r["refused"] else
+                             f"{r['state_heights']:.1e} / {r['state_velocities']:.1e} / "
+                             f"{r['state_steps']:,}")
+            lines.append(f"| `{integrator}` | " + " | ".join(cells) + " |")
+        lines.append("| spread (largest ÷ smallest) | " + " | ".join(
+            f"{spread(rows, preset, tol):.3g}×" for tol in TOLS) + " |")
+        lines.append("")
+    return lines
 
 
 def table(rows) -> str:
@@ -74,13 +146,13 @@ def table(rows) -> str:
         for integrator in INTEGRATORS:
             cells = []
             for tol in TOLS:
-                r = next(r for r in rows if (r["preset"], r["integrator"], r["tol"]) ==
-                         (preset, integrator, tol))
+                r = _row(rows, preset, integrator, tol)
                 cells.append("refused" if r["refused"] else
                              f"{r['error']:.1e}{' !' if r['over'] else ''} / {r['steps']:,} / "
                              f"{r['seconds'] * 1e3:.3g} ms")
             lines.append(f"| `{integrator}` | " + " | ".join(cells) + " |")
         lines.append("")
+    lines += state_table(rows)
     lines.append("`!`: above 10 × tol.  `refused`: the integrator refuses the tolerance "
                  "there (`verlet` above `rod.mu = 1`).  Remade by "
                  "`python benchmarks/bench_tolerance.py`.")

@@ -38,10 +38,14 @@ def add_viscous(system, v, a):
 
 
 @step_kernel
-def jerk(system, rod, floor, u, v, a, out, k, strains):
+def jerk(system, rod, floor, u, v, a, out, k, strains, beam=True, viscous=True):
     """ȧ = M⁻¹(−H(u)v − μKa), the time derivative of the acceleration along the motion
     (H: Hessian of V; σ_b' one-sided at u_0 = 0 like the force itself).  Also leaves the
-    segment strains of u in ``strains`` (the step needs them, and they are computed here)."""
+    segment strains of u in ``strains`` (the step needs them, and they are computed here).
+
+    ``beam`` False leaves out the bending term and ``viscous`` False the viscous one (``a``
+    is then not read): the derivative of an explicit acceleration of ``forces.accel``, the
+    kick acceleration of the kick–drift–kick schemes (their error estimate, ``kdk``)."""
     n = system.n
     h = system.h
     ih = 1.0 / h
@@ -53,11 +57,14 @@ def jerk(system, rod, floor, u, v, a, out, k, strains):
     for i in range(n):
         e = (u[i + 1] - u[i]) * ih - 1.0
         strains[i] = e
-        t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
+        if viscous:
+            t = deriv(e, rod) * ih * (v[i + 1] - v[i]) + mu * ih * (a[i + 1] - a[i])
+        else:
+            t = deriv(e, rod) * ih * (v[i + 1] - v[i])
         out[i] = (t - t_prev) * _inv_mass(i, n, ih)
         t_prev = t
     out[n] = -t_prev * _inv_mass(n, n, ih)
-    if system.gamma > 0.0:
+    if beam and system.gamma > 0.0:
         add_beam_term(v, out, k, h, -system.gamma, bool(True))
 
 

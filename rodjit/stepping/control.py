@@ -245,7 +245,8 @@ def velocity_scale(scheme, y, y2):
 # at tol 1e-3, 1e-5, 1e-7); per unit step the steps go as tol^(1/2) and the global error as
 # tol.  ERROR_TIME = 1 ms, the time scale on which an impact changes (the paper presets'
 # contacts last about 4 ms); it sets the constant: verlet's first restitution on paper-mu0
-# is then about the tolerance (at 1 s it was 1.3e-3 × tol, with 30× the steps).  Below
+# is then about the tolerance with an estimate of the heights alone, 0.1–0.25 × tol with
+# the heights' and velocities' (at 1 s it was 1.3e-3 × tol, with 30× the steps).  Below
 # ERROR_TIME/UNIT_STEP_MAX (the short steps that end on a floor crossing) the factor
 # stops growing: a step's estimate has a floor of rounding and of the Newton solve, which
 # dt/ERROR_TIME would otherwise magnify without bound.

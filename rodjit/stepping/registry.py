@@ -91,7 +91,8 @@ _ENERGY_WORK_ROWS = 17   # rows S … D of stepping/energy.py (tests check it)
 # scheme's module docstring derives the estimate it measures in it
 _NORM = ("max over the estimated components of |e| / (atol + rtol·max(|y|, |y⁺|)), atol in m "
          "for heights and atol·control.VELOCITY_SCALE (1/s) in m/s for velocities")
-_KDK_NORM = _NORM + "; estimated: the heights, |dt²/6·(a⁺ − a)|"
+_KDK_NORM = _NORM + ("; estimated: heights |dt²/6·(a⁺ − a)| and velocities "
+                     "|dt/6·(a⁺ − a − dt·ȧ)| (kick acceleration a, its jerk ȧ at the start)")
 _ENERGY_NORM = _NORM + "; estimated: heights and velocities (predictor–corrector)"
 _PAIR_NORM = _NORM + "; estimated: heights and velocities (embedded pair)"
 _RADAU_NORM = _NORM + "; estimated: heights and velocities (Hairer's filtered estimate)"

@@ -35,15 +35,49 @@ forces: a viscous sub-step split off the kicks (V) does not, and is O(1) wrong o
 solve per step (its factorisation is kept while dt is unchanged).  The full-step velocity
 of the stiffest viscous modes alternates in sign (CN's R → −1); v½ does not.
 
-Error control (``tolerance``): the predicted local error of u is dt³/6·ȧ, estimated from
-the two kicks' accelerations as dt²/6·(a⁺ − a) (O(dt³), the leading term of the exact local
-error of the verlet step), scaled componentwise by atol + rtol·max(|u|, |u⁺|) (the heights of
-the one error norm, ``control.height_scale``), per unit step (``control.per_unit_step``:
-times ERROR_TIME/dt, so the global error follows the tolerance); a ratio above 1 rejects
-the step (INACCURATE), and the next step is dt·0.9·ratio^(−1/2), capped at
-``control.STABILITY_CFL`` × the stability limit.  The estimate costs one pass over the
-arrays, no force evaluation; under fixed steps (``time.dt``) it chooses nothing, so the
-parameters have ``tolerance`` off there (``registry``) and the step skips it.
+Error control (``tolerance``): the estimate covers the heights and the velocities, as the
+other schemes' estimates do.  For u'' = a(u) the step is
+
+    u⁺ = u + dt·v + dt²/2·a,      v⁺ = v + dt/2·(a + a⁺),      a⁺ = a(u⁺),
+
+and with ȧ, ä the derivatives of a along the motion, a(u⁺) = a + dt·ȧ + dt²/2·ä + O(dt³)
+(u⁺ is exact to O(dt³)), against the exact u(dt) = u + dt·v + dt²/2·a + dt³/6·ȧ + O(dt⁴)
+and v(dt) = v + dt·a + dt²/2·ȧ + dt³/6·ä + O(dt⁴).  The local errors are therefore
+
+    heights      u⁺ − u(dt) = −dt³/6·ȧ + O(dt⁴),
+    velocities   v⁺ − v(dt) = (1/4 − 1/6)·dt³·ä = dt³/12·ä + O(dt⁴),
+
+both O(dt³).  Heights: a⁺ − a = dt·ȧ + O(dt²), so dt²/6·(a⁺ − a) is the leading term, from
+the two kicks' accelerations alone.  Velocities: the two accelerations cannot tell ä from
+ȧ (a⁺ − a is their sum to O(dt³)), so the estimate takes ȧ at the start as well, the jerk
+ȧ₀ = −M⁻¹H(u)·v of the kick acceleration (``rates.jerk`` without the viscous term, and
+without the bending term where the kicks leave it out): a⁺ − a − dt·ȧ₀ = dt²/2·ä + O(dt³),
+and dt/6·(a⁺ − a − dt·ȧ₀) is the velocities' leading term, consistent at order 3 like the
+heights' one (its ratio to the true local error → 1 as dt → 0: 1.0000 at dt = 3e-5 on a
+smooth flight, the heights' 1.003; tests/test_stepping_kdk_error.py).  The
+trapezoid-versus-Euler difference dt/2·(a⁺ − a) would cost no jerk, but it is O(dt²), the
+error of a first-order step: it would hold verlet's velocities to a first-order scheme's
+steps.  The jerk costs one pass over the segments (the stress law's derivative, which
+``accel`` also evaluates for its bound), no force evaluation and no scratch of its own
+(rows of the workspace that the step is done with): a trial under tolerance control costs 27 % more at N = 5 and 12 % at N = 200
+(``paper-mu0``, 172 → 218 and 859 → 959 ns on a loaded two-core machine).  It pays: with
+the heights' part alone, on ``paper-mu0`` at rtol 1e-6, atol 1e-9 the bottom node's
+velocity in contact ends 7.9e-3 m/s off over the first second (25× dp54's error there);
+with both parts 5.1e-4 m/s, level with ``energy`` and ``dp54``, at 2.2× the steps
+(tests/test_stepping_tolerance_state.py).  Its price is highest where the rod is long and
+viscous: ``semi-implicit`` on ``paper-mu100`` at N = 200 to t = 1.2 takes 151 066 steps
+(45 023 with the heights' part alone, ``energy`` 38 192), most after the impact; the
+estimate covers the explicit forces only, not the viscous terms that damp the short waves.
+
+Each component is scaled as in the one error norm, heights by atol + rtol·max(|u|, |u⁺|)
+(``control.height_scale``), velocities by atol·``control.VELOCITY_SCALE`` +
+rtol·max(|v|, |v⁺|) (``control.velocity_scale``); the ratio is the largest over both, per
+unit step (``control.per_unit_step``: times ERROR_TIME/dt, so the global error follows the
+tolerance).  A ratio above 1 rejects the step (INACCURATE), and the next step is
+dt·0.9·ratio^(−1/2) (order 2), capped at ``control.STABILITY_CFL`` × the stability limit.
+The estimate covers the explicitly treated forces (the kicks'); the implicitly treated
+viscous and beam terms are not in it.  Under fixed steps (``time.dt``) it chooses nothing,
+so the parameters have ``tolerance`` off there (``registry``) and the step skips it.
 
 The row is a compile-time constant of the scheme's parameter type (``stages``): each
 scheme compiles to its own straight-line step, and only the sub-steps of its own row are
@@ -56,10 +90,12 @@ from typing import NamedTuple
 from ...kernels.banded import tridiag_solve
 from ...kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
 from ...kernels.mass import node_mass
+from ...kernels.rates import jerk
+from ...kernels.reduce import nan_max
 from .. import workspace as W
 from ..beam import beam_midpoint
 from ..control import (FAC_MIN, STABILITY_CFL, height_scale, per_unit_step,
-                       unit_step_factor)
+                       unit_step_factor, velocity_scale)
 from ..stability import explicit_dt
 from ..step_result import StepResult
 from ..viscous import factored, viscous_cn, viscous_sdirk2
@@ -69,8 +105,9 @@ __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "s
 
 
 class Verlet(NamedTuple):
-    """``tolerance``: steps from the local error estimate (rtol, atol), capped at
-    ``control.STABILITY_CFL`` × the stability limit; else cfl × the stability limit."""
+    """``tolerance``: steps from the local error estimate of heights and velocities in
+    the one error norm (rtol, atol; module docstring), capped at ``control.STABILITY_CFL``
+    × the stability limit; else cfl × the stability limit."""
 
     cfl: float
     rtol: float = 1e-6
@@ -188,15 +225,33 @@ def _imex_second_kick(v2, a2, tau, system):
 
 
 @step_kernel
-def _error_ratio(scheme, u, u2, a, a2, dt):
-    """max_i dt²/6·|a2_i − a_i| / (atol + rtol·max(|u_i|, |u2_i|)): the predicted local
-    error of u (dt³/6·ȧ) over its tolerance."""
-    c = dt * dt / 6.0
+def _error_ratio(scheme, u, u2, v, v2, a, a2, ad, dt):
+    """The predicted local error over its tolerance, the largest over heights and
+    velocities (module docstring): max_i of dt²/6·|a2_i − a_i| / ``height_scale`` and of
+    dt/6·|a2_i − a_i − dt·ad_i| / ``velocity_scale`` (``ad``: ȧ of the kick acceleration
+    at the start)."""
+    cu = dt * dt / 6.0
+    cv = dt / 6.0
     r = 0.0
     for i in range(u.size):
-        su = height_scale(scheme, u[i], u2[i])
-        r = max(r, c * abs(a2[i] - a[i]) / su)
+        # nan_max: a reduction LLVM vectorises (Python's max is a chain of selects that
+        # it does not); with its two divisions per node the loop then takes a third of
+        # the time
+        da = a2[i] - a[i]
+        r = nan_max(r, nan_max(cu * abs(da) / height_scale(scheme, u[i], u2[i]),
+                               cv * abs(da - dt * ad[i]) / velocity_scale(scheme, v[i], v2[i])))
     return r
+
+
+@step_kernel
+def _estimate(scheme, st, system, rod, floor, u, v, a, u2, v2, a2, work, dt):
+    """``_error_ratio`` of a finished trial step.  The jerk at the start goes into rows
+    the step is done with: V0 (the viscous sub-step's copy), with the velocity's
+    curvatures in K and the strains in S (both refilled by the next ``accel``)."""
+    ad = work[W.V0]
+    jerk(system, rod, floor, u, v, a, ad, work[W.K], work[W.S], st.kick_bending,
+         bool(False))
+    return _error_ratio(scheme, u, u2, v, v2, a, a2, ad, dt)
 
 
 def _for_rows(uses, kernel):
@@ -283,7 +338,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     dts = _suggest(scheme, st, system, floor, om2, u2[0], v2[0])
     if scheme.tolerance:
         # per unit step (control.per_unit_step): the global error follows the tolerance
-        err = per_unit_step(_error_ratio(scheme, u, u2, a, a2, dt), dt)
+        err = per_unit_step(_estimate(scheme, st, system, rod, floor, u, v, a, u2, v2, a2,
+                                      work, dt), dt)
         if not math.isfinite(err):
             return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, diss)
         if err > 1.0:
