@@ -159,12 +159,20 @@ def _rodjit_first_bounce(integrator, mu, n):
 # allowed: verlet splits its viscous sub-step off the kicks and is not allowed above
 # rodjit.config.VERLET_MU_MAX (the configuration warns; measured 2.8e-4 at μ = 100, N = 5,
 # and steps ∝ μN²; see tests/reference/notes/README.md and docs/integrators.md).
-_CASES = [(i, mu, n) for i in ("verlet", "semi-implicit", "energy") for mu in (1, 100, 1000)
-          for n in (5, 200) if not (i == "verlet" and mu > VERLET_MU_MAX)]
+# The explicit pairs where their viscous cap admits the run (``registry.VISCOUS_STEPS_MAX``:
+# dp54 and dop853 at μ = 100 and 1000 with N = 200 are refused), and "auto", the default.
+_CASES = [(i, mu, n) for i in ("verlet", "semi-implicit", "energy", "dp54", "dop853",
+                               "radau5", "auto")
+          for mu in (1, 100, 1000) for n in (5, 200)
+          if not (i == "verlet" and mu > VERLET_MU_MAX)
+          and not (i in ("dp54", "dop853") and mu * n * n > 1e6)]
 
 
 def _case(i, mu, n):
-    return pytest.param(i, mu, n, id=f"{i}-mu{mu}-N{n}")
+    # the pairs' N = 200 run at μ = 1 takes about 50 000 steps: a few seconds
+    slow = i in ("dp54", "dop853") and n == 200
+    return pytest.param(i, mu, n, id=f"{i}-mu{mu}-N{n}",
+                        marks=[pytest.mark.slow] if slow else [])
 
 
 def test_verlet_warns_where_it_is_not_allowed():

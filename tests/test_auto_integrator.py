@@ -148,3 +148,42 @@ def test_a_ladder_keeps_one_integrator_across_its_rungs():
     assert rep.base.time.integrator == "dop853"
     alone = rodjit.simulate(base.resolve().override({"rod.N": 20}))
     assert rep.runs[-1]["steps"] == alone.stats["steps"]
+
+
+# ---- where an integrator is impractical ----------------------------------------------------
+@pytest.mark.parametrize("name", ["dp54", "dop853"])
+def test_an_explicit_pair_capped_by_the_viscosity_is_refused_in_one_line(name):
+    cfg = rodjit.Config().override({"time.integrator": name, "rod.mu": 100.0, "rod.N": 200})
+    with pytest.raises(ValueError) as info:
+        cfg.check_runnable()
+    text = str(info.value)
+    assert "\n" not in text and "rod.mu*rod.N^2 = 4e+06" in text
+    assert "'radau5' or 'auto'" in text
+    # the same rod where the cap admits the run, with a fixed step, or chosen by auto
+    cfg.override({"rod.N": 20}).check_runnable()
+    cfg.override({"time.dt": 1e-6}).check_runnable()
+    auto = cfg.override({"time.integrator": "auto"})
+    auto.check_runnable()
+    assert auto.resolve().time.integrator == "radau5"
+
+
+@pytest.mark.parametrize("name", ["dp54", "dop853"])
+def test_the_registry_s_step_count_of_the_viscous_cap_is_measured(name):
+    """``Scheme.viscous_steps``: steps per simulated second over μN², as a run counts."""
+    cfg = rodjit.Config().override({**SHORT, "time.integrator": name, "rod.mu": 100.0,
+                                    "rod.N": 20, "time.t_end": 0.1})
+    steps = rodjit.simulate(cfg).stats["steps"]
+    expected = registry.get(name).viscous_steps * 100.0 * 20 ** 2 * 0.1
+    assert steps == pytest.approx(expected, rel=0.05)
+
+
+def test_the_command_line_refuses_an_impractical_pair(tmp_path):
+    from click.testing import CliRunner
+
+    from rodjit.cli import main
+
+    r = CliRunner().invoke(main, ["run", "-o", str(tmp_path / "r.h5"), "--set",
+                                  "time.integrator=dop853", "--set", "rod.mu=100", "--set",
+                                  "rod.N=200"])
+    assert r.exit_code == 2 and "impractical at rod.mu = 100, rod.N = 200" in r.output
+    assert len(r.output.strip().splitlines()) == 1 and not (tmp_path / "r.h5").exists()

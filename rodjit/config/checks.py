@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from ..stepping.registry import AUTO, get as registry_get
+from ..stepping.registry import AUTO, VISCOUS_STEPS_MAX, get as registry_get
 from .errors import ConfigError
 from .sections import check_dt_range
 
@@ -123,7 +123,24 @@ def _check_tolerance_honoured(integrator: str, control: str, dt: float | None,
             f"time.integrator = 'semi-implicit' or 'energy'")
 
 
+def _check_viscous_cap(integrator: str, control: str, dt: float | None, mu: float,
+                       n: int) -> None:
+    """An explicit scheme whose viscous stability cap would take more than
+    ``VISCOUS_STEPS_MAX`` steps per simulated second (``Scheme.viscous_steps``)."""
+    if integrator == AUTO or dt is not None or control != "tolerance":
+        return
+    entry = registry_get(integrator)
+    steps = entry.viscous_steps * mu * n * n
+    if steps > VISCOUS_STEPS_MAX:
+        raise ConfigError(
+            f"time.integrator = {integrator!r} is impractical at rod.mu = {mu:g}, rod.N = "
+            f"{n} (rod.mu*rod.N^2 = {mu * n * n:.3g}): its viscous stability cap takes "
+            f"about {steps:.2g} steps per simulated second (at most "
+            f"{VISCOUS_STEPS_MAX:.0e}); use time.integrator = 'radau5' or 'auto'")
+
+
 # What a run checks beyond ``CROSS_CHECKS`` before it steps (``Config.check_runnable``):
 # configurations that are valid (a file may hold one) but that a run refuses.
 RUN_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., Any]], ...] = (
-    (("time.integrator", "time.control", "time.dt", "rod.mu"), _check_tolerance_honoured),)
+    (("time.integrator", "time.control", "time.dt", "rod.mu"), _check_tolerance_honoured),
+    (("time.integrator", "time.control", "time.dt", "rod.mu", "rod.N"), _check_viscous_cap))

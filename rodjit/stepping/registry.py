@@ -23,8 +23,14 @@ from typing import Any, Callable
 from . import workspace
 
 __all__ = ["Scheme", "SCHEMES", "NAMES", "SCHEME_STATS", "TIME_KEYS", "get", "entry_of",
-           "AUTO", "AUTO_TABLE", "AUTO_SPAN", "AUTO_RTOL_MIN", "Choice", "choose",
+           "VISCOUS_STEPS_MAX", "AUTO", "AUTO_TABLE", "AUTO_SPAN", "AUTO_RTOL_MIN", "Choice", "choose",
            "load", "make_scheme", "counter_index", "register"]
+
+# An explicit scheme capped by the viscous stiffness above this many steps per simulated
+# second is refused (``Scheme.viscous_steps``): dop853 at μ = 100, N = 200 would take 3.5e6
+# steps and 156 s of compiled loop per simulated second where radau5 takes about 1,400
+# steps (0.05 s)
+VISCOUS_STEPS_MAX = 1e6
 
 # the configuration keys that can set the length of a step
 TIME_KEYS = ("time.rtol", "time.atol", "time.cfl", "time.dt")
@@ -38,6 +44,11 @@ class Scheme:
     ``counters`` name the entries of ``sstats`` the step increments (see ``SCHEME_STATS``).
     ``gap_control``: explicit schemes need the loop's barrier-gap limit; a scheme that is
     admissible by construction turns it off.
+    ``viscous_steps``: an explicit scheme whose steps the viscous stability cap sets takes
+    about ``viscous_steps``·μN² steps per simulated second under tolerance control
+    (measured: the count is that multiple to three digits at μ = 100…1000, N = 20…200); a
+    run that would take more than ``VISCOUS_STEPS_MAX`` of them is refused
+    (``Config.check_runnable``).  0: the scheme has no such cap.
     ``step_rules`` names the loop's step-size rules for the scheme (``control.RULES``).
     ``dense``: the scheme's module also provides ``dense_setup`` and ``dense`` (its
     continuous extension, see ``schemes``); with ``output.interpolate`` on and adaptive
@@ -62,6 +73,7 @@ class Scheme:
     cap_keys: tuple[str, ...] = ()
     error_norm: str = ""
     viscous_mu_max: float = float("inf")
+    viscous_steps: float = 0.0
     aot: bool = False
 
     def step_keys(self, control: str, fixed: bool = False) -> tuple[str, ...]:
@@ -118,10 +130,12 @@ SCHEMES: tuple[Scheme, ...] = (
     Scheme("dp54", "rodjit.stepping.integrators.erk", "DP54",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 16, gap_control=False,
            step_rules="pair-dp54", dense=True, order=5, error_norm=_PAIR_NORM,
+           viscous_steps=1.36,
            cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
     Scheme("dop853", "rodjit.stepping.integrators.erk", "DOP853",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 40, gap_control=False,
-           step_rules="pair-dop853", dense=True, order=8, error_norm=_PAIR_NORM, aot=True,
+           step_rules="pair-dop853", dense=True, order=8, error_norm=_PAIR_NORM,
+           viscous_steps=0.88, aot=True,
            cap="erk.STABILITY_CAP / ω and erk.VISCOUS_CAP·h²/(4μ) (constants of the pair; they bind in contact and at large μ)"),
     Scheme("radau5", "rodjit.stepping.integrators.radau", "Radau5",
            lambda tc, P: P(float(tc.rtol), float(tc.atol)), 50,
