@@ -54,7 +54,7 @@ def stats(res):
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("integrators", nargs="*", default=["energy", "verlet", "semi-implicit"])
+    ap.add_argument("integrators", nargs="*", default=["auto", "energy", "verlet", "semi-implicit"])
     ap.add_argument("--t-end", type=float, default=200.0)
     a = ap.parse_args()
     print("| integrator | steps | run time (s) | max rel. energy error to t = 5 / 20 / 100 / "
