@@ -301,11 +301,10 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
             dtp = retry
             after_reject = True
             continue
-        if sides and side != BOTH and (side == FREE) != (u2[0] >= 0.0):
-            # the step ended a sliver across the switch: the new state's derivative
-            # under the law itself, so the next step starts consistent
-            full_accel(system, rod, _trial_floor(scheme, floor, BOTH), u2, v2, nxt[2],
-                       work[0], work[1], bool(False))
+        # the step ended a sliver across the switch: once its outputs and extremes are
+        # taken (from the step's own derivative: its continuous extension reads it), the
+        # new state's derivative under the law itself, so the next step starts consistent
+        resync = sides and side != BOTH and (side == FREE) != (u2[0] >= 0.0)
         forced = 0
         t_new = target if land else t + dt
         evib = 0.0     # the vibration energy at a new bounce's impact (its step's start)
@@ -348,6 +347,9 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
             clock[L.DISSIPATED] = diss
             emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
                   snap_t, snap_step, snap_u, snap_v, diag, bool(False))
+        if resync:
+            full_accel(system, rod, _trial_floor(scheme, floor, BOTH), cur[0], cur[1], cur[2],
+                       work[0], work[1], bool(False))
     clock[L.T] = t
     clock[L.DT] = dtp
     clock[L.DISSIPATED] = diss
