@@ -114,22 +114,26 @@ def spread(rows, preset, tol) -> float:
     return max(errs) / min(errs)
 
 
+def _grid(rows, preset: str, title: str, cell) -> list[str]:
+    """One preset's Markdown table, integrators × TOLS, ``cell(row)`` in each cell."""
+    lines = [title, "", "| integrator | " + " | ".join(f"tol {t:.0e}" for t in TOLS) + " |",
+             "|---|" + "---|" * len(TOLS)]
+    for integrator in INTEGRATORS:
+        cells = [_row(rows, preset, integrator, tol) for tol in TOLS]
+        lines.append(f"| `{integrator}` | " + " | ".join(
+            "refused" if r["refused"] else cell(r) for r in cells) + " |")
+    return lines
+
+
 def state_table(rows) -> list[str]:
     lines = []
     for preset in PRESETS:
-        lines += [f"`{preset}`, t ≤ 1 s: largest snapshot error of the heights (m) / of the "
-                  f"velocities ÷ the impact speed against dop853 at rtol 1e-12 / accepted "
-                  f"steps", "",
-                  "| integrator | " + " | ".join(f"tol {t:.0e}" for t in TOLS) + " |",
-                  "|---|" + "---|" * len(TOLS)]
-        for integrator in INTEGRATORS:
-            cells = []
-            for tol in TOLS:
-                r = _row(rows, preset, integrator, tol)
-                cells.append("refused" if r["refused"] else
-                             f"{r['state_heights']:.1e} / {r['state_velocities']:.1e} / "
-                             f"{r['state_steps']:,}")
-            lines.append(f"| `{integrator}` | " + " | ".join(cells) + " |")
+        lines += _grid(rows, preset,
+                       f"`{preset}`, t ≤ 1 s: largest snapshot error of the heights (m) / of "
+                       f"the velocities ÷ the impact speed against dop853 at rtol 1e-12 / "
+                       f"accepted steps",
+                       lambda r: f"{r['state_heights']:.1e} / {r['state_velocities']:.1e} / "
+                                 f"{r['state_steps']:,}")
         lines.append("| spread (largest ÷ smallest) | " + " | ".join(
             f"{spread(rows, preset, tol):.3g}×" for tol in TOLS) + " |")
         lines.append("")
@@ -139,18 +143,11 @@ def state_table(rows) -> list[str]:
 def table(rows) -> str:
     lines = []
     for preset in PRESETS:
-        lines += [f"`{preset}`, T = 2 s: first-restitution error against dop853 at rtol "
-                  f"1e-12 / accepted steps / wall time", "",
-                  "| integrator | " + " | ".join(f"tol {t:.0e}" for t in TOLS) + " |",
-                  "|---|" + "---|" * len(TOLS)]
-        for integrator in INTEGRATORS:
-            cells = []
-            for tol in TOLS:
-                r = _row(rows, preset, integrator, tol)
-                cells.append("refused" if r["refused"] else
-                             f"{r['error']:.1e}{' !' if r['over'] else ''} / {r['steps']:,} / "
-                             f"{r['seconds'] * 1e3:.3g} ms")
-            lines.append(f"| `{integrator}` | " + " | ".join(cells) + " |")
+        lines += _grid(rows, preset,
+                       f"`{preset}`, T = 2 s: first-restitution error against dop853 at rtol "
+                       f"1e-12 / accepted steps / wall time",
+                       lambda r: f"{r['error']:.1e}{' !' if r['over'] else ''} / "
+                                 f"{r['steps']:,} / {r['seconds'] * 1e3:.3g} ms")
         lines.append("")
     lines += state_table(rows)
     lines.append("`!`: above 10 × tol.  `refused`: the integrator refuses the tolerance "
