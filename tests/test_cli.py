@@ -17,12 +17,15 @@ from rodjit.stepping import layout as L
 
 from conftest import assert_same_files, final_state, rodjit_cli
 
-# heavy enough that a run is still going when the test signals it (it would take minutes)
+# heavy enough that a run is still going when the test signals it (it would take minutes);
+# energy lands on the output times, so a resume to an earlier end equals a run made to it
+# at once (dop853, auto's here, steps toward t_end: driver.files.resume_file)
 LONG_RUN = """
 [rod]
 N = 300
 [time]
 t_end = 1000.0
+integrator = "energy"
 [output]
 snapshot_interval = 0.01
 """

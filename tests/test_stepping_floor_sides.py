@@ -19,7 +19,8 @@ import pytest
 import rodjit
 from rodjit.driver.run import Run
 from rodjit.model.laws import aiki_kosugi as ak
-from rodjit.model.laws.base import BOTH, CONTACT, FREE, Law, Sided, deriv, register, value
+from rodjit.model.laws.base import (BOTH, CONTACT, FREE, Law, Sided, deriv, lower,
+                                    primitive, register, value)
 from rodjit.records.result import MemorySink
 from rodjit.stepping import events
 from rodjit.stepping import layout as L
@@ -55,6 +56,24 @@ def test_sided_law_values_compiled_and_python(h):
             assert d == pytest.approx(law_d, rel=1e-14, abs=0.0)
         else:
             assert v < 0.0 and d < 0.0     # the contact branch pulls down above the floor
+
+
+@kernel
+def _sided_bounds(h, floor, side):
+    p = Sided(floor, side)
+    return lower(p), primitive(h, p)
+
+
+def test_sided_law_lower_and_primitive_compiled_and_python():
+    """``lower`` and ``primitive`` of a sided law are the law's own, compiled and from
+    Python (which the kernels run as under NUMBA_DISABLE_JIT: a sweep there failed with a
+    KeyError on ``Sided``)."""
+    for side in (FREE, CONTACT, BOTH):
+        p = Sided(FLOOR, side)
+        assert lower(p) == lower(FLOOR) == -0.05
+        assert primitive(-0.01, p) == primitive(-0.01, FLOOR)
+        assert _sided_bounds(-0.01, FLOOR, side) == pytest.approx(
+            (lower(FLOOR), primitive(-0.01, FLOOR)), rel=1e-14)
 
 
 def test_contact_extension_is_smooth_through_the_switch():

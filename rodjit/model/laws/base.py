@@ -368,6 +368,8 @@ def primitive(x, p):
     -------
     float
     """
+    if type(p) is Sided:       # as compiled: the law's own (``_primitive_ov``)
+        p = p.law
     return _BY_TYPE[type(p)].primitive(x, p)
 
 
@@ -385,7 +387,9 @@ def lower(p):
         −1 for the Aiki–Kosugi rod, −β for the floor.
     """
     # from Python, the law's own Python function (``_jit.python_function``); compiled
-    # code calls the kernel, through the overload below
+    # code calls the kernel, through the overload below (``Sided``: the law's, as there)
+    if type(p) is Sided:
+        p = p.law
     return float(python_function(_BY_TYPE[type(p)].lower)(p))
 
 
