@@ -136,6 +136,9 @@ def test_a_sweep_runs_the_base_choice_at_every_point(tmp_path):
     alone = rodjit.simulate(base.resolve().override({"rod.mu": 100.0}))
     assert table.columns["steps"][1] == alone.stats["steps"]
     assert rodjit.load_sweep(tmp_path / "s.h5").base.choice == table.base.choice
+    from rodjit.reports import info
+
+    assert f"integrator dop853, {table.base.choice}" in info(tmp_path / "s.h5")
 
 
 def test_a_ladder_keeps_one_integrator_across_its_rungs():
