@@ -136,6 +136,9 @@ def test_a_sweep_runs_the_base_choice_at_every_point(tmp_path):
     alone = rodjit.simulate(base.resolve().override({"rod.mu": 100.0}))
     assert table.columns["steps"][1] == alone.stats["steps"]
     assert rodjit.load_sweep(tmp_path / "s.h5").base.choice == table.base.choice
+    from rodjit.reports import info
+
+    assert f"integrator dop853, {table.base.choice}" in info(tmp_path / "s.h5")
 
 
 def test_a_ladder_keeps_one_integrator_across_its_rungs():
@@ -187,3 +190,14 @@ def test_the_command_line_refuses_an_impractical_pair(tmp_path):
                                   "rod.N=200"])
     assert r.exit_code == 2 and "impractical at rod.mu = 100, rod.N = 200" in r.output
     assert len(r.output.strip().splitlines()) == 1 and not (tmp_path / "r.h5").exists()
+
+
+def test_a_study_from_an_auto_base_refuses_a_point_its_integrator_cannot_run():
+    """The study keeps the base's choice (dop853 at μ = 0); a point where that is
+    impractical is named before anything runs, as docs/integrators.md says."""
+    with pytest.raises(ValueError, match=r"grid point 1 \(rod.mu=100\): time.integrator = "
+                                         r"'dop853' is impractical"):
+        rodjit.plan_sweep(rodjit.Config().override({"rod.N": 200}), {"rod.mu": [0.0, 100.0]})
+    plan = rodjit.plan_sweep(rodjit.Config().override({"rod.N": 200, "rod.mu": 100.0}),
+                             {"rod.mu": [0.0, 100.0]})
+    assert plan.config.time.integrator == "radau5"
