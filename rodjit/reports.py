@@ -76,7 +76,7 @@ def _about_sweep(path: str) -> About:
     if a.get("save_runs"):
         details.append(f"run files {a['save_runs']}")
     if table.base.choice:        # the integrator "auto" chose for every point
-        details.append(f"integrator {table.base.time.integrator}, {table.base.choice}")
+        details.append(f"integrator {table.base.ran_with()}")
     return About(int(a.get("format_version", sweep_file.FORMAT_VERSION)), a,
                  status + (f": {table.message}" if table.message else ""), details,
                  "base configuration:", table.base, table.report())

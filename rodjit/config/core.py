@@ -135,6 +135,12 @@ class Config:
         """
         return dataclasses.replace(self, choice=choice) if choice != self.choice else self
 
+    def ran_with(self) -> str:
+        """``time.integrator``, with how "auto" chose it (``choice``) where it did: the one
+        wording of the summary, ``rodjit info`` and ``--dry-run``."""
+        return (f"{self.time.integrator}, {self.choice}" if self.choice
+                else self.time.integrator)
+
     def resolve(self) -> "Config":
         """The configuration a run takes: ``time.integrator = "auto"`` replaced by the
         integrator the registry's table picks for this rod (``registry.choose``: by rod.mu,

@@ -180,8 +180,7 @@ class RunPlan:
         lines.append(f"memory       about {format_size(e.memory_bytes)}")
         lines.append(f"steps        {e.steps:.6g} fixed steps of time.dt = {c.time.dt:g}"
                      if e.steps is not None else
-                     f"steps        adaptive ({c.time.integrator}"
-                     + (f", {c.choice})" if c.choice else ")"))
+                     f"steps        adaptive ({c.ran_with()})")
         return "\n".join(lines)
 
 

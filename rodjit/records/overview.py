@@ -85,7 +85,7 @@ class RunFacts:
         lines = [f"{self.name}: {self.status} at t = {self.t:.6g} of {self.t_end:.6g} "
                  f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
         if c.choice:
-            lines.append(f"  integrator {c.time.integrator}, {c.choice}")
+            lines.append(f"  integrator {c.ran_with()}")
         if self.message:
             lines.append(f"  {self.message}")
         lines.extend(f"  warning: {w}" for w in self.warnings)

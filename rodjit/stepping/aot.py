@@ -242,12 +242,13 @@ def build(directory: Path, runs) -> Path:
     cc.target_cpu = "host"
     cc.verbose = False
     entries = []
+    gil = {"_save_thread": types.ExternalFunction("PyEval_SaveThread", types.voidptr()),
+           "_restore_thread": types.ExternalFunction("PyEval_RestoreThread",
+                                                     types.void(types.voidptr))}
     for args in runs:
         suffix = tag(args)
         source, glob = wrapper_source(args, suffix)
-        glob["_save_thread"] = types.ExternalFunction("PyEval_SaveThread", types.voidptr())
-        glob["_restore_thread"] = types.ExternalFunction("PyEval_RestoreThread",
-                                                         types.void(types.voidptr))
+        glob.update(gil)
         exec(compile(source, f"<rodjit.{EXTENSION} wrappers, {suffix}>", "exec"), glob)
         for name in ENTRIES:
             cc.export(f"{name}_{suffix}", _signature(name))(glob[f"{name}_{suffix}"])

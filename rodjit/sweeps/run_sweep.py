@@ -74,9 +74,9 @@ def _open_resume(output, config, grid, max_points):
     base, file_grid = header["base"], header["grid"]
     # the configurations as they run ("auto" resolved): the file's base is resolved already
     # unless an older version or a caller of sweep_file.create wrote it unresolved
-    if config is not None and config.resolve() != base.resolve():
-        was = base.resolve().flat()
-        differ = sorted(k for k, v in config.resolve().flat().items() if was[k] != v)
+    if config is not None and (want := config.resolve()) != (have := base.resolve()):
+        was = have.flat()
+        differ = sorted(k for k, v in want.flat().items() if was[k] != v)
         raise ResumeMismatch(output, "configuration", ", ".join(differ))
     if grid is not None and Grid.from_spec(grid, max_points=max_points) != file_grid:
         raise ResumeMismatch(output, "grid", file_grid.to_json())
