@@ -109,27 +109,23 @@ CROSS_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., None]], ...] = (
     (("time.dt_min", "time.dt_max"), check_dt_range))
 
 
-def _check_tolerance_honoured(integrator: str, control: str, dt: float | None,
-                              mu: float) -> None:
-    if integrator == AUTO:     # it chooses among the integrators that honour them
+def _check_regime(integrator: str, control: str, dt: float | None, mu: float,
+                  n: int) -> None:
+    """An integrator under tolerance control outside the regime its registry row admits:
+    one whose split viscous sub-step caps its step above ``viscous_mu_max`` (the cap, not
+    the tolerance, then sets its error), or an explicit scheme whose viscous stability cap
+    would take more than ``VISCOUS_STEPS_MAX`` steps per simulated second
+    (``viscous_steps``).  "auto" chooses among the integrators that admit the rod."""
+    if integrator == AUTO or dt is not None or control != "tolerance":
         return
     entry = registry_get(integrator)
-    if control == "tolerance" and dt is None and mu > entry.viscous_mu_max:
+    if mu > entry.viscous_mu_max:
         raise ConfigError(
             f"time.integrator = {integrator!r} cannot honour time.rtol/time.atol at "
             f"rod.mu = {mu:g} > {entry.viscous_mu_max:g}: its split viscous sub-step caps "
             f"the step at time.cfl*h^2/(2*mu), and that cap, not the tolerance, sets its "
             f"error; set time.control = 'cfl' and refine time.cfl, or use "
             f"time.integrator = 'semi-implicit' or 'energy'")
-
-
-def _check_viscous_cap(integrator: str, control: str, dt: float | None, mu: float,
-                       n: int) -> None:
-    """An explicit scheme whose viscous stability cap would take more than
-    ``VISCOUS_STEPS_MAX`` steps per simulated second (``Scheme.viscous_steps``)."""
-    if integrator == AUTO or dt is not None or control != "tolerance":
-        return
-    entry = registry_get(integrator)
     steps = entry.viscous_steps * mu * n * n
     if steps > VISCOUS_STEPS_MAX:
         raise ConfigError(
@@ -142,5 +138,4 @@ def _check_viscous_cap(integrator: str, control: str, dt: float | None, mu: floa
 # What a run checks beyond ``CROSS_CHECKS`` before it steps (``Config.check_runnable``):
 # configurations that are valid (a file may hold one) but that a run refuses.
 RUN_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., Any]], ...] = (
-    (("time.integrator", "time.control", "time.dt", "rod.mu"), _check_tolerance_honoured),
-    (("time.integrator", "time.control", "time.dt", "rod.mu", "rod.N"), _check_viscous_cap))
+    (("time.integrator", "time.control", "time.dt", "rod.mu", "rod.N"), _check_regime),)
