@@ -471,3 +471,50 @@ def test_a_shock_forming_rod_ladder_prints_no_limit_not_a_bar():
         line = [ln for ln in repr(conv).splitlines() if name in ln][0]
         assert "no limit" in line and "±" not in line
         assert all(f"{v:.6g}" in line for v in oc.space.values)
+
+
+def test_a_bounce_past_the_predictability_time_gets_the_spread_of_the_ladder_not_a_bar():
+    """N = 80 on a stiff floor at μ = 0: the first restitution converges along a tolerance
+    ladder, the second does not (its release, near 1.47 s, lies past the predictability
+    time that the ladder's heights give), so converge prints no bar for it, says why,
+    and a tight run of another integrator lands on no value the ladder settles to."""
+    cfg = rodjit.load_preset("paper-mu0").override({
+        "rod.N": 80, "floor.kappa_b": 1e7, "floor.beta": 0.1, "time.t_end": 2.0})
+    names = ["restitution_first", "restitution_second"]
+    conv = converge(cfg, {"time.rtol": [1e-6, 1e-7, 1e-8]}, observables=names, jobs=1)
+    assert conv.time_key is None and conv.key == "time.rtol"
+    first, second = conv["restitution_first"], conv["restitution_second"]
+    assert first.space.status == "converged" and first.error < 1e-5
+    tight = rodjit.simulate(cfg.override({"time.integrator": "radau5", "time.rtol": 1e-10,
+                                          "time.atol": 1e-12}))
+    ref = rodjit.analysis.observables(tight)
+    assert abs(first.value - ref["restitution_first"]) <= first.error
+    # the second bounce: no settled value, and the ladder's heights part before it ends
+    assert second.space.status in ("not converging", "oscillating")
+    values = second.space.values
+    assert max(values) - min(values) > 1e-3
+    release = (rodjit.analysis.macroscopic_contacts(
+        tight.diagnostics, tight.episodes, tight.bounces,
+        rodjit.analysis.physics_of(tight))["t_release"][1])
+    assert 0 < conv.predictability_time < release
+    text = repr(conv)
+    assert f"predictability_time: {conv.predictability_time:.4g} s" in text
+    assert ("restitution_second: the runs along the time.rtol ladder disagree after "
+            f"t = {conv.predictability_time:.4g} s") in text
+    assert not math.isfinite(second.error) or abs(second.value - ref["restitution_second"]) \
+        <= second.error
+
+
+def test_an_oscillating_time_ladder_adds_its_own_spread_to_the_time_error():
+    """Where the time ladder does not settle (its differences alternate), its finest value
+    is no reference: the time error is the base value's distance to it plus the ladder's
+    own error, so it covers the spread along the ladder."""
+    cfg = rodjit.load_preset("paper-mu0").override({
+        "rod.N": 80, "floor.kappa_b": 1e7, "floor.beta": 0.1, "time.t_end": 2.0})
+    conv = converge(cfg, {"rod.N": [40, 80]}, also={"time.rtol": [1e-6, 1e-8, 1e-10]},
+                    time_at=80, observables=["restitution_second"], jobs=1)
+    oc = conv["restitution_second"]
+    assert oc.time.status == "oscillating"
+    here = oc.space.values[-1]
+    assert oc.time_error == pytest.approx(abs(here - oc.time.values[-1]) + oc.time.error)
+    assert all(abs(here - v) <= oc.time_error for v in oc.time.values)

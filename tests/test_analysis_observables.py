@@ -91,8 +91,35 @@ def test_mu_10_on_the_paper_setting_reports_no_lift_off_with_the_rebound_speed()
     # the centre of mass rises while the bottom stays pressed: 0.17 of the impact speed
     assert 0.1 * math.sqrt(2 * 9.81) < obs["rebound_speed_first"] < 0.25 * math.sqrt(2 * 9.81)
     assert "never leaves the floor" in obs["reason"] and "of the impact speed" in obs["reason"]
+    # a contact that never ends leaves no second one
     assert not any(isinstance(v, float) and math.isnan(v) for k, v in obs.items()
-                   if k != "vibration_share_first")
+                   if k not in ("vibration_share_first", "restitution_second",
+                                "contact_time_second"))
+    assert math.isnan(obs["restitution_second"]) and math.isnan(obs["contact_time_second"])
+
+
+def test_the_second_contact_observables_are_the_second_row_of_the_bounce_table():
+    """paper-mu0 lifts off twice in 2 s: the second contact's restitution and contact time
+    are those of the bounce table's second row; paper-mu100 lands a second time and never
+    leaves the floor again (0 and inf, as for a first contact); before a second impact
+    there is none (NaN, "no impact" with its reason)."""
+    r = rodjit.simulate(rodjit.load_preset("paper-mu0").override({"time.t_end": 2.0}))
+    obs = observables(r)
+    b = r.bounces
+    assert obs["restitution_second"] == pytest.approx(b["restitution"][1], rel=1e-12)
+    assert obs["contact_time_second"] == pytest.approx(b["t_release"][1] - b["t_impact"][1],
+                                                       rel=1e-12)
+    assert obs["restitution_second"] != obs["restitution_first"]
+    r = rodjit.simulate(PAPER.override({"time.t_end": 2.0}))
+    obs = observables(r)
+    assert obs["restitution_first"] > 0 and obs["status"] == "lift-off"
+    assert obs["restitution_second"] == 0.0 and obs["contact_time_second"] == math.inf
+    r = rodjit.simulate(PAPER.override({"time.t_end": 0.5}))
+    obs = observables(r)
+    assert math.isnan(obs["restitution_second"]) and math.isnan(obs["contact_time_second"])
+    second = first_impact(r.diagnostics, r.episodes, r.bounces, physics_of(r), 1)
+    assert second.status == "no impact"
+    assert second.reason == "1 macroscopic contact(s), not 2, before t = 0.5"
 
 
 def test_a_contact_open_with_energy_to_spare_is_reported_open_with_the_reason():

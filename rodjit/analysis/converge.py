@@ -104,10 +104,11 @@ class Convergence:
     runs, time_runs : list of dict
         Each level's observables, status and ``steps`` (space ladder, time ladder).
     predictability_time : float
-        The simulated time [s] after which the runs along the time ladder disagree in the
-        heights by more than their error bar (``predictability_time``); inf if they never
-        do before ``time.t_end``, NaN when not measured (no time ladder of three levels
-        with snapshots, or one that did not change the steps).
+        The simulated time [s] after which the runs along the time ladder (or along the
+        ladder itself, when its key is a time key) disagree in the heights by more than
+        their error bar (``predictability_time``); inf if they never do before
+        ``time.t_end``, NaN when not measured (no time ladder of three levels with
+        snapshots, or one that did not change the steps).
     time_steps : list of int
         The accepted steps of each run of the time ladder.
     """
@@ -142,12 +143,13 @@ class Convergence:
                 lines.append(f"  {name}: {along} along {self.key}  {NO_LIMIT}")
                 continue
             lines.append(f"  {name}: {oc.value:.6g} ± {oc.error:.2g}{t}  {order}  {s.status}")
-        if self.time_key:
+        along = self.time_key or (self.key if self.key in TIME_KEYS else None)
+        if along:
             p = self.predictability_time
             lines.append("  predictability_time: " + (
                 "not measured" if math.isnan(p) else
                 f"none before t_end = {self.base.time.t_end:g} s" if p == math.inf else
-                f"{p:.4g} s (the heights along the {self.time_key} ladder disagree beyond "
+                f"{p:.4g} s (the heights along the {along} ladder disagree beyond "
                 f"it: trajectory-level outputs after it are not reproducible)"))
         for w in self.warnings:
             lines.append(f"  warning: {w}")
@@ -384,8 +386,12 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
     for c in configs + t_configs:        # what a run would refuse: before any runs
         c.check_runnable()
     limits = {"max_output": max_output, "max_steps": max_steps}
+    # a ladder over a time key is itself a time ladder: its heights give the
+    # predictability time
+    on_time = key in TIME_KEYS
     runs = evaluate(configs + t_configs, jobs=jobs, scheduler=scheduler,
-                    merge_time=merge_time, extra=extra, histories=bool(t_configs), **limits)
+                    merge_time=merge_time, extra=extra,
+                    histories=bool(t_configs) or on_time, **limits)
     runs, t_runs = runs[:len(configs)], runs[len(configs):]
     warnings = []
     failed = [f"{key} = {v}: {r['reason']}" for v, r in zip(values, runs)
@@ -426,8 +432,7 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
                     f"({steps_text(t_runs)} at every level)")
         base_t = base.get(t_key)
     histories = [r.pop("history", None) for r in t_runs]
-    for r in runs:
-        r.pop("history", None)
+    main_histories = [r.pop("history", None) for r in runs]
     out = {}
     for name in observables:
         s = study(name, levels(key, values), _values_of(runs, name))
@@ -470,6 +475,11 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
                 ref = ts.extrapolated if math.isfinite(ts.extrapolated) else ts.values[-1]
                 here = _at_base(base_t, t_values, ts.values, runs, values, time_at, name)
                 oc.time_error = abs(here - ref) if math.isfinite(here) else math.nan
+                if ts.status in ("oscillating", "pre-asymptotic") and math.isfinite(ts.error):
+                    # not extrapolated: the finest level is itself uncertain by the
+                    # ladder's own error (an observable past the predictability time
+                    # scatters along a tolerance ladder)
+                    oc.time_error += ts.error
                 if ts.status not in ("converged", "exact", "oscillating"):
                     warnings.append(f"{name}: {t_key} ladder {ts.status}: {ts.message}")
         if s.status not in ("converged", "exact", NO_LIMIT):
@@ -478,6 +488,16 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
     p_time = math.nan
     if t_key is not None and measured:
         p_time = predictability_time(histories, base.time.t_end)
+    elif on_time and not same_steps(runs):
+        p_time = predictability_time(main_histories, base.time.t_end)
+    if math.isfinite(p_time):
+        for name, oc in out.items():
+            ts = oc.space if on_time else oc.time
+            if ts is not None and ts.status in ("not converging", "oscillating"):
+                warnings.append(
+                    f"{name}: the runs along the {t_key or key} ladder disagree after "
+                    f"t = {p_time:.4g} s (the predictability time): a value set after it "
+                    f"is not reproducible: only its spread along the ladder is known")
     return Convergence(base, key, values, t_key, t_values, time_at, out, warnings, runs,
                        t_runs, p_time, [r.get("steps", -1) for r in t_runs])
 

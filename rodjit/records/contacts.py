@@ -315,8 +315,10 @@ class FirstImpact:
         return asdict(self)
 
 
-def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
-    """The first macroscopic contact and its restitutions (see docs/MODEL.md §3).
+def first_impact(diag, episodes, bounces, phys: Physics, index: int = 0,
+                 rows: dict[str, np.ndarray] | None = None) -> FirstImpact:
+    """The first macroscopic contact and its restitutions (see docs/MODEL.md §3), or with
+    ``index`` = k the (k+1)-th, with the same statuses.
 
     ``lift-off``: the contact ended; ``no lift-off``: it is still running at the end and the
     energy left is below ``phys.lift_energy``, so it can never end (restitution 0, apex
@@ -334,18 +336,24 @@ def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
         Its bounce table (``Result.bounces``).
     phys : Physics
         The configuration's numbers, from ``physics_of``.
+    index : int
+        Which macroscopic contact, from 0 (the first).
+    rows : dict, optional
+        The run's ``macroscopic_contacts``, where the caller has them already.
 
     Returns
     -------
     FirstImpact
     """
     nan = math.nan
-    rows = macroscopic_contacts(diag, episodes, bounces, phys)
-    if rows["t_impact"].size == 0:
-        return FirstImpact("no impact", f"the bottom never touched the floor before "
-                           f"t = {phys.t_final:g}", nan, nan, nan, nan, nan, 0, nan, nan,
-                           nan, nan, nan, nan, nan)
-    r = {k: v[0] for k, v in rows.items()}
+    if rows is None:
+        rows = macroscopic_contacts(diag, episodes, bounces, phys)
+    if rows["t_impact"].size <= index:
+        what = ("the bottom never touched the floor" if index == 0 else
+                f"{rows['t_impact'].size} macroscopic contact(s), not {index + 1},")
+        return FirstImpact("no impact", f"{what} before t = {phys.t_final:g}", nan, nan,
+                           nan, nan, nan, 0, nan, nan, nan, nan, nan, nan, nan)
+    r = {k: v[index] for k, v in rows.items()}
     common: dict[str, Any] = dict(
         t_impact=float(r["t_impact"]), n_episodes=int(r["n_episodes"]),
         w_impact=float(r["w_impact"]), rebound_speed=float(r["rebound_speed"]),
@@ -367,7 +375,8 @@ def first_impact(diag, episodes, bounces, phys: Physics) -> FirstImpact:
                            f"{common['rebound_speed']:.3g} ({ratio:.3g} of the impact speed)",
                            0.0, 0.0, math.inf, t_release=math.inf, w_release=nan,
                            energy_vibration_release=nan, **common)
-    return FirstImpact("open", f"the first contact is still running at t = {phys.t_final:g} "
+    which = "first contact" if index == 0 else f"contact {index + 1}"
+    return FirstImpact("open", f"the {which} is still running at t = {phys.t_final:g} "
                        f"with energy {e_end:.6g} above the {phys.lift_energy:.6g} a lift-off "
                        f"needs: run longer (time.t_end)", nan, nan, nan,
                        t_release=nan, w_release=nan, energy_vibration_release=nan, **common)

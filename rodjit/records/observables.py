@@ -51,6 +51,9 @@ OBSERVABLES: dict[str, str] = {
     "max_floor_force_first": "largest floor force during the first macroscopic contact",
     "vibration_share_first": "energy_vibration / (energy_vibration + w^2/2) at release of "
                              "the first macroscopic contact",
+    "restitution_second": "-w_release/w_impact of the second macroscopic contact (0 if the "
+                          "rod never leaves the floor again, NaN if there is none)",
+    "contact_time_second": "t_release - t_impact of the second macroscopic contact",
     "min_u0": "lowest bottom height u_0 of the run",
     "max_floor_force": "largest floor force of the run",
 }
@@ -70,7 +73,9 @@ def observables(result: Result, merge_time: float | None = None) -> dict[str, An
     """
     phys = physics_of(result, merge_time)
     d = result.diagnostics
-    fi = first_impact(d, result.episodes, result.bounces, phys)
+    rows = macroscopic_contacts(d, result.episodes, result.bounces, phys)
+    fi = first_impact(d, result.episodes, result.bounces, phys, rows=rows)
+    second = first_impact(d, result.episodes, result.bounces, phys, 1, rows=rows)
     ev, w = fi.energy_vibration_release, fi.w_release
     share = ev / (ev + 0.5 * w * w) if fi.status == "lift-off" else math.nan
     b = result.bounces
@@ -81,5 +86,7 @@ def observables(result: Result, merge_time: float | None = None) -> dict[str, An
     return {"restitution_first": fi.restitution, "restitution_apex_first": fi.restitution_apex,
             "contact_time_first": fi.contact_time, "rebound_speed_first": fi.rebound_speed,
             "min_u0_first": fi.min_u0, "max_floor_force_first": fi.max_floor_force,
-            "vibration_share_first": share, "min_u0": min_u0, "max_floor_force": max_ff,
+            "vibration_share_first": share, "restitution_second": second.restitution,
+            "contact_time_second": second.contact_time, "min_u0": min_u0,
+            "max_floor_force": max_ff,
             "status": fi.status, "reason": fi.reason}
