@@ -19,7 +19,7 @@ SOURCES = {path.stem: path.read_text() for path in sorted(CLI.glob("*.py"))}
 def test_each_verb_lives_in_its_own_module():
     modules = {name: command.callback.__module__ for name, command in cli.main.commands.items()}
     assert set(modules) == {"run", "sweep", "presets", "config", "info", "plot", "animate",
-                            "converge", "fit"}
+                            "converge", "fit", "restitution"}
     for name, module in modules.items():
         assert module == f"rodjit.cli.{name}", (name, module)
 

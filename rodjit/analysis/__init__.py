@@ -10,9 +10,10 @@ from .known import free_free_frequencies, spring_wall_impact
 from .observables import (FirstImpact, OBSERVABLES, Physics, energy_vibration, first_impact,
                           lift_energy, macroscopic_contacts, merge_episodes, observables,
                           physics_of, wave_speed)
+from .restitution import curve_report, restitution_curve
 
 __all__ = ["observables", "first_impact", "FirstImpact", "macroscopic_contacts",
            "merge_episodes", "energy_vibration", "lift_energy", "wave_speed", "physics_of",
            "Physics", "OBSERVABLES", "converge", "Convergence", "load_convergence",
            "free_free_frequencies", "spring_wall_impact", "fit", "FitResult", "FitError",
-           "fit_table", "TableFit", "read_measurements"]
+           "fit_table", "TableFit", "read_measurements", "restitution_curve", "curve_report"]

@@ -143,13 +143,13 @@ class Convergence:
                 lines.append(f"  {name}: {along} along {self.key}  {NO_LIMIT}")
                 continue
             lines.append(f"  {name}: {oc.value:.6g} ± {oc.error:.2g}{t}  {order}  {s.status}")
-        along = self.time_key or (self.key if self.key in TIME_KEYS else None)
-        if along:
+        ladder_key = self.time_key or (self.key if self.key in TIME_KEYS else None)
+        if ladder_key:
             p = self.predictability_time
             lines.append("  predictability_time: " + (
                 "not measured" if math.isnan(p) else
                 f"none before t_end = {self.base.time.t_end:g} s" if p == math.inf else
-                f"{p:.4g} s (the heights along the {along} ladder disagree beyond "
+                f"{p:.4g} s (the heights along the {ladder_key} ladder disagree beyond "
                 f"it: trajectory-level outputs after it are not reproducible)"))
         for w in self.warnings:
             lines.append(f"  warning: {w}")
@@ -492,8 +492,8 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
         p_time = predictability_time(main_histories, base.time.t_end)
     if math.isfinite(p_time):
         for name, oc in out.items():
-            ts = oc.space if on_time else oc.time
-            if ts is not None and ts.status in ("not converging", "oscillating"):
+            study_t = oc.space if on_time else oc.time
+            if study_t is not None and study_t.status in ("not converging", "oscillating"):
                 warnings.append(
                     f"{name}: the runs along the {t_key or key} ladder disagree after "
                     f"t = {p_time:.4g} s (the predictability time): a value set after it "

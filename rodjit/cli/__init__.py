@@ -2,7 +2,7 @@
 the analyses, the reports and the plots.
 
 One module per verb (``run``, ``sweep``, ``presets``, ``config``, ``info``, ``plot``,
-``animate``, ``converge``, ``fit``); the options several verbs share are defined once in
+``animate``, ``converge``, ``fit``, ``restitution``); the options several verbs share are defined once in
 ``options``; ``exits`` holds the exit codes and the two one-line errors, ``say`` the
 warning lines, ``wording`` how the command line words the API's typed errors (the API's
 messages speak Python, the command line its options), ``group`` the ``rodjit`` group.
@@ -29,6 +29,7 @@ from .info import info_command
 from .options import DEFAULT_OUTPUT
 from .plot import plot_command, plot_run, plot_sweep
 from .presets import presets_command
+from .restitution import restitution_command
 from .run import run_command
 from .say import say_warning
 from .sweep import sweep_command
@@ -44,6 +45,7 @@ quiet_disk_errors()
 
 # the verbs, in the order the original module declared them (``rodjit --help`` sorts them)
 for _command in (run_command, sweep_command, presets_command, config_command, info_command,
-                 plot_command, animate_command, converge_command, fit_command):
+                 plot_command, animate_command, converge_command, fit_command,
+                 restitution_command):
     main.add_command(_command)
 del _command

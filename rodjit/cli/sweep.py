@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import click
 
@@ -12,7 +12,7 @@ from .exits import EXIT_FAILED, EXIT_SIGNAL, UsageError, disk_failed, one_line
 from .options import close, command_line, overrides, progress, sweep_bar
 from .wording import output_exists, word
 
-__all__ = ["sweep_command", "failed_points"]
+__all__ = ["sweep_command", "failed_points", "sweep_and_print", "sweep_exit"]
 
 
 @click.command("sweep")
@@ -64,8 +64,6 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
     reruns them), 2 usage or configuration error (nothing written), 130/143 interrupted
     (every finished point is kept; --resume continues).
     """
-    import signal
-
     from ..sweeps.start_method import POOL_SCHEDULERS, start_server
 
     if scheduler in POOL_SCHEDULERS and device != "cuda" and not dry_run:
@@ -74,8 +72,7 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
         start_server()
 
     from ..output.h5files import OutputExists
-    from ..driver.signals import hold_on_exit, pending_signal
-    from ..sweeps import SweepFailed, SweepInterrupted, plan_sweep, sweep
+    from ..sweeps import plan_sweep
 
     if dry_run and resume:
         raise UsageError("--dry-run checks a new sweep; it cannot be used with --resume")
@@ -135,6 +132,34 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
             click.echo(plan.report())
             return
         jobs = options.cap_jobs(jobs, scheduler, grid, force_jobs, quiet)
+    except OutputExists as exc:
+        raise UsageError(output_exists(exc, "--resume")) from None
+    except ValueError as exc:
+        raise UsageError(exc) from None
+    table = sweep_and_print(cfg, grid, output, jobs=jobs, scheduler=scheduler,
+                            save_runs=save_runs, resume=resume, overwrite=overwrite, bar=bar,
+                            quiet=quiet, command=command, device=device,
+                            batch_size=batch_size, limits=limits)
+    sweep_exit(table, output)
+
+
+def sweep_and_print(cfg: Any, grid: Any, output: str, *, jobs: int | None,
+                    scheduler: str | None, bar: Any, quiet: bool, command: str,
+                    device: str | None, limits: dict[str, Any], save_runs: str | None = None,
+                    resume: bool = False, overwrite: bool = False,
+                    batch_size: int | None = None,
+                    report: Callable[[Any], str] | None = None) -> Any:
+    """Run a sweep as the command line does (``rodjit sweep``, ``rodjit restitution``):
+    signals held from its end on, an interruption or a failure printed with the table and
+    its exit code, a bad argument a usage error; then print the headline and
+    ``report(table)`` (default: the sweep's table) unless ``quiet``, and return the table.
+    ``sweep_exit`` ends the command."""
+    from ..driver.signals import hold_on_exit
+    from ..output.h5files import OutputExists
+    from ..sweeps import SweepFailed, SweepInterrupted, sweep
+
+    text = report or (lambda t: t.report(max_rows=40))
+    try:
         with hold_on_exit():      # from the end of the sweep on, signals wait (see below)
             table = sweep(cfg, grid, output=output, jobs=jobs, scheduler=scheduler,
                           save_runs=save_runs, resume=resume, overwrite=overwrite,
@@ -147,14 +172,14 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
         if not quiet:
             click.echo(exc.table.headline())
             if exc.table.status == "completed":
-                click.echo(exc.table.report(max_rows=40))
+                click.echo(text(exc.table))
         click.echo(word(exc), err=True)
         sys.exit(EXIT_SIGNAL + (exc.signum or 2))
     except SweepFailed as exc:
         close(bar)
         if not quiet:
             click.echo(exc.table.headline())
-            click.echo(exc.table.report(max_rows=40))
+            click.echo(text(exc.table))
         click.echo(f"error: {exc}", err=True)
         sys.exit(EXIT_FAILED)
     except ValueError as exc:
@@ -165,8 +190,18 @@ def sweep_command(config: str | None, grids: tuple[str, ...], output: str | None
     close(bar)
     if not quiet:
         click.echo(table.headline())
-        click.echo(table.report(max_rows=40))
-    late = pending_signal()   # came after the file was closed, while the table was printed
+        click.echo(text(table))
+    return table
+
+
+def sweep_exit(table: Any, output: str) -> None:
+    """End a sweep's command: a signal that came after the file was closed, while the table
+    was printed, exits with its code; failed points exit 1 with one line on them."""
+    import signal
+
+    from ..driver.signals import pending_signal
+
+    late = pending_signal()
     if late is not None:
         click.echo(f"interrupted by {signal.Signals(late).name} after the last point; "
                    f"{output!r} is complete", err=True)

@@ -4,8 +4,10 @@ registry), configurations a run refuses, and the known limits of the model.
 """
 from __future__ import annotations
 
+import math
 from typing import Any, Callable
 
+from ..model.system import start_velocity
 from ..stepping.registry import AUTO, VISCOUS_STEPS_MAX, get as registry_get
 from .errors import ConfigError
 from .sections import check_dt_range
@@ -93,6 +95,22 @@ def _check_height(height: float, beta: float) -> None:
             f"= {-beta!r}: the bottom must start above the floor's bending limit)")
 
 
+def _check_impact_speed(impact_speed: float | None, velocity: float, height: float,
+                        g: float) -> None:
+    if impact_speed is None:
+        return
+    if velocity != 0.0:
+        raise ConfigError(
+            f"initial.impact_speed = {impact_speed!r} sets the initial velocity: leave "
+            f"initial.velocity unset (0), not {velocity!r}")
+    if math.isnan(start_velocity(height, velocity, impact_speed, g)):
+        least = math.sqrt(-2.0 * g * height)
+        raise ConfigError(
+            f"initial.impact_speed = {impact_speed!r} is out of range (>= {least:.6g} m/s, "
+            f"the speed of a fall from rest from initial.height = {height!r}): lower "
+            f"initial.height")
+
+
 def _law_check(kind: str) -> Callable[[str], None]:
     def check(name: str) -> None:
         from ..model.laws import get_law  # laws register themselves on import
@@ -106,6 +124,8 @@ CROSS_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., None]], ...] = (
     (("rod.law",), _law_check("rod")),
     (("floor.law",), _law_check("floor")),
     (("initial.height", "floor.beta"), _check_height),
+    (("initial.impact_speed", "initial.velocity", "initial.height", "gravity.g"),
+     _check_impact_speed),
     (("time.dt_min", "time.dt_max"), check_dt_range))
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..stepping.registry import AUTO, choose
+from ..model.system import start_velocity
 from .checks import CROSS_CHECKS, RUN_CHECKS, model_warnings, setup_warnings
 from .errors import ConfigError
 from .keys import FIELDS, parse_value, strip_quotes, unknown_key_error
@@ -99,7 +100,9 @@ class Config:
             the rod's length.
         """
         return (model_warnings(self.rod.mu, self.rod.gamma, self.resolve().time.integrator)
-                + setup_warnings(self.gravity.g, self.initial.height, self.initial.velocity,
+                + setup_warnings(self.gravity.g, self.initial.height,
+                                 start_velocity(self.initial.height, self.initial.velocity,
+                                                self.initial.impact_speed, self.gravity.g),
                                  self.floor.beta))
 
     def check_runnable(self) -> None:

@@ -251,6 +251,12 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
                             unit="m s-1"),
         "strain": KeySpec("float", "> -1", lambda e: e > -1.0,
                           meaning="initial uniform strain of the rod", unit="1"),
+        "impact_speed": KeySpec("float", "> 0 (unset: initial.velocity)", _pos,
+                                optional=True, unit="m s-1",
+                                meaning="speed at which the bottom reaches the floor: the "
+                                        "rod starts at initial.height with the uniform "
+                                        "velocity a free fall needs for it (instead of "
+                                        "initial.velocity)"),
     },
     "time": {
         "t_end": KeySpec("float", "> 0", _pos, meaning="time at which the run ends", unit="s"),

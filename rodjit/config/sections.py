@@ -104,13 +104,15 @@ class GravityConfig(Section):
 @dataclass(frozen=True)
 class InitialConfig(Section):
     """Initial state: bottom height (above ``-floor.beta``, checked by ``Config``), uniform
-    velocity, uniform pre-strain."""
+    velocity, uniform pre-strain; or, with ``impact_speed`` set, the uniform velocity that
+    brings the bottom to the floor at that speed (``model.system.start_velocity``)."""
 
     SECTION: ClassVar[str] = "initial"
 
     height: float = 1.0
     velocity: float = 0.0
     strain: float = 0.0
+    impact_speed: float | None = None
 
 
 @_documented

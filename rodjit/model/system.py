@@ -1,6 +1,7 @@
 """The semi-discrete rod of MODEL.md §2 as plain data: grid, masses, parameters, initial state."""
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -8,7 +9,7 @@ import numpy as np
 from .laws import get_law, lower
 
 __all__ = ["RodSystem", "build_system", "rod_system", "law_params", "grid", "masses",
-           "initial_state", "check_admissible"]
+           "initial_state", "start_velocity", "check_admissible"]
 
 
 class RodSystem(NamedTuple):
@@ -65,10 +66,30 @@ def initial_state(config, u0=None, v0=None) -> tuple[np.ndarray, np.ndarray]:
         u = _profile("u0", u0, n)
     if v0 is None:
         v = np.empty(n + 1)
-        v.fill(float(config.initial.velocity))
+        ini = config.initial
+        v.fill(start_velocity(ini.height, ini.velocity, ini.impact_speed, config.gravity.g))
     else:
         v = _profile("v0", v0, n)
     return u, v
+
+
+def start_velocity(height: float, velocity: float, impact_speed: float | None,
+                   g: float) -> float:
+    """The uniform initial velocity of the nodes: ``initial.velocity``, or with
+    ``initial.impact_speed`` = V set, the velocity w₀ < 0 at which a free fall from
+    ``initial.height`` = h brings the bottom to the floor at speed V: w² − 2g·u is constant
+    in free flight (u'' = g), so w₀ = −√(V² + 2g·h) (g signed along +u).  Started a little
+    above the floor, the rod meets it as one dropped from rest from V²/(2|g|) does (g < 0;
+    the free fall does not deform it), without the fall's steps: a restitution curve's
+    points (``analysis.restitution``).  NaN where no such w₀ exists (V below the speed a
+    fall from h already gives, which ``Config`` refuses)."""
+    if impact_speed is None:
+        return float(velocity)
+    v2 = impact_speed * impact_speed
+    w2 = v2 + 2.0 * g * height
+    if w2 < 0.0 and w2 >= -1e-12 * v2:     # a start at the drop height itself, but for
+        w2 = 0.0                           # rounding: from rest
+    return -math.sqrt(w2) if w2 >= 0.0 else math.nan
 
 
 def _check_resolved(height: float, u: np.ndarray, spacing: float) -> None:

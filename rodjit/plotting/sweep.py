@@ -26,7 +26,7 @@ MARKERS = "osD^vP*X"   # one per line, so lines can be told apart without colour
 MAX_ANNOTATED = 15     # cells per side up to which a heatmap prints its values
 _SYMBOLS = {"rod.mu": "μ", "rod.kappa": "κ", "rod.gamma": "γ", "floor.kappa_b": "κ_b",
             "floor.beta": "β", "gravity.g": "g", "rod.N": "N", "initial.height": "height",
-            "initial.velocity": "v0"}
+            "initial.velocity": "v0", "initial.impact_speed": "impact speed"}
 
 
 def _name(key: str) -> str:
@@ -167,16 +167,30 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     import matplotlib
 
     colors = matplotlib.colormaps["viridis"](np.linspace(0.0, 0.85, max(1, len(combos))))
-    marked = False
+    marked = marked_stay = False
     for j, combo in enumerate(combos):
         mask = base & _select(table, dict(zip(others, combo)))
         order = np.argsort(table[x][mask])
         xv = np.asarray(table[x][mask])[order]
         yv = np.asarray(table[quantity][mask], float)[order]
         label = ", ".join(f"{_name(k)} = {format_value(v)}" for k, v in zip(others, combo))
-        ax.plot(xv, yv, MARKERS[j % len(MARKERS)] + "-", ms=5, lw=1.0, color=colors[j],
-                label=label or None)
-        missing = ~np.isfinite(yv)
+        # a point whose rod never leaves the floor (restitution 0, contact time inf) is
+        # marked as such, at its value or, infinite, at the top of the axes, and breaks
+        # its line (no bounce to join to the bounces beside it)
+        stays = np.asarray(table["impact_status"][mask])[order] == "no lift-off"
+        ax.plot(xv, np.where(stays, np.nan, yv), MARKERS[j % len(MARKERS)] + "-", ms=5,
+                lw=1.0, color=colors[j], label=label or None)
+        if stays.any():
+            top = ~np.isfinite(yv[stays])
+            at_value = np.where(top, np.nan, yv[stays])
+            ax.plot(xv[stays], at_value, "v", ms=8, mfc="none", mew=1.5, color=colors[j],
+                    label=None if marked_stay else "no lift-off")
+            if top.any():
+                ax.plot(xv[stays][top], np.full(int(top.sum()), 0.97), "^", ms=8,
+                        mfc="none", mew=1.5, color=colors[j],
+                        transform=ax.get_xaxis_transform(), clip_on=False)
+            marked_stay = True
+        missing = ~np.isfinite(yv) & ~stays
         if missing.any():   # a point without a value is marked at the foot of the axes
             ax.plot(xv[missing], np.full(int(missing.sum()), 0.03), "x", ms=7, mew=1.5,
                     color=colors[j], transform=ax.get_xaxis_transform(), clip_on=False,
@@ -189,7 +203,7 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
     _title(ax, _label(quantity) + (f"\n{title}" if title else ""))
     if quantity.startswith("restitution"):
         ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
-    if others or marked:
+    if others or marked or marked_stay:
         ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=8)
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
@@ -49,6 +49,13 @@ def dimension_names(keys) -> dict[str, str]:
     last = [k.rpartition(".")[2] for k in keys]
     return {k: (short if last.count(short) == 1 else k.replace(".", "_"))
             for k, short in zip(keys, last)}
+
+
+def _csv_cell(value) -> str:
+    """A CSV cell: a float at full precision (``repr``), anything else as ``str``."""
+    if isinstance(value, (float, np.floating)):
+        return repr(float(value))
+    return str(value.item() if isinstance(value, np.generic) else value)
 
 
 @dataclass(repr=False)
@@ -181,6 +188,58 @@ class SweepTable:
         df = pd.DataFrame(self.columns)
         df.index.name = "point"
         return df
+
+    def to_csv(self, path: str | os.PathLike[str], columns: Sequence[str] | None = None,
+               overwrite: bool = False) -> Path:
+        """Write the table as CSV (one row per point, a header of column names; floats at
+        full precision, ``nan``/``inf`` as Python writes them), for a spreadsheet or a
+        reader without h5py.  Written to ``path.part`` and renamed: a failed write leaves
+        no half file.
+
+        Parameters
+        ----------
+        path : str or os.PathLike
+            The CSV file.
+        columns : sequence of str, optional
+            The columns, in order (default: all, the swept keys first).
+        overwrite : bool
+            Replace an existing file.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+
+        Raises
+        ------
+        ValueError
+            An unknown column, or ``path`` exists and ``overwrite`` is false, or its
+            directory is missing.
+        """
+        import csv
+
+        names = list(self.columns) if columns is None else list(columns)
+        unknown = [c for c in names if c not in self.columns]
+        if unknown:
+            raise ValueError(f"columns: {unknown[0]!r} is not a column of this sweep (one "
+                             f"of {', '.join(self.columns)})")
+        out = Path(path)
+        if out.exists() and not overwrite:
+            raise ValueError(f"output file {str(out)!r} exists (overwrite=True replaces it)")
+        if not out.parent.is_dir():
+            raise ValueError(f"output directory {str(out.parent)!r} does not exist")
+        tmp = out.with_name(out.name + ".part")
+        try:
+            with open(tmp, "w", newline="") as f:
+                w = csv.writer(f)
+                w.writerow(names)
+                cols = [self.columns[c] for c in names]
+                for i in range(len(self)):
+                    w.writerow([_csv_cell(col[i]) for col in cols])
+            os.replace(tmp, out)
+        finally:
+            tmp.unlink(missing_ok=True)
+        return out
 
     def dimension_names(self) -> dict[str, str]:
         """Swept key -> its dimension name in ``to_xarray``: a Python identifier (``rod.mu``
