@@ -14,7 +14,13 @@ restitution_first = 0.8 (at N = 100 the restitution falls from 0.85 at μ = 0 to
    it, SAMPLE points spread evenly over the grid run and the grid's time is their time
    × (grid size / SAMPLE) (printed as an estimate).
 
-    python benchmarks/bench_fit.py [--full]
+With ``--evaluate``: the runs of a table fit (``rodjit.fit_table``: 6 rows of
+paper-mu100 over impact speeds 2–8 m/s, at 3 parameter vectors, 6 times: 108 runs),
+evaluated as a fit does (its observables are sweep summary columns: the batch engine)
+against a run file each (``analysis.evaluate`` without ``columns``), in alternating
+pairs on 2 workers.
+
+    python benchmarks/bench_fit.py [--full] [--evaluate]
 """
 from __future__ import annotations
 
@@ -38,10 +44,40 @@ SAMPLE = 32
 JOBS = 2
 
 
+def evaluate_paths(repeat: int = 3) -> dict:
+    """A table fit's runs on the batch engine against a run file each (module docstring)."""
+    from rodjit.analysis.evaluate import evaluate
+
+    _util.header("a table fit's 108 runs: batch engine against a run file each (2 jobs)")
+    base = rodjit.load_preset("paper-mu100").override({"time.t_end": 1.0,
+                                                       "initial.height": 0.01})
+    configs = [base.override({"initial.impact_speed": v, "rod.mu": mu,
+                              "floor.kappa_b": kb})
+               for _ in range(6) for mu, kb in ((150.0, 2e3), (150.15, 2e3), (150.0, 2002.0))
+               for v in (2.0, 3.0, 4.0, 5.0, 6.0, 8.0)]
+    columns = ["restitution_first", "contact_time_first"]
+    evaluate(configs[:4], jobs=JOBS, columns=columns)    # kernels loaded before timing
+    t_batch, t_files = [], []
+    for _ in range(repeat):
+        t_batch.append(_util.timed(lambda: evaluate(configs, jobs=JOBS, columns=columns))[0])
+        t_files.append(_util.timed(lambda: evaluate(configs, jobs=JOBS))[0])
+    b, f = float(np.median(t_batch)), float(np.median(t_files))
+    print(_util.table([["batch engine", len(configs), b, 1e3 * b / len(configs), 1.0],
+                       ["a run file each", len(configs), f, 1e3 * f / len(configs), f / b]],
+                      ["path", "runs", "time [s]", "ms per run", "× batch engine"]))
+    return {"runs": len(configs), "batch_time": b, "files_time": f, "speedup": f / b}
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--full", action="store_true", help="run every grid point")
+    ap.add_argument("--evaluate", action="store_true",
+                    help="only a table fit's runs: batch engine against a run file each")
     args = ap.parse_args()
+    if args.evaluate:
+        out = evaluate_paths()
+        print(f"   -> {_util.save('fit_evaluate', out)}")
+        return out
     _util.header("rodjit.fit against a grid search (paper setting, N = 100, target e = 0.8)")
     base = rodjit.load_preset("paper-mu100").override(
         {"rod.N": 100, "time.t_end": 0.8, "output.snapshot_interval": 0.0})

@@ -27,7 +27,8 @@ _WHERE = {
     "Convergence": ".analysis", "FitError": ".analysis", "FitResult": ".analysis",
     "TableFit": ".analysis", "converge": ".analysis", "fit": ".analysis",
     "fit_table": ".analysis", "load_convergence": ".analysis", "observables": ".analysis",
-    "restitution_curve": ".analysis",
+    "restitution_curve": ".analysis", "compare_laws": ".analysis",
+    "LawComparison": ".analysis",
     "Config": ".config",
     "OutputExists": ".driver.files", "RunInterrupted": ".driver.files",
     "RunPlan": ".driver.files", "plan_run": ".driver.files", "resume_file": ".driver.files",
@@ -53,6 +54,7 @@ if TYPE_CHECKING:      # what static tools and editors see: the same names, impo
     from .analysis.fit import fit
     from .analysis.fit_table import fit_table
     from .analysis.observables import observables
+    from .analysis.fit_table import LawComparison, compare_laws
     from .analysis.restitution import restitution_curve
     from .config import Config
     from .driver.files import (OutputExists, RunInterrupted, RunPlan, plan_run, resume_file,
@@ -78,4 +80,5 @@ __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "re
            "load_preset", "preset_names", "SweepInterrupted", "SweepFailed", "MissingMainGuard",
            "open_run", "plot", "animate", "laws", "converge", "fit", "fit_table", "observables",
            "Convergence", "FitResult", "FitError", "TableFit", "load_convergence", "plan_run",
-           "RunPlan", "plan_sweep", "SweepPlan", "restitution_curve", "__version__"]
+           "RunPlan", "plan_sweep", "SweepPlan", "restitution_curve", "compare_laws", "LawComparison",
+           "__version__"]

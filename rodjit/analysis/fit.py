@@ -147,7 +147,7 @@ class _Objective:
             if self.ladder is None:
                 runs = evaluate([self.config(x) for x in todo], jobs=self.jobs,
                                 scheduler=self.scheduler, merge_time=self.merge_time,
-                                **self.limits)
+                                columns=[self.name], **self.limits)
                 for x, r in zip(todo, runs):
                     self.cache[x] = (float(r.get(self.name, math.nan)), r.get("reason", ""))
             else:
@@ -158,7 +158,8 @@ class _Objective:
                 lkey, levels = check_ladder("ladder", self.ladder, self.base)
                 cfgs = [self.config(x).override({lkey: v}) for x in todo for v in levels]
                 runs = evaluate(cfgs, jobs=self.jobs, scheduler=self.scheduler,
-                                merge_time=self.merge_time, **self.limits)
+                                merge_time=self.merge_time, columns=[self.name],
+                                **self.limits)
                 n = len(levels)
                 for i, x in enumerate(todo):
                     part = runs[i * n:(i + 1) * n]
@@ -373,7 +374,7 @@ def _resolution_shift(out: FitResult, obj, base, key, name, coarse, ladder, jobs
     if coarse is None:
         coarse = {"rod.N": max(1, base.rod.N // 2)}
     cfg = base.override({key: out.value}).override(coarse)
-    r = evaluate([cfg], jobs=1, merge_time=merge_time, **obj.limits)[0]
+    r = evaluate([cfg], jobs=1, merge_time=merge_time, columns=[name], **obj.limits)[0]
     f_c = float(r.get(name, math.nan))
     if math.isfinite(f_c):
         out.resolution_shift = float((f_c - out.target) / out.sensitivity)

@@ -14,6 +14,7 @@ import csv
 import math
 import os
 from dataclasses import asdict, dataclass, field
+from statistics import NormalDist
 from typing import TYPE_CHECKING, Any, Mapping, Sequence
 
 import numpy as np
@@ -23,7 +24,54 @@ from .evaluate import evaluate
 if TYPE_CHECKING:
     from ..config import Config
 
-__all__ = ["fit_table", "TableFit", "read_measurements"]
+__all__ = ["fit_table", "TableFit", "read_measurements", "compare_laws", "LawComparison",
+           "t_quantile"]
+
+
+def t_quantile(level: float, dof: int) -> float:
+    """The two-sided quantile q of Student's t with ``dof`` degrees of freedom:
+    P(|T| ≤ q) = ``level``.  The distribution function by the finite series of Abramowitz
+    & Stegun 26.7.3 (exact for a whole number of degrees of freedom), inverted by
+    bisection; tests/test_calibration.py compares it with SciPy's.
+
+    Parameters
+    ----------
+    level : float
+        In (0, 1).
+    dof : int
+        At least 1.
+
+    Returns
+    -------
+    float
+    """
+    def inside(t: float) -> float:          # P(|T| <= t)
+        theta = math.atan(t / math.sqrt(dof))
+        c, sn = math.cos(theta), math.sin(theta)
+        if dof % 2:
+            term, total = c, (c if dof > 1 else 0.0)
+            for k in range(3, dof - 1, 2):
+                term *= (k - 1) / k * c * c
+                total += term
+            return 2.0 / math.pi * (theta + sn * total)
+        term = total = 1.0
+        for k in range(2, dof - 1, 2):
+            term *= (k - 1) / k * c * c
+            total += term
+        return sn * total
+
+    lo, hi = 0.0, 1.0
+    while inside(hi) < level:
+        hi *= 2.0
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        if inside(mid) < level:
+            lo = mid
+        else:
+            hi = mid
+        if hi - lo <= 1e-13 * hi:
+            break
+    return 0.5 * (lo + hi)
 
 
 def read_measurements(path) -> list[dict]:
@@ -112,6 +160,11 @@ class TableFit:
         step reduced χ² further).
     notes : list of str
         What the caller should know (a singular Jacobian, no residual variance).
+    weighted : bool
+        Whether the table gave the measurements' σ (the errors then follow from them;
+        else from the scatter of the residuals).
+    dof : int
+        Degrees of freedom m − p: measurements less fitted keys.
     """
 
     keys: list
@@ -124,6 +177,33 @@ class TableFit:
     evaluations: int
     converged: bool
     notes: list = field(default_factory=list)
+    weighted: bool = True
+    dof: int = 0
+
+    def intervals(self, level: float = 0.95) -> dict[str, tuple[float, float]]:
+        """Confidence intervals of the fitted keys: value ± q·error, from the Jacobian's
+        covariance (the linearisation of the model at the answer: exact for a model
+        linear in the keys, and what the coverage tests measure for rodjit's models at
+        the measurement errors of a drop test).  q is the normal quantile where the table
+        gave σ (known errors), Student's t quantile with ``dof`` degrees of freedom where
+        the errors come from the residuals' scatter.
+
+        Parameters
+        ----------
+        level : float
+            The confidence level, in (0, 1).
+
+        Returns
+        -------
+        dict
+            Key -> ``(low, high)``.
+        """
+        if not 0.0 < level < 1.0:
+            raise ValueError(f"level = {level!r} is out of range (0 < level < 1)")
+        q = (NormalDist().inv_cdf(0.5 + level / 2) if self.weighted or self.dof < 1
+             else t_quantile(level, self.dof))
+        return {k: (v - q * e, v + q * e) for k, v, e in zip(self.keys, self.values,
+                                                             self.errors)}
 
     def __repr__(self) -> str:
         parts = ", ".join(f"{k} = {v:.6g} ± {e:.2g}" for k, v, e in
@@ -209,6 +289,11 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
     targets = [(i, o) for i, r in enumerate(rows) for o in OBSERVABLES if o in r]
     if len(targets) < len(keys):
         raise ValueError(f"{len(targets)} measurements cannot determine {len(keys)} keys")
+    for i, o in targets:
+        for name in (o, f"sigma_{o}"):
+            if name in rows[i] and not math.isfinite(float(rows[i][name])):
+                raise ValueError(f"measurement table row {i + 1}: {name} = {rows[i][name]!r} "
+                                 f"is out of range (a finite number)")
     sigma = np.array([rows[i].get(f"sigma_{o}", 1.0) for i, o in targets])
     if np.any(sigma <= 0):
         raise ValueError("sigma_<observable> columns must be > 0")
@@ -233,7 +318,8 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
         nonlocal runs_total
         cfgs = [c for th in thetas for c in configs(th)]
         res = evaluate(cfgs, jobs=jobs, scheduler=scheduler, merge_time=merge_time,
-                       max_output=max_output, max_steps=max_steps)
+                       max_output=max_output, max_steps=max_steps,
+                       columns=sorted({o for _, o in targets}))
         runs_total += len(cfgs)
         n = len(rows)
         out = [residual(res[j * n:(j + 1) * n]) for j in range(len(thetas))]
@@ -304,4 +390,106 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
                  "model": float(measured[k] + r[k] * sigma[k]),
                  "residual": float(r[k] * sigma[k])} for k, (i, o) in enumerate(targets)]
     return TableFit(keys, [float(v) for v in x], [float(e) for e in errors],
-                    cov.tolist(), res_rows, chi2, it, runs_total, converged, notes)
+                    cov.tolist(), res_rows, chi2, it, runs_total, converged, notes,
+                    weighted, m - p)
+
+
+@dataclass
+class LawComparison:
+    """The answer of ``compare_laws``: each candidate's best fit to one table, ranked.
+
+    The ranking is by Akaike's information criterion: AIC = χ² + 2p for a table with σ
+    (χ² is −2 log L up to a constant for Gaussian errors), m·log(χ²/m) + 2p without (σ
+    estimated from the residuals); p fitted keys, m measurements.  Lower is better; a
+    difference under 2 does not tell two candidates apart.
+
+    Attributes
+    ----------
+    fits : dict
+        Candidate label -> its ``TableFit``.
+    """
+
+    fits: dict
+
+    def aic(self, label: str) -> float:
+        """The candidate's AIC (class docstring).
+
+        Parameters
+        ----------
+        label : str
+            A candidate.
+
+        Returns
+        -------
+        float
+        """
+        f = self.fits[label]
+        p = len(f.keys)
+        m = f.dof + p
+        if f.weighted:
+            return f.chi2 + 2 * p
+        return m * math.log(max(f.chi2, 1e-300) / m) + 2 * p
+
+    def ranking(self) -> list[str]:
+        """The candidates' labels, best (lowest AIC) first."""
+        return sorted(self.fits, key=self.aic)
+
+    @property
+    def best(self) -> str:
+        """The label of the candidate that reproduces the table best."""
+        return self.ranking()[0]
+
+    def __repr__(self) -> str:
+        rank = self.ranking()
+        a0 = self.aic(rank[0])
+        lines = ["LawComparison (best first; ΔAIC < 2 does not tell candidates apart)"]
+        for label in rank:
+            f = self.fits[label]
+            values = ", ".join(f"{k} = {v:.6g} ± {e:.2g}" for k, v, e in
+                               zip(f.keys, f.values, f.errors))
+            lines.append(f"  {label}: chi2 = {f.chi2:.4g}, ΔAIC = {self.aic(label) - a0:.3g}"
+                         f"; {values}")
+        return "\n".join(lines)
+
+
+def compare_laws(table: str | os.PathLike[str] | Sequence[Mapping[str, Any]],
+                 candidates: Mapping[str, tuple], **options: Any) -> LawComparison:
+    """Fit each candidate law to the same table and rank them (``LawComparison``): which
+    law, at its best parameters, reproduces the measurements.
+
+    Parameters
+    ----------
+    table : str, os.PathLike or list of dict
+        As for ``fit_table``.
+    candidates : mapping
+        Label -> ``(config, keys)`` or ``(config, keys, start)``: the configuration that
+        selects the law (e.g. ``rod.law``, ``rod.mu``), the keys fitted, and optionally
+        their starting values.
+    **options
+        The other arguments of ``fit_table`` (``bounds``, ``jobs``, ``scheduler``,
+        ``max_iter``, ...), for every candidate.
+
+    Returns
+    -------
+    LawComparison
+
+    Raises
+    ------
+    ValueError
+        No candidates, a candidate that is not ``(config, keys[, start])``, or what
+        ``fit_table`` raises (naming the candidate).
+    """
+    if not candidates:
+        raise ValueError("compare_laws needs at least one candidate")
+    rows = read_measurements(table) if not isinstance(table, list) else table
+    fits = {}
+    for label, cand in candidates.items():
+        if not isinstance(cand, tuple) or len(cand) not in (2, 3):
+            raise ValueError(f"candidate {label!r}: give (config, keys) or (config, keys, "
+                             f"start), not {cand!r}")
+        config, keys, start = (*cand, None) if len(cand) == 2 else cand
+        try:
+            fits[label] = fit_table(keys, rows, config, start=start, **options)
+        except ValueError as exc:
+            raise ValueError(f"candidate {label!r}: {exc}") from None
+    return LawComparison(fits)
