@@ -111,6 +111,12 @@ def _check_impact_speed(impact_speed: float | None, velocity: float, height: flo
             f"initial.height")
 
 
+def _check_stop_at_rest(stop: bool, g: float) -> None:
+    if stop and not g < 0:
+        raise ConfigError(f"time.stop_at_rest needs gravity.g < 0 (a rod that falls back "
+                          f"onto the floor can come to rest), not gravity.g = {g!r}")
+
+
 def _law_check(kind: str) -> Callable[[str], None]:
     def check(name: str) -> None:
         from ..model.laws import get_law  # laws register themselves on import
@@ -126,6 +132,7 @@ CROSS_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., None]], ...] = (
     (("initial.height", "floor.beta"), _check_height),
     (("initial.impact_speed", "initial.velocity", "initial.height", "gravity.g"),
      _check_impact_speed),
+    (("time.stop_at_rest", "gravity.g"), _check_stop_at_rest),
     (("time.dt_min", "time.dt_max"), check_dt_range))
 
 

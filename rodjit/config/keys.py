@@ -282,6 +282,14 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
         "atol": KeySpec("float", "> 0", _pos, unit="m",
                         meaning="absolute tolerance of the local error per step (heights "
                                 "u)"),
+        "stop_after_bounces": KeySpec("int", ">= 0 (0: off)", lambda k: k >= 0, unit="1",
+                                      meaning="end the run once this many bounces are "
+                                              "over (at the apex of the flight after the "
+                                              "last), before time.t_end"),
+        "stop_at_rest": KeySpec("bool",
+                                meaning="end the run once the rod can never leave the floor "
+                                        "again (its energy below the lift-off energy; "
+                                        "needs gravity.g < 0), before time.t_end"),
     },
     "output": {
         "snapshot_interval": KeySpec("float", ">= 0 (0 disables snapshots)", _nonneg,

@@ -137,6 +137,8 @@ class TimeConfig(Section):
     dt: float | None = None
     rtol: float = 1e-6
     atol: float = 1e-9
+    stop_after_bounces: int = 0
+    stop_at_rest: bool = False
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -292,6 +292,12 @@ def _resume_locked(path: Path, t_end, command, progress, flush_interval,
         raise
     t = float(ck["clock"][L.T])
     complete = t >= float(ck["clock"][L.T_END]) - float(ck["clock"][L.TOL])
+    if complete and t < config.time.t_end - float(ck["clock"][L.TOL]):
+        # ended before time.t_end by time.stop_after_bounces or time.stop_at_rest: it
+        # would end again at once
+        raise ValueError(f"{str(path)!r} is complete: it ended at t = {t:.9g} by "
+                         f"time.stop_after_bounces or time.stop_at_rest, before time.t_end "
+                         f"= {config.time.t_end:g}")
     if t_end is not None:
         if not (math.isfinite(t_end) and t_end > t):
             raise ValueError(f"time.t_end = {t_end!r} is out of range (must be > the "

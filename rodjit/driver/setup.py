@@ -40,6 +40,7 @@ import numpy as np
 from ..model.laws import get_law
 from ..model.system import check_admissible, initial_state, law_params, rod_system
 from ..records.observables import flight_time
+from ..records.physics import lift_energy
 from ..stepping import control
 from ..stepping import layout as L
 from ..stepping.schemes import make_scheme
@@ -119,7 +120,7 @@ _TOKENS = itertools.count()
 # an object's token by its id, the object kept (so that its id is not another's meanwhile)
 _OBJECTS: dict[int, tuple[object, int]] = {}
 _BY_VALUE: dict[tuple, int] = {}      # the token of a value key (``_value_key``)
-_PIECES = ("runnable", "system", "rod", "floor", "tau", "scheme", "ctrl", "state",
+_PIECES = ("runnable", "system", "rod", "floor", "tau", "rest", "scheme", "ctrl", "state",
            "admissible", "clock", "x")
 _MADE: dict[str, dict] = {name: {} for name in _PIECES}
 
@@ -208,9 +209,10 @@ def start(config, u0=None, v0=None) -> Start:
     # τ reads the rod law's parameters and N only (``records.physics.flight_time``)
     rod_p = _token(rod)
     tau = _get("tau", (laws[0], rod_p, n), flight_time, config)
-    scheme, ctrl = _stepping(config, time_t)
+    scheme, ctrl = _stepping(config, time_t, _rest(config, laws, rod_p))
     if u0 is None and v0 is None:
-        ini = (_token(config.initial), n)
+        # the initial velocity reads g too (``initial.impact_speed``)
+        ini = (_token(config.initial), n, _token(config.gravity))
         state = _get("state", ini, _state, config)
         _get("admissible", (*ini, *laws, rod_p, _token(floor)), check_admissible,
              state[0], rod, floor, "initial state")
@@ -232,12 +234,21 @@ def _body(config, rod_t) -> tuple:
     return system, rod, floor, laws
 
 
-def _stepping(config, time_t) -> tuple:
-    """``(scheme, control)`` of ``config``."""
+def _rest(config, laws, rod_p) -> float:
+    """The energy below which ``time.stop_at_rest`` ends a run in contact: the lift-off
+    energy, which reads the rod law, N and g (-inf when the key is off)."""
+    if not config.time.stop_at_rest:
+        return -math.inf
+    return _get("rest", (laws[0], rod_p, config.rod.N, _token(config.gravity)),
+                lift_energy, config)
+
+
+def _stepping(config, time_t, rest: float = -math.inf) -> tuple:
+    """``(scheme, control)`` of ``config`` (``rest``: the energy of ``time.stop_at_rest``)."""
     scheme = _get("scheme", (time_t,), make_scheme, config.time)
     interpolate = config.output.interpolate      # a bool: its type tells 1 from True
-    ctrl = _get("ctrl", (time_t, config.rod.N, type(interpolate), interpolate), _control,
-                config, scheme)
+    ctrl = _get("ctrl", (time_t, config.rod.N, type(interpolate), interpolate, rest),
+                _control, config, scheme, rest)
     return scheme, ctrl
 
 
@@ -245,8 +256,9 @@ def parameters(config) -> tuple:
     """``(scheme, control, system, rod law, floor law)``: the parameter tuples the compiled
     loop takes for ``config`` (no run checks, no initial state)."""
     config = config.resolve()
-    system, rod, floor, _ = _body(config, _token(config.rod))
-    return (*_stepping(config, _token(config.time)), system, rod, floor)
+    system, rod, floor, laws = _body(config, _token(config.rod))
+    rest = _rest(config, laws, _token(rod))
+    return (*_stepping(config, _token(config.time), rest), system, rod, floor)
 
 
 def starts(configs) -> list:
@@ -270,9 +282,9 @@ def _positions(n: int) -> np.ndarray:
     return np.arange(n + 1) / n
 
 
-def _control(config, scheme):
+def _control(config, scheme, rest: float = -math.inf):
     return control.build(config.time, scheme, config.output.interpolate,
-                         snapshot_rows=snapshot_bound(config.rod.N + 1))
+                         snapshot_rows=snapshot_bound(config.rod.N + 1), rest_energy=rest)
 
 
 def _state(config, u0=None, v0=None) -> np.ndarray:

@@ -130,7 +130,7 @@ def _summary(path, status, message, config, ck, counts, bounces, extremes: Extre
     run_time = ck["run_time"]
     return RunSummary(
         path=str(path), status=status, message=message, config=config,
-        t=float(clock[L.T]), t_end=float(clock[L.T_END]), counts=counts, bounces=bounces,
+        t=float(clock[L.T]), t_end=float(config.time.t_end), counts=counts, bounces=bounces,
         energy0=e0, energy_error=ext.energy_error(e0),
         min_strain=ext.strain_min if math.isfinite(ext.strain_min) else math.nan,
         min_u0=ext.u0_min if math.isfinite(ext.u0_min) else math.inf,

@@ -56,10 +56,29 @@ class RunFacts:
                 ("steps", f"{self.steps} ({self.rejected} rejected)"),
                 ("wall time", f"{self.compile_time + self.run_time:.3g} s "
                               f"({self.compile_time:.3g} s compiling)")]
+        if self.stop_reason():
+            rows.insert(0, ("stopped", self.stop_reason()))
         if self.message:
             rows.insert(0, ("message", self.message))
         rows.extend(("warning", w) for w in self.warnings)
         return rows
+
+    def stop_reason(self) -> str:
+        """Why a completed run ended before ``time.t_end`` ('' where it did not): its
+        bounces were over (``time.stop_after_bounces``) or it came to rest
+        (``time.stop_at_rest``)."""
+        c = self.config
+        if self.status != "completed" or not self.t < self.t_end - 1e-9 * abs(self.t_end):
+            return ""
+        k = int(c.time.stop_after_bounces)
+        over = int(np.count_nonzero(~np.asarray(self.bounces["open"], bool)))
+        if k and over >= k:
+            return (f"ended after {k} bounce{'s' if k != 1 else ''} "
+                    f"(time.stop_after_bounces = {k})")
+        if c.time.stop_at_rest:
+            return ("ended at rest: the energy fell below the lift-off energy, so the rod "
+                    "never leaves the floor again (time.stop_at_rest)")
+        return ""
 
     def _open(self, i: int) -> str:
         """What the restitution of the open bounce ``i`` (in contact at the end) reads: "no
@@ -86,6 +105,8 @@ class RunFacts:
                  f"(N = {c.rod.N}, mu = {c.rod.mu:g}, {c.time.integrator})"]
         if c.choice:
             lines.append(f"  integrator {c.ran_with()}")
+        if self.stop_reason():
+            lines.append(f"  {self.stop_reason()}")
         if self.message:
             lines.append(f"  {self.message}")
         lines.extend(f"  warning: {w}" for w in self.warnings)

@@ -134,14 +134,18 @@ class Control(NamedTuple):
     dense: bool = False   # steps aim at t_end only; outputs inside a step are interpolated
     dense_snapshots: int = 0     # ... and a step covers at most this many snapshot times
     dense_diagnostics: int = 0   # ... and diagnostics times (0 when not dense)
+    stop_bounces: int = 0        # > 0: the run ends once this many bounces are over
+    rest_energy: float = -math.inf   # the run ends in contact with its energy below this
 
 
 def build(time_config, scheme, interpolate: bool = True,
-          snapshot_rows: int = DENSE_OUTPUTS_MAX) -> Control:
+          snapshot_rows: int = DENSE_OUTPUTS_MAX, rest_energy: float = -math.inf) -> Control:
     """The loop's ``Control`` for a ``TimeConfig`` and the scheme built from it;
     ``interpolate`` (``output.interpolate``): output by the scheme's dense output where it
     has one and the steps are adaptive; ``snapshot_rows``: the most snapshot rows a buffer
-    of the run may hold (the driver's memory rule), which bounds ``dense_snapshots``."""
+    of the run may hold (the driver's memory rule), which bounds ``dense_snapshots``;
+    ``rest_energy``: with ``time.stop_at_rest``, the lift-off energy below which the rod
+    never leaves the floor again (``records.physics.lift_energy``)."""
     tc = time_config
     entry = registry.entry_of(type(scheme))
     dense = bool(interpolate and entry.dense and tc.dt is None)
@@ -158,6 +162,8 @@ def build(time_config, scheme, interpolate: bool = True,
         dense=dense,
         dense_snapshots=max(1, min(DENSE_OUTPUTS_MAX, int(snapshot_rows))) if dense else 0,
         dense_diagnostics=DENSE_OUTPUTS_MAX if dense else 0,
+        stop_bounces=int(tc.stop_after_bounces),
+        rest_energy=float(rest_energy) if tc.stop_at_rest else -math.inf,
     )
 
 

@@ -21,6 +21,22 @@ from .._jit import exact_kernel, kernel, step_kernel
 AMBIGUOUS_SPEED = 0.2
 
 
+@step_kernel
+def stop_due(ctrl, count, u, v, k, system, rod, floor):
+    """Whether the run ends before t_end at the state (u, v) (``k``: a scratch row):
+    ``ctrl.stop_bounces`` bounces are over (``time.stop_after_bounces``), or the bottom is
+    in contact with the energy below ``ctrl.rest_energy``, the lift-off energy: the energy
+    never increases, so the rod never leaves the floor again (``time.stop_at_rest``).
+    Read from what a checkpoint keeps, so a resumed run stops where an uninterrupted one
+    does."""
+    if ctrl.stop_bounces > 0 and count[L.BOUNCES_TOTAL] >= ctrl.stop_bounces:
+        return True
+    if ctrl.rest_energy > -np.inf and u[0] < 0.0:
+        ke, st, be, fe, ge, emin, z, w = energies(u, v, k, system, rod, floor)
+        return ke + st + be + fe + ge < ctrl.rest_energy
+    return False
+
+
 @kernel
 def _root(c0, c1, c2):
     """The root in [0, 1] of c0 + c1 s + c2 s² nearest 0, given a sign change on [0, 1]."""

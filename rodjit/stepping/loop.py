@@ -55,9 +55,9 @@ from ..model.laws.base import BOTH, CONTACT, FREE, Sided, has_extension
 from . import control as C
 from . import layout as L
 from . import registry
-from .events import crossing, hermite_exit, open_contact, track, vibration_energy
+from .events import crossing, hermite_exit, open_contact, stop_due, track, vibration_energy
 from .extremes import step_extremes
-from .outputs import dense_target, emit, emit_dense, grid_time, next_target
+from .outputs import dense_target, emit, emit_dense, emit_final, grid_time, next_target
 from .schemes import dense_setup, has_dense, initial, step
 from .._jit import kernel, overload
 
@@ -190,6 +190,18 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
     code = L.PAUSED
     while True:
         if t >= t_end - tol:
+            code = L.DONE
+            break
+        if stop_due(ctrl, count, cur[0], cur[1], work[1], system, rod, floor):
+            # the run ends here (``time.stop_after_bounces``, ``time.stop_at_rest``): its
+            # last rows at t, once the buffers have room for them
+            if count[L.N_SNAP] >= cap_s or count[L.N_DIAG] >= cap_d:
+                code = L.FULL
+                break
+            clock[L.DISSIPATED] = diss
+            emit_final(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
+                       snap_t, snap_step, snap_u, snap_v, diag)
+            clock[L.T_END] = t      # the run's end: complete, as one that reached t_end
             code = L.DONE
             break
         if taken >= max_steps:

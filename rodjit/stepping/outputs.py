@@ -102,6 +102,20 @@ def emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
 
 
 @step_kernel
+def emit_final(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
+               snap_t, snap_step, snap_u, snap_v, diag):
+    """The snapshot and diagnostics rows of a run that ends before t_end
+    (``events.stop_due``), at its end time t, unless its grid has a row at t already
+    (the last step landed on one); the caller leaves room for one row of each."""
+    tol = clock[L.TOL]
+    if clock[L.SNAP_DT] > 0.0 and clock[L.T0] + (count[L.K_SNAP] - 1) * clock[L.SNAP_DT] < t - tol:
+        _snapshot_row(cur[0], cur[1], t, step_no, count, snap_t, snap_step, snap_u, snap_v)
+    if clock[L.DIAG_DT] > 0.0 and clock[L.T0] + (count[L.K_DIAG] - 1) * clock[L.DIAG_DT] < t - tol:
+        _diag_row(cur[0], cur[1], work, system, rod, floor, count, t, dt_prop,
+                  clock[L.DISSIPATED], diag)
+
+
+@step_kernel
 def dense_target(ctrl, fixed, clock, count, t, dtp):
     """A dense-output step from t: ``(target, dt, land, snapshots, diagnostics)``, the step
     toward t_end, shortened to end on the last output time it may cover
