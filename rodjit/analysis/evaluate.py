@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+import warnings
 from typing import Any
 
 __all__ = ["evaluate", "check_limits", "Extractor", "SUMMARY_OF"]
@@ -47,6 +48,7 @@ def _batched(configs, columns, jobs: int, scheduler) -> list[dict]:
 
     from ..sweeps.ensemble import BatchTask
     from ..sweeps.executors import make_executor
+    from ..config import ModelWarning
     from ..sweeps.point import law_modules, reissue_warnings
 
     laws = tuple(dict.fromkeys(m for c in configs for m in law_modules(c)))
@@ -58,8 +60,13 @@ def _batched(configs, columns, jobs: int, scheduler) -> list[dict]:
     out: list[dict | None] = [None] * n
     executor = make_executor(scheduler, min(jobs, -(-n // per)),
                              configs[0] if not laws else None, batched=True)
+    said: set = set()
+    # the model's warnings of the configurations, said here once each (a worker that set
+    # up an equal configuration before keeps its pieces and does not warn again)
+    for text in dict.fromkeys(w for c in configs for w in c.warnings()):
+        said.add(text)
+        warnings.warn(text, ModelWarning, stacklevel=3)
     try:
-        said: set = set()
         for res in executor.results(tasks, total=n):
             if res is None:
                 continue

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Mapping, Sequence
 import numpy as np
 
 from .evaluate import evaluate
+from .roots import increasing_root
 
 if TYPE_CHECKING:
     from ..config import Config
@@ -60,18 +61,10 @@ def t_quantile(level: float, dof: int) -> float:
             total += term
         return sn * total
 
-    lo, hi = 0.0, 1.0
+    hi = 1.0
     while inside(hi) < level:
         hi *= 2.0
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if inside(mid) < level:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo <= 1e-13 * hi:
-            break
-    return 0.5 * (lo + hi)
+    return increasing_root(inside, level, 0.0, hi, rtol=1e-13)
 
 
 def read_measurements(path) -> list[dict]:

@@ -13,6 +13,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .roots import increasing_root
+
 __all__ = ["observed_order", "extrapolate", "Study", "study"]
 
 P_MIN, P_MAX = 0.25, 8.0        # orders outside this range are not asymptotic behaviour
@@ -48,15 +50,7 @@ def observed_order(h, f) -> float:
     lo, hi = 1e-3, 20.0           # ratio(p) increases in p for h1 > h2 > h3
     if not ratio(lo) < q < ratio(hi):
         return math.nan
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        if ratio(mid) < q:
-            lo = mid
-        else:
-            hi = mid
-        if hi - lo < 1e-12:
-            break
-    return 0.5 * (lo + hi)
+    return increasing_root(ratio, q, lo, hi, atol=1e-12)
 
 
 def extrapolate(h, f, p: float) -> float:

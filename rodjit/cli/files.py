@@ -56,17 +56,19 @@ def draw(plot: Callable[..., Any], path: str, output: str | None, kind: str,
     click.echo(f"wrote {written}")
 
 
-def check_picture(output: str, overwrite: bool, source: str | None = None) -> None:
-    """UsageError (one line) unless the picture ``output`` can be written: its directory,
-    a special file, and an existing file only with --overwrite
-    (``output.h5files.check_output``); never the file drawn (``source``) nor any HDF5
-    file, whatever its name: a picture replaces only a picture."""
+def check_picture(output: str, overwrite: bool, source: str | None = None,
+                  option: str = "-o", what: str = "a picture") -> None:
+    """UsageError (one line, naming ``option``) unless the picture (or other plain file,
+    ``what``) ``output`` can be written: its directory, a special file, and an existing
+    file only with --overwrite (``output.h5files.check_output``); never the file drawn
+    (``source``) nor any HDF5 file, whatever its name: a picture replaces only a
+    picture."""
     from ..output.h5files import check_output, looks_hdf5
 
     if source is not None and _same_file(output, source):
-        raise UsageError(f"-o {output!r} is the file being drawn; choose another name")
+        raise UsageError(f"{option} {output!r} is the file being drawn; choose another name")
     if looks_hdf5(output):
-        raise UsageError(f"-o {output!r} is an HDF5 file, not a picture; rodjit does not "
+        raise UsageError(f"{option} {output!r} is an HDF5 file, not {what}; rodjit does not "
                          f"replace it with one (choose another name)")
     try:
         check_output(output, overwrite=overwrite)

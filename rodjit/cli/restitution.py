@@ -6,24 +6,11 @@ import click
 
 from . import options
 from .exits import UsageError
+from .files import check_picture
 from .options import command_line, overrides, progress, sweep_bar
 from .sweep import make_grid, quiet_dask, sweep_and_print, sweep_exit
 
 __all__ = ["restitution_command"]
-
-
-def _check_csv(path: str, overwrite: bool) -> None:
-    """UsageError unless the CSV file can be written: as any output, and never over an
-    HDF5 file whatever its name."""
-    from ..output.h5files import check_output, looks_hdf5
-
-    if looks_hdf5(path):
-        raise UsageError(f"--csv {path!r} is an HDF5 file; rodjit does not replace it with a "
-                         f"CSV file (choose another name)")
-    try:
-        check_output(path, overwrite=overwrite)
-    except ValueError as exc:
-        raise UsageError(f"--csv: {exc}") from None
 
 
 @click.command("restitution")
@@ -106,11 +93,9 @@ def restitution_command(config: str | None, speeds: str | None, heights: str | N
     except ValueError as exc:
         raise UsageError(exc) from None
     if csv_path:
-        _check_csv(csv_path, overwrite)
+        check_picture(csv_path, overwrite, output, option="--csv", what="a CSV file")
     if plot_path:
-        from .files import check_picture
-
-        check_picture(plot_path, overwrite, output)
+        check_picture(plot_path, overwrite, output, option="--plot")
     table = sweep_and_print(base, grid, output, jobs=jobs, scheduler=scheduler, bar=bar,
                             quiet=quiet, command=command, device=device, limits=limits,
                             overwrite=overwrite, report=curve_report)
