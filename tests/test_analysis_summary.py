@@ -132,8 +132,11 @@ def test_sweep_plot_draws_a_no_lift_off_point(tmp_path):
     assert len(lines) == 1
     assert np.array_equal(lines[0].get_xdata(), [1.0, 10.0, 100.0])
     y = np.asarray(lines[0].get_ydata(), float)
-    assert np.array_equal(y, table["restitution_first"])
-    assert np.all(np.isfinite(y)) and y.size == 3 and y[1] == 0.0
+    # drawn as a point of its own, "no lift-off" at its value 0, which breaks the line
+    assert np.isnan(y[1]) and np.array_equal(y[[0, 2]], table["restitution_first"][[0, 2]])
+    marks = [ln for ln in ax.get_lines() if ln.get_label() == "no lift-off"]
+    assert len(marks) == 1
+    assert list(marks[0].get_xdata()) == [10.0] and list(marks[0].get_ydata()) == [0.0]
 
 
 def test_convergence_plot_renders_on_log_axes(tmp_path):

@@ -60,7 +60,8 @@ def _levels(name: str, values, key: str) -> list[float]:
     return _positive(name, values)
 
 
-def curve_grid(config: Config, speeds=None, heights=None,
+def curve_grid(config: Config, speeds: Sequence[float] | str | None = None,
+               heights: Sequence[float] | str | None = None,
                compare: Mapping[str, Any] | None = None,
                start_height: float = START_HEIGHT) -> tuple[Config, dict[str, Any]]:
     """The base configuration and the grid of a restitution curve.
@@ -118,7 +119,9 @@ def curve_grid(config: Config, speeds=None, heights=None,
     return base, {**compare, SPEED_KEY: vs}
 
 
-def restitution_curve(config: Config | None = None, *, speeds=None, heights=None,
+def restitution_curve(config: Config | None = None, *,
+                      speeds: Sequence[float] | str | None = None,
+                      heights: Sequence[float] | str | None = None,
                       compare: Mapping[str, Any] | None = None,
                       start_height: float = START_HEIGHT,
                       output: str | os.PathLike[str] | None = None, overwrite: bool = False,

@@ -177,7 +177,9 @@ def _restitution(fig, table, quantity, x, at, ax=None, panels=None) -> None:
         # a point whose rod never leaves the floor (restitution 0, contact time inf) is
         # marked as such, at its value or, infinite, at the top of the axes, and breaks
         # its line (no bounce to join to the bounces beside it)
-        stays = np.asarray(table["impact_status"][mask])[order] == "no lift-off"
+        status = table.columns.get("impact_status")     # absent from format-1 files
+        stays = (np.asarray(status[mask])[order] == "no lift-off" if status is not None
+                 else np.zeros(xv.size, bool))
         ax.plot(xv, np.where(stays, np.nan, yv), MARKERS[j % len(MARKERS)] + "-", ms=5,
                 lw=1.0, color=colors[j], label=label or None)
         if stays.any():
