@@ -178,3 +178,29 @@ def test_too_few_rows_for_the_keys_exit_2(tmp_path):
                                     "--table", str(path), "--scheduler", "inline"])
     assert res.exit_code == 2
     assert "1 measurements cannot determine 2 keys" in res.output
+
+
+def test_the_command_ranks_candidates_and_prints_intervals(tmp_path):
+    rows = _noisy(_exact(BASE.override(TRUTH)), np.random.default_rng(2))
+    path = tmp_path / "drops.csv"
+    names = list(rows[0])
+    path.write_text(",".join(names) + "\n" + "".join(
+        ",".join(repr(float(r[n])) for n in names) + "\n" for r in rows))
+    sets = ["--set", "time.t_end=1", "--set", "initial.height=0.01", "--set", "rod.mu=120",
+            "--set", "floor.kappa_b=1500", "--scheduler", "inline"]
+    res = CliRunner().invoke(main, ["fit", "rod.mu,floor.kappa_b", "paper-mu100", *sets,
+                                    "--table", str(path), "--compare", "floor.beta=0.2,0.05"])
+    assert res.exit_code == 0, res.output
+    lines = res.output.splitlines()
+    assert lines[0].startswith("LawComparison")
+    assert lines[1].startswith("  floor.beta = 0.05: chi2 = ") and "ΔAIC = 0;" in lines[1]
+    assert any(ln.startswith("floor.beta = 0.05: 95 % intervals: rod.mu in [") for ln in lines)
+    one = CliRunner().invoke(main, ["fit", "rod.mu,floor.kappa_b", "paper-mu100", *sets,
+                                    "--table", str(path)])
+    assert one.exit_code == 0, one.output
+    (lo, hi), = [tuple(float(x) for x in ln.split("rod.mu in [")[1].split("]")[0].split(","))
+                 for ln in one.output.splitlines() if ln.startswith("95 % intervals:")]
+    assert lo < TRUTH["rod.mu"] < hi
+    bad = CliRunner().invoke(main, ["fit", "rod.mu", "paper-mu100", "--target",
+                                    "restitution_first=0.5", "--compare", "floor.beta=0.1"])
+    assert bad.exit_code == 2 and "--compare ranks fits to a table" in bad.output

@@ -31,6 +31,9 @@ __all__ = ["fit_command"]
               help="Least squares of the comma-separated KEYs against a CSV of measurements "
                    "(a drop condition per row, e.g. initial.height, and measured "
                    "restitution_first and/or contact_time_first, optional sigma_<name>).")
+@click.option("--compare", metavar="KEY=VALUES",
+              help="With --table: fit the KEYs once per value of this key (e.g. "
+                   "rod.law=aiki-kosugi,my-law) and rank the candidates by AIC.")
 @options.jobs_option()
 @options.force_jobs_option()
 @options.scheduler_option()
@@ -39,16 +42,18 @@ __all__ = ["fit_command"]
 @options.max_steps_option("a fixed time.dt that")
 def fit_command(key: str, config: str | None, target: str | None, bracket: str,
                 points: int | None, ftol: float, converged: bool, ladder: str | None,
-                table: str | None, jobs: int | None, force_jobs: bool, scheduler: str | None,
+                table: str | None, compare: str | None, jobs: int | None, force_jobs: bool,
+                scheduler: str | None,
                 sets: tuple[str, ...], max_output: str, max_steps: float) -> None:
     """Find the value of KEY for which an observable takes a target (--target), or fit
-    several KEYs to a table of measurements (--table).
+    several KEYs to a table of measurements (--table), with their 95 % intervals; with
+    --compare, once per candidate, ranked.
 
     Exit codes: 0 done, 1 the target cannot be fitted (unreachable, or crossed more than
     once in the bracket: the message says where), 2 usage or configuration error.
     """
     from ..analysis.fit import FitError, fit
-    from ..analysis.fit_table import fit_table
+    from ..analysis.fit_table import compare_laws, fit_table
     from ..output.estimate import parse_size
 
     result: Any
@@ -57,10 +62,19 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
         jobs = options.cap_jobs(jobs, scheduler, None, force_jobs)
         limits: dict[str, Any] = {"max_output": parse_size(max_output), "max_steps": max_steps}
         keys = [k.strip() for k in key.split(",") if k.strip()]
+        if compare and not table:
+            raise ValueError("--compare ranks fits to a table: give --table FILE.csv")
         if table:
             if target:
                 raise ValueError("--target and --table exclude each other")
-            result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler, **limits)
+            if compare:
+                ckey, values = _candidates(compare)
+                result = compare_laws(table, {f"{ckey} = {v}": (cfg.override({ckey: v}), keys)
+                                              for v in values},
+                                      jobs=jobs, scheduler=scheduler, **limits)
+            else:
+                result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler,
+                                   **limits)
         else:
             if not target:
                 raise ValueError("fit needs --target OBSERVABLE=VALUE (or --table FILE.csv)")
@@ -84,8 +98,27 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     except ValueError as exc:
         raise UsageError(exc) from None
     click.echo(repr(result))
+    fits = getattr(result, "fits", None)
+    for label, one in (fits.items() if fits else [(None, result)]):
+        _fit_lines(one, label)
+
+
+def _candidates(text: str) -> tuple[str, list[str]]:
+    """``KEY=V1,V2,...`` of --compare: the key and its values as written."""
+    key, values = next(iter(key_values("--compare", text).items()))
+    return key, [v.strip() for v in values.split(",") if v.strip()]
+
+
+def _fit_lines(result: Any, label: str | None) -> None:
+    """A fit's notes; a table fit's 95 % intervals and residuals too."""
+    head = f"{label}: " if label else ""
+    if hasattr(result, "intervals"):
+        spans = ", ".join(f"{k} in [{lo:.6g}, {hi:.6g}]"
+                          for k, (lo, hi) in result.intervals(0.95).items())
+        click.echo(f"{head}95 % intervals: {spans}")
     for note in getattr(result, "notes", []):
-        click.echo(f"note: {note}")
+        click.echo(f"{head}note: {note}")
     for row in getattr(result, "residuals", []):
-        click.echo(f"  row {row['row']} {row['observable']}: measured {row['measured']:.6g}, "
-                   f"model {row['model']:.6g}, residual {row['residual']:+.3g}")
+        click.echo(f"  {head}row {row['row']} {row['observable']}: measured "
+                   f"{row['measured']:.6g}, model {row['model']:.6g}, residual "
+                   f"{row['residual']:+.3g}")
