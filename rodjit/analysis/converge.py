@@ -385,7 +385,7 @@ def converge(config: Config | None = None, ladder: Mapping[str, Any] | None = No
         t_configs = [at.override({t_key: v}) for v in t_values]
     for c in configs + t_configs:        # what a run would refuse: before any runs
         c.check_runnable()
-    limits = {"max_output": max_output, "max_steps": max_steps}
+    limits: dict[str, Any] = {"max_output": max_output, "max_steps": max_steps}
     # a ladder over a time key is itself a time ladder: its heights give the
     # predictability time
     on_time = key in TIME_KEYS

@@ -1,10 +1,13 @@
 """Observables of many configurations, run in parallel on the sweep engine's executors.
 
-Each configuration becomes one sweep point that writes its full run file to a private
-temporary directory (the executors move only summaries; the observables need the
-diagnostics and episodes); the parent reads each file back as it arrives, computes the
-observables, and deletes it.  One configuration, or ``scheduler="inline"``, runs in this
-process without any file.
+Where the caller needs only observables that a sweep point's summary row holds
+(``SUMMARY_OF``: the first bounce's, the extremes), the configurations run on the batch
+engine as sweep points do, and the rows are the answer.  Otherwise each configuration
+becomes one sweep point that writes its full run file to a private temporary directory
+(the executors move only summaries; the other observables need the diagnostics and
+episodes); the parent reads each file back as it arrives, computes the observables, and
+deletes it.  One configuration, or ``scheduler="inline"``, then runs in this process
+without any file.
 """
 from __future__ import annotations
 
@@ -12,7 +15,7 @@ import math
 import os
 import tempfile
 import warnings
-from typing import Any
+from typing import Any, Sequence
 
 __all__ = ["evaluate", "check_limits", "Extractor", "SUMMARY_OF"]
 
@@ -46,9 +49,9 @@ def _batched(configs, columns, jobs: int, scheduler) -> list[dict]:
     on the sweep's batch engine, a few tasks per worker."""
     import numpy as np
 
+    from ..config import ModelWarning
     from ..sweeps.ensemble import BatchTask
     from ..sweeps.executors import make_executor
-    from ..config import ModelWarning
     from ..sweeps.point import law_modules, reissue_warnings
 
     laws = tuple(dict.fromkeys(m for c in configs for m in law_modules(c)))
@@ -152,7 +155,8 @@ def _where(cfg, first) -> str:
 def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
              merge_time: float | None = None, extra: dict | None = None,
              histories: bool = False, max_output: float | None = None,
-             max_steps: float | None = None, columns=None) -> list[dict]:
+             max_steps: float | None = None,
+             columns: Sequence[str] | None = None) -> list[dict]:
     """The observables (``rodjit.analysis.observables``, and ``extra``: name ->
     function(Result) -> float) of every Config in ``configs``, in their order, with each
     run's accepted and rejected ``steps`` (and with ``histories``: ``history``, the
