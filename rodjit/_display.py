@@ -5,7 +5,7 @@ from __future__ import annotations
 import html
 import math
 
-__all__ = ["text", "html_table", "number"]
+__all__ = ["text", "html_table", "number", "aligned"]
 
 
 def number(value, spec: str = ".4g") -> str:
@@ -27,3 +27,10 @@ def html_table(title: str, rows: list[tuple[str, str]]) -> str:
                    for label, value in rows)
     return (f"<table><caption style='text-align:left'><b>{html.escape(title)}</b></caption>"
             f"{body}</table>")
+
+
+def aligned(head: list[str], rows: list[list[str]]) -> list[str]:
+    """A header line and one line per row, each column right-aligned to its widest cell."""
+    widths = [max(len(h), *(len(r[j]) for r in rows)) if rows else len(h)
+              for j, h in enumerate(head)]
+    return ["  ".join(c.rjust(w) for c, w in zip(r, widths)) for r in [head, *rows]]

@@ -15,7 +15,7 @@ import math
 import os
 import tempfile
 import warnings
-from typing import Any, Sequence
+from typing import Any, Iterator, Sequence
 
 __all__ = ["evaluate", "check_limits", "Extractor", "SUMMARY_OF"]
 
@@ -51,8 +51,7 @@ def _batched(configs, columns, jobs: int, scheduler) -> list[dict]:
 
     from ..config import ModelWarning
     from ..sweeps.ensemble import BatchTask
-    from ..sweeps.executors import make_executor
-    from ..sweeps.point import law_modules, reissue_warnings
+    from ..sweeps.point import law_modules
 
     laws = tuple(dict.fromkeys(m for c in configs for m in law_modules(c)))
     n = len(configs)
@@ -61,32 +60,41 @@ def _batched(configs, columns, jobs: int, scheduler) -> list[dict]:
                        _Configs({j: configs[j] for j in range(i, min(i + per, n))}), laws)
              for i in range(0, n, per))
     out: list[dict | None] = [None] * n
-    executor = make_executor(scheduler, min(jobs, -(-n // per)),
-                             configs[0] if not laws else None, batched=True)
     said: set = set()
     # the model's warnings of the configurations, said here once each (a worker that set
     # up an equal configuration before keeps its pieces and does not warn again)
     for text in dict.fromkeys(w for c in configs for w in c.warnings()):
         said.add(text)
         warnings.warn(text, ModelWarning, stacklevel=3)
+    for res in _results(scheduler, min(jobs, -(-n // per)), configs[0] if not laws else None,
+                        True, tasks, n, said):
+        v = res.values
+        for k, i in enumerate(res.index):
+            failed = v["status"][k] == "failed"
+            row: dict[str, Any] = {name: float(v[SUMMARY_OF[name]][k]) for name in columns}
+            row.update(status="failed" if failed else str(v["impact_status"][k]),
+                       reason=str(v["message"][k] if failed else v["impact_reason"][k]),
+                       run_status=str(v["status"][k]), message=str(v["message"][k]),
+                       steps=int(v["steps"][k]), rejected_steps=int(v["rejected_steps"][k]))
+            out[int(i)] = row
+    return [r if r is not None else _failed("no result") for r in out]
+
+
+def _results(scheduler, jobs: int, warm, batched: bool, tasks, total: int,
+             said: set) -> Iterator:
+    """The results of ``tasks`` on an executor of ``jobs`` workers (``make_executor``),
+    each with its warnings said once (``said``), the executor closed at the end."""
+    from ..sweeps.executors import make_executor
+    from ..sweeps.point import reissue_warnings
+
+    executor = make_executor(scheduler, jobs, warm, batched=batched)
     try:
-        for res in executor.results(tasks, total=n):
-            if res is None:
-                continue
-            reissue_warnings(res, said)
-            v = res.values
-            for k, i in enumerate(res.index):
-                failed = v["status"][k] == "failed"
-                row: dict[str, Any] = {name: float(v[SUMMARY_OF[name]][k])
-                                       for name in columns}
-                row.update(status="failed" if failed else str(v["impact_status"][k]),
-                           reason=str(v["message"][k] if failed else v["impact_reason"][k]),
-                           run_status=str(v["status"][k]), message=str(v["message"][k]),
-                           steps=int(v["steps"][k]), rejected_steps=int(v["rejected_steps"][k]))
-                out[int(i)] = row
+        for res in executor.results(tasks, total=total):
+            if res is not None:
+                reissue_warnings(res, said)
+                yield res
     finally:
         executor.close(cancel=True)
-    return [r if r is not None else _failed("no result") for r in out]
 
 
 def _values(result, extra, merge_time, histories=False) -> dict:
@@ -174,8 +182,8 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
     2 workers, ``benchmarks/bench_fit.py --evaluate``)."""
     from ..driver.run import SimulationError
     from ..driver.simulate import simulate
-    from ..sweeps.executors import check_scheduler, default_jobs, make_executor
-    from ..sweeps.point import PointTask, law_modules, reissue_warnings
+    from ..sweeps.executors import check_scheduler, default_jobs
+    from ..sweeps.point import PointTask, law_modules
 
     configs = list(configs)
     check_limits(configs, max_output=max_output, max_steps=max_steps)
@@ -204,28 +212,20 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
         paths = [os.path.join(tmp, f"{i:06d}.h5") for i in range(len(configs))]
         tasks = (PointTask(i, cfg, paths[i], law_modules(cfg)) for i, cfg in enumerate(configs))
         warm = configs[0] if not law_modules(configs[0]) else None
-        executor = make_executor(scheduler, min(jobs, len(configs)), warm)
-        try:
-            said: set = set()
-            for res in executor.results(tasks, total=len(configs)):
-                if res is None:
-                    continue
-                reissue_warnings(res, said)
-                i = res.index
-                if os.path.exists(paths[i]):
-                    try:
-                        results[i] = _values(load_file(paths[i]), extra, merge_time,
-                                             histories)
-                    except Exception as exc:
-                        results[i] = _failed(f"{type(exc).__name__}: {exc}", extra)
-                    os.remove(paths[i])
-                else:
-                    results[i] = _failed(res.values.get("message") or "the point did not run", extra)
-                if res.status == "failed":
-                    results[i].update(status="failed", run_status="failed",
-                                      reason=res.values["message"],
-                                      message=res.values["message"])
-        finally:
-            executor.close(cancel=True)
+        for res in _results(scheduler, min(jobs, len(configs)), warm, False, tasks,
+                            len(configs), set()):
+            i = res.index
+            if os.path.exists(paths[i]):
+                try:
+                    results[i] = _values(load_file(paths[i]), extra, merge_time, histories)
+                except Exception as exc:
+                    results[i] = _failed(f"{type(exc).__name__}: {exc}", extra)
+                os.remove(paths[i])
+            else:
+                results[i] = _failed(res.values.get("message") or "the point did not run",
+                                     extra)
+            if res.status == "failed":
+                results[i].update(status="failed", run_status="failed",
+                                  reason=res.values["message"], message=res.values["message"])
     return [r if r is not None else _failed("no result", extra) for r in results]
 

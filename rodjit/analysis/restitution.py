@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from .._display import aligned
 from ..config import Config
 from ..sweeps.grid import Grid
 
@@ -203,8 +204,4 @@ def curve_report(table: SweepTable, columns: Sequence[str] = ("restitution_first
             else str(table["status"][i])
         cells.append(status)
         rows.append(cells)
-    width = [max(len(h), *(len(r[j]) for r in rows)) if rows else len(h)
-             for j, h in enumerate(head)]
-    lines = ["  ".join(h.rjust(w) for h, w in zip(head, width))]
-    lines += ["  ".join(c.rjust(w) for c, w in zip(r, width)) for r in rows]
-    return "\n".join(lines)
+    return "\n".join(aligned(head, rows))

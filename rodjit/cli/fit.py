@@ -55,6 +55,8 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     from ..analysis.fit import FitError, fit
     from ..analysis.fit_table import compare_laws, fit_table
     from ..output.estimate import parse_size
+    from ..sweeps.grid import MAX_POINTS, format_value
+    from .sweep import make_grid
 
     result: Any
     try:
@@ -67,10 +69,12 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
         if table:
             if target:
                 raise ValueError("--target and --table exclude each other")
-            if compare:
-                ckey, values = _candidates(compare)
-                result = compare_laws(table, {f"{ckey} = {v}": (cfg.override({ckey: v}), keys)
-                                              for v in values},
+            if compare:       # the values as --grid and --compare of restitution read them
+                grid = make_grid((compare,), max_points=MAX_POINTS)
+                ckey = grid.keys[0]
+                result = compare_laws(table, {f"{ckey} = {format_value(v)}":
+                                              (cfg.override({ckey: v}), keys)
+                                              for v in grid.values[0]},
                                       jobs=jobs, scheduler=scheduler, **limits)
             else:
                 result = fit_table(keys, table, cfg, jobs=jobs, scheduler=scheduler,
@@ -101,12 +105,6 @@ def fit_command(key: str, config: str | None, target: str | None, bracket: str,
     fits = getattr(result, "fits", None)
     for label, one in (fits.items() if fits else [(None, result)]):
         _fit_lines(one, label)
-
-
-def _candidates(text: str) -> tuple[str, list[str]]:
-    """``KEY=V1,V2,...`` of --compare: the key and its values as written."""
-    key, values = next(iter(key_values("--compare", text).items()))
-    return key, [v.strip() for v in values.split(",") if v.strip()]
 
 
 def _fit_lines(result: Any, label: str | None) -> None:

@@ -107,10 +107,11 @@ def emit_final(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
     """The snapshot and diagnostics rows of a run that ends before t_end
     (``events.stop_due``), at its end time t, unless its grid has a row at t already
     (the last step landed on one); the caller leaves room for one row of each."""
+    # the grid's last output time (inf with the grid off): a row at t already if within tol
     tol = clock[L.TOL]
-    if clock[L.SNAP_DT] > 0.0 and clock[L.T0] + (count[L.K_SNAP] - 1) * clock[L.SNAP_DT] < t - tol:
+    if grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(-1)) < t - tol:
         _snapshot_row(cur[0], cur[1], t, step_no, count, snap_t, snap_step, snap_u, snap_v)
-    if clock[L.DIAG_DT] > 0.0 and clock[L.T0] + (count[L.K_DIAG] - 1) * clock[L.DIAG_DT] < t - tol:
+    if grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(-1)) < t - tol:
         _diag_row(cur[0], cur[1], work, system, rod, floor, count, t, dt_prop,
                   clock[L.DISSIPATED], diag)
 

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 
-from .._display import html_table, number, text
+from .._display import aligned, html_table, number, text
 from .._extras import need
 from ..config import Config, field_spec
 from ..output import cf
@@ -331,10 +331,7 @@ class SweepTable:
                 rows.append(["..."] + [""] * (len(head) - 1))
                 continue
             rows.append([str(i)] + [_cell(self.columns[c][i], c) for c in keys + list(TABLE_COLUMNS)])
-        widths = [max(len(h), *(len(r[j]) for r in rows)) if rows else len(h)
-                  for j, h in enumerate(head)]
-        lines = ["  ".join(h.rjust(w) for h, w in zip(head, widths))]
-        lines += ["  ".join(c.rjust(w) for c, w in zip(r, widths)) for r in rows]
+        lines = aligned(head, rows)
         failed = np.flatnonzero(self.columns["status"] == "failed")
         if failed.size:
             lines.append(f"failed points ({failed.size}):")
