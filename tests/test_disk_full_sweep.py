@@ -121,6 +121,17 @@ def test_a_refused_write_keeps_exactly_the_points_written_before(
     same_values(table, ref)
 
 
+# the sweep's clock for its writes of finished points runs 10 s a reading: every point is
+# written on its own whatever the machine's load, so two resumes write alike (how many
+# points a write holds sets the file's size; a loaded machine wrote the copy's two in one
+# write and the limited resume's in two, which outgrew the copy's size)
+ONE_POINT_A_WRITE = ("import itertools, types\n"
+                     "import rodjit.sweeps.run_sweep as R\n"
+                     "_t = itertools.count(0.0, 10.0)\n"
+                     "R.time = types.SimpleNamespace(monotonic=lambda: next(_t),\n"
+                     "                               perf_counter=R.time.perf_counter)")
+
+
 def test_a_resume_needs_only_the_space_its_points_take(tmp_path, reference):
     """A sweep stopped after 2 of its 4 points, continued with its file allowed to grow to
     the size that finishing it gives (measured by finishing a copy) and no further: the
@@ -134,11 +145,11 @@ def test_a_resume_needs_only_the_space_its_points_take(tmp_path, reference):
     copy = tmp_path / "copy.h5"
     shutil.copy(cut, copy)
     resume = ["sweep", "--resume", "--scheduler", "inline", "--batch-size", "1", "-q", "-o"]
-    r = rodjit_cli(*resume, copy, cwd=tmp_path)
+    r = rodjit_cli(*resume, copy, cwd=tmp_path, code=ONE_POINT_A_WRITE)
     assert r.returncode == 0, r.stderr
     finished = copy.stat().st_size
     assert finished > cut.stat().st_size
-    r = rodjit_cli(*resume, cut, cwd=tmp_path, limit=finished)
+    r = rodjit_cli(*resume, cut, cwd=tmp_path, limit=finished, code=ONE_POINT_A_WRITE)
     assert r.returncode == 0, r.stderr
     same_values(rodjit.load_sweep(cut), ref)
 
