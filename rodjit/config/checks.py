@@ -13,7 +13,8 @@ from .errors import ConfigError
 from .sections import check_dt_range
 
 __all__ = ["CROSS_CHECKS", "RUN_CHECKS", "SHOCK_WARNING", "VERLET_MU_MAX", "VERLET_WARNING",
-           "viscous_warning", "model_warnings", "setup_warnings", "ROD_LENGTH"]
+           "viscous_warning", "model_warnings", "setup_warnings", "times_warnings",
+           "ROD_LENGTH"]
 
 # The texts of ``Config.warnings`` (tests and the convergence tool use them too).
 SHOCK_WARNING = (
@@ -86,6 +87,17 @@ def setup_warnings(g: float, height: float, velocity: float, beta: float) -> tup
                    f"{ROD_LENGTH:g}: the floor law models a thin bending layer (default "
                    f"0.05), not a floor softer than the rod is long")
     return tuple(out)
+
+
+def times_warnings(times: tuple[float, ...], t_end: float) -> tuple[str, ...]:
+    """Listed snapshot times (``output.times``) after ``time.t_end``: this run does not
+    reach them (a run extended later, ``resume_file(..., t_end=...)``, does)."""
+    late = [t for t in times if t > t_end]
+    if not late:
+        return ()
+    return (f"output.times lists {len(late)} time{'s' if len(late) > 1 else ''} after "
+            f"time.t_end = {t_end!r} (from {late[0]!r}): this run writes no snapshot "
+            f"there, a run extended past them does",)
 
 
 def _check_height(height: float, beta: float) -> None:

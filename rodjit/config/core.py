@@ -15,7 +15,7 @@ from typing import Any, Mapping
 
 from ..stepping.registry import AUTO, choose
 from ..model.system import start_velocity
-from .checks import CROSS_CHECKS, RUN_CHECKS, model_warnings, setup_warnings
+from .checks import CROSS_CHECKS, RUN_CHECKS, model_warnings, setup_warnings, times_warnings
 from .errors import ConfigError
 from .keys import FIELDS, parse_value, strip_quotes, unknown_key_error
 from .sections import (SECTIONS, FloorConfig, GravityConfig, InitialConfig, OutputConfig,
@@ -97,13 +97,14 @@ class Config:
             μ = γ = 0 model, verlet at large μ; and per set-up that is valid but almost
             surely a mistake (``checks.setup_warnings``): a ``gravity.g > 0`` under which
             the rod never comes down to the floor (no impact), a ``floor.beta`` at least
-            the rod's length.
+            the rod's length, listed ``output.times`` after ``time.t_end``.
         """
         return (model_warnings(self.rod.mu, self.rod.gamma, self.resolve().time.integrator)
                 + setup_warnings(self.gravity.g, self.initial.height,
                                  start_velocity(self.initial.height, self.initial.velocity,
                                                 self.initial.impact_speed, self.gravity.g),
-                                 self.floor.beta))
+                                 self.floor.beta)
+                + times_warnings(self.output.times, self.time.t_end))
 
     def check_runnable(self) -> None:
         """Refuse, in one line, a configuration that is valid but whose run could not keep

@@ -41,7 +41,8 @@ class KeySpec:
     Parameters
     ----------
     kind : str
-        ``"int"``, ``"float"``, ``"str"`` or ``"bool"``.
+        ``"int"``, ``"float"``, ``"str"``, ``"bool"`` or ``"times"`` (a list of
+        increasing times, a tuple of floats).
     rng : str, optional
         The allowed range, as messages print it (``"> 0"``).
     check : callable, optional
@@ -96,6 +97,8 @@ class KeySpec:
             if self.optional:
                 return None
             raise ConfigError(f"{key} must be set ({self.describe()})", key)
+        if self.kind == "times":
+            return self._times(key, value)
         if isinstance(value, str) and self.kind != "str":
             raise ConfigError(_quoted_error(key, value, self), key)
         is_bool = isinstance(value, bool) or type(value).__name__ in ("bool_", "bool")
@@ -138,6 +141,36 @@ class KeySpec:
                               key)
         return value
 
+    def _times(self, key: str, value: Any) -> tuple[float, ...]:
+        """A list of times: a sequence of numbers (a TOML array, a list, a NumPy array) or
+        their text separated by commas, as a tuple of floats; ``check`` its order."""
+        if isinstance(value, str):
+            text = value.strip().strip("[]")
+            try:
+                value = [float(x) for x in text.split(",") if x.strip()]
+            except ValueError:
+                raise ConfigError(f"{key} = {value!r} is not a list of numbers "
+                                  f"({self.describe()})", key) from None
+        if hasattr(value, "tolist"):                 # a NumPy array or scalar
+            value = value.tolist()
+        if not isinstance(value, (list, tuple)):
+            raise ConfigError(f"{key} = {value!r} is not a list of numbers "
+                              f"({self.describe()})", key)
+        out: list[float] = []
+        for i, x in enumerate(value):
+            if isinstance(x, bool) or not isinstance(x, numbers.Real):
+                raise ConfigError(f"{key}[{i}] = {x!r} is not a number ({self.describe()})",
+                                  key)
+            x = float(x)
+            if not math.isfinite(x) or x < 0.0:
+                raise ConfigError(f"{key}[{i}] = {x!r} is out of range ({self.describe()})",
+                                  key)
+            if out and not x > out[-1]:
+                raise ConfigError(f"{key}[{i}] = {x!r} is out of range: not after "
+                                  f"{key}[{i - 1}] = {out[-1]!r} ({self.describe()})", key)
+            out.append(x)
+        return tuple(out)
+
     def describe(self) -> str:
         """The allowed values in words (``"float > 0"``, ``"one of 'gzip', ..."``)."""
         if self.choices is not None:
@@ -145,7 +178,8 @@ class KeySpec:
         elif self.kind == "bool":
             text = "true or false"
         else:
-            text = f"{self.kind} {self.rng}".strip()
+            kind = "list of times" if self.kind == "times" else self.kind
+            text = f"{kind} {self.rng}".strip()
         return text + (", or unset" if self.optional else "")
 
     def unit_words(self) -> str:
@@ -298,6 +332,10 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
         "diagnostics_interval": KeySpec("float", ">= 0 (0 disables diagnostics)", _nonneg,
                                         unit="s", meaning="simulated time between "
                                                           "diagnostics rows"),
+        "times": KeySpec("times", "increasing, each >= 0; empty: off",
+                         unit="s",
+                         meaning="the times of the snapshots of u and v, in place of "
+                                 "output.snapshot_interval's grid (solve_ivp's t_eval)"),
         "compression": KeySpec("str", choices=COMPRESSIONS,
                                meaning="compression of the HDF5 tables"),
         "interpolate": KeySpec("bool",

@@ -51,7 +51,8 @@ def _documented(cls: _S) -> _S:
     lines = ["", "    Parameters", "    ----------"]
     defaults = cls()
     for name, spec in FIELDS[cls.SECTION].items():      # type: ignore[attr-defined]
-        kind = {"int": "int", "float": "float", "str": "str", "bool": "bool"}[spec.kind]
+        kind = {"int": "int", "float": "float", "str": "str", "bool": "bool",
+                "times": "tuple of float"}[spec.kind]
         lines.append(f"    {name} : {kind}{' or None' if spec.optional else ''}")
         unit = f" [{spec.unit}]" if spec.unit and spec.unit != "1" else ""
         lines.append(f"        {spec.meaning[:1].upper()}{spec.meaning[1:]}{unit}; "
@@ -157,12 +158,19 @@ class OutputConfig(Section):
     schedule costs them no steps; false: their steps land on every output time, so each row
     is the state of a step (the second-order schemes and ``energy`` always land, and so
     does any integrator under a fixed ``time.dt``).  Rows at ``time.t_end`` are always a
-    step's own state."""
+    step's own state.
+
+    ``times`` (empty by default) lists the snapshot times themselves, as ``t_eval`` does
+    for SciPy's ``solve_ivp``: the snapshots are taken at those times, by the same rule
+    (dense output or landing), and ``snapshot_interval`` is not used; the diagnostics
+    keep their own interval (the bounce and first-impact observables are read from
+    them)."""
 
     SECTION: ClassVar[str] = "output"
 
     snapshot_interval: float = 0.005
     diagnostics_interval: float = 0.001
+    times: tuple[float, ...] = ()
     compression: str = "none"
     interpolate: bool = True
 

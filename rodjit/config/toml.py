@@ -20,7 +20,7 @@ __all__ = ["toml_value", "key_comment", "to_toml", "commented_toml", "toml_line"
 
 
 def toml_value(value: Any) -> str:
-    """``value`` (bool, int, finite float or str) as a TOML value.
+    """``value`` (bool, int, finite float, str, or a tuple of them) as a TOML value.
 
     Raises
     ------
@@ -35,6 +35,8 @@ def toml_value(value: Any) -> str:
         return repr(value)  # shortest round-trip form; finite by validation
     if isinstance(value, str):
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, tuple):
+        return "[" + ", ".join(toml_value(x) for x in value) + "]"
     raise TypeError(f"cannot write {value!r} as TOML")
 
 

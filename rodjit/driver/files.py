@@ -172,6 +172,9 @@ class RunPlan:
         for name, rows, key in (("snapshots", e.snapshots, "snapshot_interval"),
                                 ("diagnostics", e.diagnostics, "diagnostics_interval")):
             every = getattr(c.output, key)
+            if name == "snapshots" and c.output.times:
+                lines.append(f"{name:<13}{rows} rows (at output.times)")
+                continue
             lines.append(f"{name:<13}{rows} rows" + (f" (every {every:g} s to t = "
                                                      f"{c.time.t_end:g})" if every else ""))
         free = f", {format_size(self.free)} free" if self.free is not None else ""

@@ -109,10 +109,13 @@ def capacities(config, ctrl, snapshot_capacity=None, diag_capacity=None) -> tupl
     n1 = config.rod.N + 1
     out, t_end = config.output, config.time.t_end
     if snapshot_capacity is None:
-        snapshot_capacity = min(snapshot_bound(n1), rows_needed(out.snapshot_interval, t_end))
+        # listed times: one row each, and one for the row of a run stopped between them
+        wanted = (len(out.times) + 1 if out.times else
+                  rows_needed(out.snapshot_interval, t_end))
+        snapshot_capacity = min(snapshot_bound(n1), wanted)
     if diag_capacity is None:
         diag_capacity = min(4096, rows_needed(out.diagnostics_interval, t_end))
-    if out.snapshot_interval > 0:
+    if out.snapshot_interval > 0 or out.times:
         snapshot_capacity = max(snapshot_capacity, ctrl.dense_snapshots)
     if out.diagnostics_interval > 0:
         diag_capacity = max(diag_capacity, ctrl.dense_diagnostics)
@@ -189,7 +192,7 @@ class Run:
         # v rows, the clock row (t_end, the output intervals and tolerance set) and ``ev``
         # (the flight time)
         self.arrays = a = allocate(n1, self.scheme, snapshot_capacity, diag_capacity,
-                                   event_capacity)
+                                   event_capacity, config.output.times)
         a.state[:2] = s.state
         a.clock[:] = s.clock
         a.ev[:] = s.ev()
@@ -256,7 +259,7 @@ class Run:
         self._set_tolerance()
 
     def _set_tolerance(self):
-        self.arrays.clock[L.TOL] = tolerance(self.arrays.clock)
+        self.arrays.clock[L.TOL] = tolerance(self.arrays.clock, self.config.output.times)
 
     # ---- stepping ----------------------------------------------------------------------
     def _args(self):

@@ -100,17 +100,21 @@ def clock_row(config) -> np.ndarray:
     out = config.output
     clock = np.zeros(L.CLOCK_SIZE)
     clock[L.T_END] = config.time.t_end
-    clock[L.SNAP_DT] = out.snapshot_interval
+    # listed snapshot times (``output.times``): the interval's place says so, the times
+    # themselves are the run's ``times`` array (``stepping.outputs``)
+    clock[L.SNAP_DT] = -1.0 if out.times else out.snapshot_interval
     clock[L.DIAG_DT] = out.diagnostics_interval
-    clock[L.TOL] = tolerance(clock)
+    clock[L.TOL] = tolerance(clock, out.times)
     return clock
 
 
-def tolerance(clock: np.ndarray) -> float:
-    """The time below which two output times coincide, for the intervals and the remaining
-    run in ``clock`` (``control.output_tolerance``)."""
+def tolerance(clock: np.ndarray, times=()) -> float:
+    """The time below which two output times coincide, for the intervals, the gaps between
+    the listed snapshot ``times`` and the remaining run in ``clock``
+    (``control.output_tolerance``)."""
     spans = [x for x in (clock[L.SNAP_DT], clock[L.DIAG_DT], clock[L.T_END] - clock[L.T])
              if x > 0]
+    spans += [b - a for a, b in zip(times, times[1:])]
     return control.output_tolerance(spans)
 
 

@@ -108,6 +108,16 @@ def _capacities(run) -> tuple[int, int]:
     return max(4, run.ctrl.dense_snapshots), max(16, run.ctrl.dense_diagnostics)
 
 
+def _times(runs) -> np.ndarray:
+    """The points' listed snapshot times (``output.times``), a row each, padded with inf
+    (a time the loop never reaches): the kernel's ``times`` input."""
+    lists = [r.config.output.times for r in runs]
+    out = np.full((len(runs), max([1, *map(len, lists)])), np.inf)
+    for row, times in zip(out, lists):
+        row[:len(times)] = times
+    return out
+
+
 def _launch(runs, cuda):
     """Run points of one family on the device; ``(fout, iout, bounce rows, compile s,
     run s)``."""
@@ -136,7 +146,7 @@ def _launch(runs, cuda):
     # the output buffers of the points' arrays (``stepping.arrays``): a row of each per point
     size = {"n1": n1, "snapshots": cs, "diagnostics": cd, "events": EVENT_ROWS}
     buffers = [cuda.device_array((n, *shape(name, size)), SPEC[name][0]) for name in BUFFERS]
-    out = [d(params), d(state0), d(clock0), d(ev0), *buffers,
+    out = [d(params), d(state0), d(clock0), d(ev0), *buffers, d(_times(runs)),
            cuda.device_array((n, BOUNCE_ROWS, T.BOUT_SIZE)),
            cuda.device_array((n, T.F_SIZE)), d(np.zeros((n, T.I_SIZE), np.int64))]
     threads = min(THREADS, n) if not simulated() else min(32, n)
@@ -271,7 +281,8 @@ def _bytes_per_point(run) -> int:
     size = {"n1": n1, "snapshots": cs, "diagnostics": cd, "events": EVENT_ROWS}
     buffers = sum(SPEC[name][0].itemsize * int(np.prod(shape(name, size)))
                   for name in BUFFERS)
-    return buffers + 8 * (BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1)
+    return buffers + 8 * (BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1
+                          + len(run.config.output.times))
 
 
 def _worker(cuda) -> dict:

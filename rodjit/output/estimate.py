@@ -89,7 +89,7 @@ def _rows(span: float, interval: float) -> float:
 # the configuration keys an estimate and the fixed-step checks depend on (a sweep computes
 # them once per combination of these keys, not once per point)
 ESTIMATE_KEYS = ("rod.N", "time.t_end", "time.dt", "output.snapshot_interval",
-                 "output.diagnostics_interval")
+                 "output.diagnostics_interval", "output.times")
 _INTERVALS = ("output.snapshot_interval", "output.diagnostics_interval")
 
 
@@ -106,7 +106,8 @@ def estimate_values(values) -> Estimate:
     """``estimate_run`` from the values of ``ESTIMATE_KEYS`` (a mapping)."""
     n1 = values["rod.N"] + 1
     span = float(values["time.t_end"])
-    snaps = _rows(span, values["output.snapshot_interval"])
+    times = values.get("output.times") or ()
+    snaps = len(times) if times else _rows(span, values["output.snapshot_interval"])
     diags = _rows(span, values["output.diagnostics_interval"])
     file_bytes = _OVERHEAD + snaps * (2 * n1 + 2) * 8 + diags * len(L.DIAG_COLUMNS) * 8
     snap_buffer = max(1, min(snaps, max(16, 2**22 // n1)))
@@ -141,8 +142,17 @@ def step_refusal(values, max_steps: float = MAX_STEPS) -> ValueError | None:
     steps = t_end / dt
     if steps > max_steps:
         return TooManySteps(dt, t_end, steps, max_steps)
+    times = values.get("output.times") or ()
+    for i, t in enumerate(times):
+        if t > 0 and not _divides(dt, t):
+            return ValueError(f"output.times[{i}] = {t!r} is not a whole number of steps of "
+                              f"time.dt = {dt!r} ({t / dt:.6g}): with a fixed step every "
+                              f"listed time must be a multiple of time.dt, so that every "
+                              f"step is time.dt; or unset time.dt for adaptive steps")
     intervals = [float(values[key]) for key in _INTERVALS if float(values[key]) > 0]
     for key in _INTERVALS:
+        if times and key == "output.snapshot_interval":
+            continue                     # not used: the listed times replace its grid
         interval = float(values[key])
         if interval > 0 and not _divides(dt, interval):
             return ValueError(f"time.dt = {dt!r} does not divide {key} = {interval!r} ({key} "

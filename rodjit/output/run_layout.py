@@ -56,7 +56,8 @@ TABLES = {
 }
 
 _DESCRIPTIONS = {
-    "snapshots/t": "simulated time of each snapshot (t0 + k * output.snapshot_interval)",
+    "snapshots/t": "simulated time of each snapshot (t0 + k * output.snapshot_interval, or "
+                   "the listed output.times)",
     "snapshots/step": ("accepted steps taken up to the snapshot (for a row interpolated by a "
                        "dense output: up to the end of the step it lies in)"),
     "snapshots/u": "height u_i of every node (rows: times, columns: nodes at x)",

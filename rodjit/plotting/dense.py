@@ -114,7 +114,7 @@ def resimulate(src, t0: float, t1: float, interval: float):
     row = max(0, int(np.searchsorted(times, t0, "right")) - 1)
     ts = float(times[row])
     config = src.config.override({"time.t_end": max(t1 - ts, interval),
-                                  "output.snapshot_interval": interval,
+                                  "output.snapshot_interval": interval, "output.times": (),
                                   "output.diagnostics_interval": 0.0})
     with warnings.catch_warnings():   # the run's own warnings were said when it ran
         warnings.simplefilter("ignore", ModelWarning)

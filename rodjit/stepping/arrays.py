@@ -14,9 +14,10 @@ NamedTuple inside), and the GPU kernel's arrays (``gpu.kernel``: the fields size
 rod in ``cuda.local.array``, the output buffers as the point's rows of device arrays).
 
 A dimension of a shape is a number or the name of a size (``sizes``): ``"n1"`` nodes
-N + 1, ``"work"`` the scheme's work rows (``schemes.work_rows``), and the buffers' row
-counts ``"snapshots"``, ``"diagnostics"`` and ``"events"``.  The fields sized by the latter
-are the output buffers (``BUFFERS``).
+N + 1, ``"work"`` the scheme's work rows (``schemes.work_rows``), the buffers' row
+counts ``"snapshots"``, ``"diagnostics"`` and ``"events"``, and ``"times"`` the listed
+snapshot times.  The fields sized by the buffers' counts are the output buffers
+(``BUFFERS``); ``times`` is the one input (``INPUTS``).
 """
 from __future__ import annotations
 
@@ -27,7 +28,7 @@ import numpy as np
 from . import layout as L
 from .schemes import SCHEME_STATS, work_rows
 
-__all__ = ["RunArrays", "SPEC", "BUFFERS", "sizes", "shape", "allocate", "aot_type"]
+__all__ = ["RunArrays", "SPEC", "BUFFERS", "INPUTS", "sizes", "shape", "allocate", "aot_type"]
 
 
 class RunArrays(NamedTuple):
@@ -49,6 +50,7 @@ class RunArrays(NamedTuple):
     episodes: np.ndarray
     bounces: np.ndarray
     fail: np.ndarray
+    times: np.ndarray       # the listed snapshot times (``output.times``; read only)
 
 
 _F8, _I8 = np.dtype(np.float64), np.dtype(np.int64)
@@ -72,18 +74,25 @@ SPEC: dict[str, tuple[np.dtype, tuple]] = {
     "episodes": (_F8, ("events", len(L.EPISODE_COLUMNS))),
     "bounces": (_F8, ("events", len(L.BOUNCE_ROW_COLUMNS))),
     "fail": (_F8, (L.FAIL_SIZE,)),
+    "times": (_F8, ("times",)),
 }
 assert tuple(SPEC) == RunArrays._fields, "SPEC must list RunArrays' fields in order"
 
 _BUFFER_SIZES = ("snapshots", "diagnostics", "events")
 # the output buffers: the fields sized by the buffers' row counts
 BUFFERS = tuple(name for name, (_, dims) in SPEC.items() if dims[0] in _BUFFER_SIZES)
+# the run's inputs that the loop only reads: the GPU passes them, as the buffers, as the
+# point's rows of device arrays rather than local arrays
+INPUTS = ("times",)
 
 
-def sizes(n1: int, scheme, snapshots: int, diagnostics: int, events: int) -> dict:
-    """The named sizes of a run's shapes (module docstring)."""
+def sizes(n1: int, scheme, snapshots: int, diagnostics: int, events: int,
+          times: int = 0) -> dict:
+    """The named sizes of a run's shapes (module docstring); ``times`` listed snapshot
+    times (``output.times``; the array has a row even when there are none)."""
     return {"n1": int(n1), "work": int(work_rows(scheme)), "snapshots": int(snapshots),
-            "diagnostics": int(diagnostics), "events": int(events)}
+            "diagnostics": int(diagnostics), "events": int(events),
+            "times": max(1, int(times))}
 
 
 def shape(name: str, size: dict) -> tuple:
@@ -92,12 +101,16 @@ def shape(name: str, size: dict) -> tuple:
     return tuple(d if isinstance(d, int) else size[d] for d in SPEC[name][1])
 
 
-def allocate(n1: int, scheme, snapshots: int, diagnostics: int, events: int) -> RunArrays:
+def allocate(n1: int, scheme, snapshots: int, diagnostics: int, events: int,
+             times=()) -> RunArrays:
     """Zeroed arrays for a run of ``n1`` nodes with ``scheme`` and output buffers of
-    ``snapshots``, ``diagnostics`` and ``events`` rows."""
-    size = sizes(n1, scheme, snapshots, diagnostics, events)
-    return RunArrays(*(np.zeros(shape(name, size), dtype=dt)
-                       for name, (dt, _) in SPEC.items()))
+    ``snapshots``, ``diagnostics`` and ``events`` rows, its ``times`` the listed snapshot
+    times (``output.times``)."""
+    size = sizes(n1, scheme, snapshots, diagnostics, events, len(times))
+    arrays = RunArrays(*(np.zeros(shape(name, size), dtype=dt)
+                         for name, (dt, _) in SPEC.items()))
+    arrays.times[:len(times)] = times
+    return arrays
 
 
 def aot_type(name: str) -> str:

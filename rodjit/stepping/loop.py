@@ -131,8 +131,8 @@ def start(scheme, ctrl, system, rod, floor, arrays):
     clock[L.EMIN] = emin
     if u[0] < 0.0:
         open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin, ke - 0.5 * w * w + st + be)
-    emit(state, work, system, rod, floor, clock, count, clock[L.T], clock[L.DT],
-          count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
+    emit(state, work, system, rod, floor, clock, count, arrays.times, clock[L.T],
+         clock[L.DT], count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
     count[L.STARTED] = 1
     return OK
 
@@ -161,6 +161,7 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
     episodes = arrays.episodes
     bounces = arrays.bounces
     fail = arrays.fail
+    times = arrays.times
     cur = state
     nxt = trial
     swapped = False
@@ -199,8 +200,8 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
                 code = L.FULL
                 break
             clock[L.DISSIPATED] = diss
-            emit_final(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
-                       snap_t, snap_step, snap_u, snap_v, diag)
+            emit_final(cur, work, system, rod, floor, clock, count, times, t, dtp,
+                       count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag)
             clock[L.T_END] = t      # the run's end: complete, as one that reached t_end
             code = L.DONE
             break
@@ -212,12 +213,13 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
             code = L.FULL
             break
         if interpolate:
-            target, dt, land, n_s, n_d = dense_target(ctrl, fixed, clock, count, t, dtp)
+            target, dt, land, n_s, n_d = dense_target(ctrl, fixed, clock, count, times, t,
+                                                      dtp)
             if count[L.N_SNAP] + n_s > cap_s or count[L.N_DIAG] + n_d > cap_d:
                 code = L.FULL   # before the step: it is the same whatever the buffers held
                 break
         else:
-            target = next_target(clock, count)
+            target = next_target(clock, count, times)
             dt, land = C.step_to(ctrl, fixed, target - t, dtp)
         u = cur[0]
         v = cur[1]
@@ -289,8 +291,9 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
                 val = emin
         if status == OK and interpolate:
             t_new = target if land else t + dt
-            inside = min(grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0)),
-                         grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))) < t_new - tol
+            inside = min(grid_time(clock, count, times, L.K_SNAP, L.SNAP_DT, int(0)),
+                         grid_time(clock, count, times, L.K_DIAG, L.DIAG_DT, int(0))
+                         ) < t_new - tol
             if inside:
                 # the extra stages of the continuous extension, once for every output of
                 # the step; one outside the admissible set retries the step shorter
@@ -351,17 +354,17 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
         if interpolate:
             if inside:
                 emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, clock, count,
-                            t_old, dt, t, diss_old, dtp, count[L.STEP], snap_t, snap_step,
-                            snap_u, snap_v, diag)
+                           times, t_old, dt, t, diss_old, dtp, count[L.STEP], snap_t,
+                           snap_step, snap_u, snap_v, diag)
             clock[L.DISSIPATED] = diss
             # an output time at the step's end: its own state (at the grid's time unless
             # the step landed there, as on t_end)
-            emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
-                  snap_t, snap_step, snap_u, snap_v, diag, not land)
+            emit(cur, work, system, rod, floor, clock, count, times, t, dtp, count[L.STEP],
+                 snap_t, snap_step, snap_u, snap_v, diag, not land)
         elif land:
             clock[L.DISSIPATED] = diss
-            emit(cur, work, system, rod, floor, clock, count, t, dtp, count[L.STEP],
-                  snap_t, snap_step, snap_u, snap_v, diag, bool(False))
+            emit(cur, work, system, rod, floor, clock, count, times, t, dtp, count[L.STEP],
+                 snap_t, snap_step, snap_u, snap_v, diag, bool(False))
         if resync:
             full_accel(system, rod, _trial_floor(scheme, floor, BOTH), cur[0], cur[1], cur[2],
                        work[0], work[1], bool(False))

@@ -15,36 +15,48 @@ __all__ = ["next_target", "grid_time", "dense_target", "emit", "emit_dense"]
 
 
 @step_kernel
-def next_target(clock, count):
-    target = clock[L.T_END]
-    if clock[L.SNAP_DT] > 0.0:
-        target = min(target, clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT])
-    if clock[L.DIAG_DT] > 0.0:
-        target = min(target, clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT])
-    return target
-
-
-@step_kernel
-def _skip_past(clock, count, kidx, dtidx, t):
-    """Advance the output index to the first grid time after t (+ tolerance)."""
-    while clock[L.T0] + count[kidx] * clock[dtidx] <= t + clock[L.TOL]:
-        count[kidx] += 1
-
-
-@step_kernel
-def grid_time(clock, count, kidx, dtidx, ahead):
-    """The output time ``ahead`` places after the next one of a grid (inf: grid off)."""
-    if clock[dtidx] > 0.0:
-        return clock[L.T0] + (count[kidx] + ahead) * clock[dtidx]
+def _grid_at(clock, times, dtidx, k):
+    """Output time k of a grid: t0 + k·Δ for an interval Δ > 0; for Δ < 0 the listed time
+    ``times[k]`` (``output.times``; inf past the list, −inf before it); inf for a grid
+    that is off (Δ = 0)."""
+    dt = clock[dtidx]
+    if dt > 0.0:
+        return clock[L.T0] + k * dt
+    if dt < 0.0:
+        if k < 0:
+            return -np.inf
+        if k < times.size:
+            return times[k]
     return np.inf
 
 
 @step_kernel
-def _covered(clock, count, kidx, dtidx, t, limit):
+def next_target(clock, count, times):
+    target = clock[L.T_END]
+    target = min(target, _grid_at(clock, times, L.SNAP_DT, count[L.K_SNAP]))
+    target = min(target, _grid_at(clock, times, L.DIAG_DT, count[L.K_DIAG]))
+    return target
+
+
+@step_kernel
+def _skip_past(clock, count, times, kidx, dtidx, t):
+    """Advance the output index to the first grid time after t (+ tolerance)."""
+    while _grid_at(clock, times, dtidx, count[kidx]) <= t + clock[L.TOL]:
+        count[kidx] += 1
+
+
+@step_kernel
+def grid_time(clock, count, times, kidx, dtidx, ahead):
+    """The output time ``ahead`` places after the next one of a grid (inf: grid off)."""
+    return _grid_at(clock, times, dtidx, count[kidx] + ahead)
+
+
+@step_kernel
+def _covered(clock, count, times, kidx, dtidx, t, limit):
     """How many output times of a grid a step ending at t covers (at most ``limit``)."""
     # a range, not a counter from a literal 0: ``grid_time`` compiles once (rodjit._jit)
     for n in range(limit):
-        if grid_time(clock, count, kidx, dtidx, n) > t + clock[L.TOL]:
+        if grid_time(clock, count, times, kidx, dtidx, n) > t + clock[L.TOL]:
             return n
     return max(limit, 0)
 
@@ -83,41 +95,41 @@ def _diag_row(u, v, work, system, rod, floor, count, t, dt_prop, dissipated, dia
 
 
 @step_kernel
-def emit(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
-          snap_t, snap_step, snap_u, snap_v, diag, at_grid):
+def emit(cur, work, system, rod, floor, clock, count, times, t, dt_prop, step_no,
+         snap_t, snap_step, snap_u, snap_v, diag, at_grid):
     """Write the snapshot and/or diagnostics row due at time t, from the state ``cur``;
     the rows' time is t, or with ``at_grid`` each grid's own output time (within the
     output tolerance of t)."""
     tol = clock[L.TOL]
-    ts = clock[L.T0] + count[L.K_SNAP] * clock[L.SNAP_DT]
-    if clock[L.SNAP_DT] > 0.0 and ts <= t + tol:
+    ts = _grid_at(clock, times, L.SNAP_DT, count[L.K_SNAP])
+    if ts <= t + tol:
         _snapshot_row(cur[0], cur[1], ts if at_grid else t, step_no, count, snap_t,
                       snap_step, snap_u, snap_v)
-        _skip_past(clock, count, L.K_SNAP, L.SNAP_DT, t)
-    td = clock[L.T0] + count[L.K_DIAG] * clock[L.DIAG_DT]
-    if clock[L.DIAG_DT] > 0.0 and td <= t + tol:
+        _skip_past(clock, count, times, L.K_SNAP, L.SNAP_DT, t)
+    td = _grid_at(clock, times, L.DIAG_DT, count[L.K_DIAG])
+    if td <= t + tol:
         _diag_row(cur[0], cur[1], work, system, rod, floor, count, td if at_grid else t,
                   dt_prop, clock[L.DISSIPATED], diag)
-        _skip_past(clock, count, L.K_DIAG, L.DIAG_DT, t)
+        _skip_past(clock, count, times, L.K_DIAG, L.DIAG_DT, t)
 
 
 @step_kernel
-def emit_final(cur, work, system, rod, floor, clock, count, t, dt_prop, step_no,
+def emit_final(cur, work, system, rod, floor, clock, count, times, t, dt_prop, step_no,
                snap_t, snap_step, snap_u, snap_v, diag):
     """The snapshot and diagnostics rows of a run that ends before t_end
     (``events.stop_due``), at its end time t, unless its grid has a row at t already
     (the last step landed on one); the caller leaves room for one row of each."""
     # the grid's last output time (inf with the grid off): a row at t already if within tol
     tol = clock[L.TOL]
-    if grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(-1)) < t - tol:
+    if grid_time(clock, count, times, L.K_SNAP, L.SNAP_DT, int(-1)) < t - tol:
         _snapshot_row(cur[0], cur[1], t, step_no, count, snap_t, snap_step, snap_u, snap_v)
-    if grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(-1)) < t - tol:
+    if grid_time(clock, count, times, L.K_DIAG, L.DIAG_DT, int(-1)) < t - tol:
         _diag_row(cur[0], cur[1], work, system, rod, floor, count, t, dt_prop,
                   clock[L.DISSIPATED], diag)
 
 
 @step_kernel
-def dense_target(ctrl, fixed, clock, count, t, dtp):
+def dense_target(ctrl, fixed, clock, count, times, t, dtp):
     """A dense-output step from t: ``(target, dt, land, snapshots, diagnostics)``, the step
     toward t_end, shortened to end on the last output time it may cover
     (``ctrl.dense_snapshots``, ``ctrl.dense_diagnostics``) if it would cover more, and at
@@ -127,13 +139,13 @@ def dense_target(ctrl, fixed, clock, count, t, dtp):
     m_d = ctrl.dense_diagnostics
     dt, land = C.step_to(ctrl, fixed, t_end - t, dtp)
     t_new = t_end if land else t + dt
-    n_s = _covered(clock, count, L.K_SNAP, L.SNAP_DT, t_new, m_s + 1)
-    n_d = _covered(clock, count, L.K_DIAG, L.DIAG_DT, t_new, m_d + 1)
+    n_s = _covered(clock, count, times, L.K_SNAP, L.SNAP_DT, t_new, m_s + 1)
+    n_d = _covered(clock, count, times, L.K_DIAG, L.DIAG_DT, t_new, m_d + 1)
     target = t_end
     if n_s > m_s:
-        target = min(target, grid_time(clock, count, L.K_SNAP, L.SNAP_DT, m_s - 1))
+        target = min(target, grid_time(clock, count, times, L.K_SNAP, L.SNAP_DT, m_s - 1))
     if n_d > m_d:
-        target = min(target, grid_time(clock, count, L.K_DIAG, L.DIAG_DT, m_d - 1))
+        target = min(target, grid_time(clock, count, times, L.K_DIAG, L.DIAG_DT, m_d - 1))
     if target < t_end:
         dt, land = C.step_to(ctrl, fixed, target - t, dtp)
         n_s = min(n_s, m_s)
@@ -142,16 +154,16 @@ def dense_target(ctrl, fixed, clock, count, t, dtp):
 
 
 @step_kernel
-def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                     t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                     diag):
+def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, times,
+                     t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
+                     snap_v, diag):
     """The rows of every output time in (t, t_new − tol) of the step of length dt from the
     state ``old`` to ``new``, by the scheme's dense output into ``interp`` (module
     docstring); ``dense_setup`` has run for the step."""
     tol = clock[L.TOL]
     while True:
-        ts = grid_time(clock, count, L.K_SNAP, L.SNAP_DT, int(0))
-        td = grid_time(clock, count, L.K_DIAG, L.DIAG_DT, int(0))
+        ts = grid_time(clock, count, times, L.K_SNAP, L.SNAP_DT, int(0))
+        td = grid_time(clock, count, times, L.K_DIAG, L.DIAG_DT, int(0))
         tau = min(ts, td)
         if not tau < t_new - tol:
             break
@@ -169,21 +181,22 @@ def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, 
             count[L.K_DIAG] += 1
 
 
-def emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v, diag):
+def emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, times, t,
+               dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
+               diag):
     """``_emit_dense_rows`` for a scheme with a dense output; compiled for one without, a
     no-op, so its loop does not compile the interpolation it never runs."""
-    _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                     t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                     diag)
+    _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, times,
+                     t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
+                     snap_v, diag)
 
 
 @overload(emit_dense)
-def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, count, t, dt,
-                   t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                   diag):
+def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, count, times,
+                   t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
+                   snap_v, diag):
     if not has_dense_type(scheme):
-        return (lambda scheme, old, new, work, interp, system, rod, floor, clock, count, t,
-                dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-                diag: None)
+        return (lambda scheme, old, new, work, interp, system, rod, floor, clock, count,
+                times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
+                snap_v, diag: None)
     return emit_dense

@@ -198,7 +198,7 @@ def run_starts(members, values: dict, rows_of: list) -> tuple[float, float]:
     for k, s in members:
         cfg = s.config
         key = (E.family(s.params()), cfg.rod.N, capacities(cfg, s.ctrl),
-               cfg.output.diagnostics_interval, cfg.time.t_end)
+               cfg.output.diagnostics_interval, cfg.time.t_end, cfg.output.times)
         groups.setdefault(key, []).append((k, s))
     compiled = loading = 0.0
     for group in groups.values():
@@ -211,10 +211,11 @@ def run_starts(members, values: dict, rows_of: list) -> tuple[float, float]:
 _LOADED: set = set()      # the families whose batch kernel this process has loaded
 
 
-def _scratch(n1, scheme, cap_s, cap_d, ev_cap) -> tuple:
+def _scratch(n1, scheme, cap_s, cap_d, ev_cap, times=()) -> tuple:
     """One point's arrays of ``run_batch`` (reused by every point of the call): a Run's
-    arrays and buffers (``stepping.arrays``), and the first-impact state."""
-    return allocate(n1, scheme, cap_s, cap_d, ev_cap), np.zeros(S.SIZE)
+    arrays and buffers (``stepping.arrays``; its listed snapshot ``times``, the same for
+    the call's points), and the first-impact state."""
+    return allocate(n1, scheme, cap_s, cap_d, ev_cap, times), np.zeros(S.SIZE)
 
 
 EV_CAP = 1024    # event rows of a point's scratch
@@ -276,7 +277,7 @@ def run_group(members, values: dict, rows_of: list) -> tuple[float, float]:
         clock0[j] = s.clock
         flight[j] = s.tau
     cap_s, cap_d = capacities(cfg, s0.ctrl)
-    scratch = _scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP)
+    scratch = _scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP, cfg.output.times)
     fout = np.zeros((m, T.F_SIZE))
     iout = np.zeros((m, T.I_SIZE), dtype=np.int64)
     pos = np.array([k for k, _ in members], dtype=np.int64)
