@@ -1,10 +1,12 @@
 """Shared helpers: small configurations, a subprocess runner for the CLI, file comparison."""
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
 import sys
+from pathlib import Path
 
 # the suite runs on the JIT, in this process and in the processes it starts; the loop
 # compiled ahead of time is tested against it (tests/test_stepping_aot.py).  RODJIT_AOT=1
@@ -16,6 +18,8 @@ import numpy as np
 import pytest
 
 import rodjit
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def quiet(**over):
@@ -128,6 +132,21 @@ def _session_signal_handlers():
         signal.signal(s, handler)
     signal.pthread_sigmask(signal.SIG_UNBLOCK, set(_SIGNALS))
     yield
+
+
+def run_simulated(args, **kw) -> subprocess.CompletedProcess:
+    """``python ARGS`` in a fresh interpreter with numba-cuda's simulator chosen (it must be
+    before ``numba.cuda`` is first imported, and other tests import it for real)."""
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
+                          timeout=900, **kw)
+
+
+def simulated_json(script: str):
+    """The JSON a ``script`` prints last, run under the GPU simulator (``run_simulated``)."""
+    p = run_simulated(["-c", script])
+    assert p.returncode == 0, p.stderr[-3000:]
+    return json.loads(p.stdout.strip().splitlines()[-1])
 
 
 def rodjit_cli(*args, cwd=None, timeout=300, limit: int | None = None,

@@ -12,18 +12,16 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from conftest import run_simulated
 
 if importlib.util.find_spec("numba_cuda") is None:
     pytest.skip("the GPU engine's extra is not installed: pip install 'rodjit[cuda]'",
                 allow_module_level=True)
 
-ROOT = Path(__file__).resolve().parent.parent
 
 # the timings; every other column, the first-impact ones the GPU streams from its
 # diagnostics rows (rodjit.stepping.impact_stream) included, is compared
@@ -85,18 +83,12 @@ print(json.dumps(report))
 """
 
 
-def _simulated(args, **kw):
-    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
-    return subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env,
-                          timeout=900, **kw)
-
-
 @pytest.mark.parametrize("integrator", ["energy", pytest.param("dp54", marks=pytest.mark.slow)])
 def test_gpu_sweep_matches_cpu(tmp_path, integrator):
     """energy (the default, implicit) and dp54 (explicit, adaptive, dense output): every
     summary column the GPU computes, and every bounce record, as the CPU's; the sweep file
     holds the GPU's table."""
-    p = _simulated(["-c", SCRIPT, integrator, str(tmp_path / "s.h5")])
+    p = run_simulated(["-c", SCRIPT, integrator, str(tmp_path / "s.h5")])
     assert p.returncode == 0, p.stderr[-3000:]
     report = json.loads(p.stdout.strip().splitlines()[-1])
     assert report["status"] == ["completed", "failed", "completed", "failed"]
@@ -115,7 +107,7 @@ def test_cli_device_cuda(tmp_path):
     """``rodjit sweep --device cuda`` writes the sweep file; N above the limit, run files
     and a scheduler are refused with one line and exit code 2, before any file is made."""
     out = tmp_path / "c.h5"
-    p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--set", "time.t_end=0.2",
+    p = run_simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--set", "time.t_end=0.2",
                     "--grid", "floor.kappa_b=1000,3000", "-o", str(out), "-q"])
     assert p.returncode == 0, p.stderr[-3000:]
     from rodjit.sweeps import load_sweep
@@ -124,19 +116,19 @@ def test_cli_device_cuda(tmp_path):
     assert list(table.columns["status"]) == ["completed", "completed"]
     assert (table.columns["steps"] > 0).all()
     bad = tmp_path / "n.h5"
-    p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--set", "rod.N=65",
+    p = run_simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--set", "rod.N=65",
                     "--grid", "floor.kappa_b=1000,3000", "-o", str(bad)])
     assert p.returncode == 2
     err = p.stderr.strip().splitlines()
     assert len(err) == 1 and "rod.N = 65" in err[0] and "1 to 64" in err[0], p.stderr
     assert not bad.exists()
-    p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--save-runs",
+    p = run_simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--save-runs",
                     str(tmp_path / "runs"), "--grid", "floor.kappa_b=1000,3000", "-o", str(bad)])
     assert p.returncode == 2
     err = p.stderr.strip().splitlines()
     assert len(err) == 1 and "--save-runs" in err[0], p.stderr
     assert not bad.exists()
-    p = _simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--scheduler", "local",
+    p = run_simulated(["-m", "rodjit", "sweep", "--device", "cuda", "--scheduler", "local",
                     "--grid", "floor.kappa_b=1000,3000", "-o", str(bad)])
     assert p.returncode == 2
     err = p.stderr.strip().splitlines()
@@ -176,7 +168,7 @@ def test_a_point_with_more_bounces_than_a_thread_keeps_has_them_all():
     """A thread whose bounce rows are full stops, and its point runs again on the CPU
     engine: every bounce is in its table, and its row is the per-point path's (no bounce
     dropped, ``n_bounces`` the point's own)."""
-    p = _simulated(["-c", FULL_SCRIPT])
+    p = run_simulated(["-c", FULL_SCRIPT])
     assert p.returncode == 0, p.stderr[-3000:]
     report = json.loads(p.stdout.strip().splitlines()[-1])
     assert min(report["n_bounces"]) > 2, report

@@ -4,7 +4,6 @@ of any size, a run file and its resume, the batch engine, the GPU engine's simul
 from __future__ import annotations
 
 import importlib.util
-import json
 import os
 import subprocess
 import sys
@@ -16,6 +15,7 @@ import pytest
 import rodjit
 from rodjit.config import ConfigError
 from rodjit.config.errors import ModelWarning
+from conftest import simulated_json
 
 ROOT = Path(__file__).resolve().parent.parent
 # paper-mu100 for 0.6 s: the fall, the first impact (at 0.452 s) and its release (0.464 s)
@@ -166,11 +166,7 @@ print(json.dumps({k: [gpu[k].tolist(), cpu[k].tolist()] for k in ("steps",
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None,
                     reason="the GPU engine's extra is not installed")
 def test_the_gpu_engine_lands_on_the_listed_times_as_the_cpu_does():
-    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
-    p = subprocess.run([sys.executable, "-c", GPU_SCRIPT], capture_output=True, text=True,
-                       env=env, timeout=900)
-    assert p.returncode == 0, p.stderr[-3000:]
-    got = json.loads(p.stdout.strip().splitlines()[-1])
+    got = simulated_json(GPU_SCRIPT)
     gpu, cpu = got["steps"]
     assert gpu == cpu
     gpu, cpu = got["restitution_first"]

@@ -3,10 +3,6 @@ rest (``time.stop_at_rest``), at the same step whatever the engine and however t
 cut into calls, with their last rows at the stop."""
 from __future__ import annotations
 
-import json
-import os
-import subprocess
-import sys
 import importlib.util
 from pathlib import Path
 
@@ -17,8 +13,8 @@ import rodjit
 from rodjit.analysis import lift_energy
 from rodjit.config import ConfigError
 from rodjit.records.sink import Sink
+from conftest import simulated_json
 
-ROOT = Path(__file__).resolve().parent.parent
 MU0 = rodjit.load_preset("paper-mu0").override({"output.snapshot_interval": 0.01})
 STICKY = rodjit.load_preset("paper-mu100").override({"rod.mu": 20.0, "time.t_end": 4.0})
 
@@ -125,11 +121,7 @@ print(json.dumps({k: [gpu[k].tolist(), cpu[k].tolist()] for k in ("t_final", "st
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None,
                     reason="the GPU engine's extra is not installed")
 def test_the_gpu_engine_stops_where_the_cpu_does():
-    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1", PYTHONPATH=str(ROOT))
-    p = subprocess.run([sys.executable, "-c", GPU_SCRIPT], capture_output=True, text=True,
-                       env=env, timeout=900)
-    assert p.returncode == 0, p.stderr[-3000:]
-    got = json.loads(p.stdout.strip().splitlines()[-1])
+    got = simulated_json(GPU_SCRIPT)
     gpu, cpu = got["t_final"]
     assert gpu == pytest.approx(cpu, rel=1e-9) and gpu[0] < gpu[1] < 3.0
     assert got["steps"][0] == got["steps"][1]
