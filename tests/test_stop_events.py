@@ -4,7 +4,6 @@ cut into calls, with their last rows at the stop."""
 from __future__ import annotations
 
 import importlib.util
-from pathlib import Path
 
 import numpy as np
 import pytest
