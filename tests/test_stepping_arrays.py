@@ -63,20 +63,22 @@ def test_the_extension_takes_the_fields_as_separate_arrays_of_their_types():
 
 
 def test_the_gpu_kernel_builds_it_from_local_arrays_and_its_rows_of_the_buffers():
-    """The buffers and the inputs (the listed output times) are the point's rows of the
-    kernel's arguments, the other fields local arrays."""
+    """The buffers are the point's rows of the kernel's arguments, the inputs (the listed
+    output times) those arguments whole, shared by the threads, the other fields local
+    arrays."""
     fam = family_of(Run(rodjit.Config().override({"rod.N": 9}))._args())
     src = _source(fam)
     size = {"n1": fam.n1, "work": fam.work_rows}
-    rows = BUFFERS + A.INPUTS
     assert A.INPUTS == ("times",)
     for name in RunArrays._fields:
-        if name in rows:
+        if name in BUFFERS:
             assert f"{name}[i]" in src and f"{name} = cuda.local" not in src
+        elif name in A.INPUTS:
+            assert f"{name}[i]" not in src and f"{name} = cuda.local" not in src
         else:
             dims = A.shape(name, size)
             assert f"{name} = cuda.local.array({dims}, {SPEC[name][0].name})" in src
-    fields = ", ".join(f"{n}[i]" if n in rows else n for n in RunArrays._fields)
+    fields = ", ".join(f"{n}[i]" if n in BUFFERS else n for n in RunArrays._fields)
     assert f"arrays = RunArrays({fields})" in src
 
 

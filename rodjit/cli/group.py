@@ -26,10 +26,33 @@ class Commands(click.Group):
             raise UsageError(exc) from None
 
 
+def import_modules(names: tuple[str, ...]) -> None:
+    """Import the modules ``--import`` names, the working directory first on the path (as
+    ``python -m`` has it): what they register (a stress law, an integrator) is then
+    selectable by name, here and in a sweep's worker processes, which import the modules
+    that define a point's laws and integrator (``sweeps.point.law_modules``).  A module
+    that cannot be imported is a usage error, one line naming it."""
+    import importlib
+    import os
+    import sys
+
+    if names and os.getcwd() not in sys.path:
+        sys.path.insert(0, os.getcwd())
+    for name in names:
+        try:
+            importlib.import_module(name)
+        except Exception as exc:          # any failure of the user's module: say it, exit 2
+            raise UsageError(f"--import {name}: {type(exc).__name__}: {exc}") from None
+
+
 @click.group(cls=Commands, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="rodjit", prog_name="rodjit")
+@click.option("--import", "imports", multiple=True, metavar="MODULE",
+              help="Import MODULE first (from the working directory or the Python path): "
+                   "a module of one's own that registers a stress law or an integrator, "
+                   "e.g. rodjit --import myfloor run --set floor.law=my-floor. Repeatable.")
 @click.pass_context
-def main(ctx: click.Context) -> None:
+def main(ctx: click.Context, imports: tuple[str, ...]) -> None:
     """Simulate an elastic rod bouncing on a floor (Aiki & Kosugi) and inspect the runs.
 
     \b
@@ -42,3 +65,4 @@ def main(ctx: click.Context) -> None:
       143  stopped by SIGTERM (likewise)
     """
     ctx.with_resource(warnings_as_lines())
+    import_modules(imports)

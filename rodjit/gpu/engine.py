@@ -109,13 +109,12 @@ def _capacities(run) -> tuple[int, int]:
 
 
 def _times(runs) -> np.ndarray:
-    """The points' listed snapshot times (``output.times``), a row each, padded with inf
-    (a time the loop never reaches): the kernel's ``times`` input."""
-    lists = [r.config.output.times for r in runs]
-    out = np.full((len(runs), max([1, *map(len, lists)])), np.inf)
-    for row, times in zip(out, lists):
-        row[:len(times)] = times
-    return out
+    """The listed snapshot times (``output.times``) of a launch's points, the same for all
+    (``run_sweep`` groups them so): the kernel's ``times`` input, one array for every
+    thread, so a long list costs its size once, not once per point (a placeholder row
+    where there are none)."""
+    times = runs[0].config.output.times
+    return np.array(times if times else (np.inf,), dtype=np.float64)
 
 
 def _launch(runs, cuda):
@@ -240,7 +239,8 @@ def run_batch(configs, index) -> BatchResult:
             fam = families.get(ids)
             if fam is None:
                 fam = families[ids] = family_of(r.params())
-            groups.setdefault(fam, []).append(j)
+            # one listed-times array per launch, shared by its threads (``_times``)
+            groups.setdefault((fam, r.config.output.times), []).append(j)
     rows_of: list[list] = [[] for _ in range(n)]
     again: list = []            # points whose bounce rows filled: the CPU engine's
     compile_s = run_s = 0.0
@@ -281,8 +281,7 @@ def _bytes_per_point(run) -> int:
     size = {"n1": n1, "snapshots": cs, "diagnostics": cd, "events": EVENT_ROWS}
     buffers = sum(SPEC[name][0].itemsize * int(np.prod(shape(name, size)))
                   for name in BUFFERS)
-    return buffers + 8 * (BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1
-                          + len(run.config.output.times))
+    return buffers + 8 * (BOUNCE_ROWS * T.BOUT_SIZE + 64 + 2 * n1)
 
 
 def _worker(cuda) -> dict:

@@ -68,14 +68,14 @@ def _source(family: Family) -> str:
     fields = [f"    t{k} = {x}"
               for k, x in enumerate(P.rebuild_source(family.kinds, "p", names))]
     n1 = family.n1
-    # the run's arrays (``stepping.arrays``): the output buffers and the inputs are the
-    # point's rows of the kernel's arguments, the others local arrays, zeroed, then the
-    # state's u and v rows, the clock and ev rows from the point's
+    # the run's arrays (``stepping.arrays``): the output buffers are the point's rows of
+    # the kernel's arguments, the inputs those arguments themselves (the same for every
+    # thread of a launch), the others local arrays, zeroed, then the state's u and v rows,
+    # the clock and ev rows from the point's
     size = {"n1": n1, "work": family.work_rows}
-    rows = BUFFERS + INPUTS
     local = []
     for name in RunArrays._fields:
-        if name in rows:
+        if name in BUFFERS + INPUTS:
             continue
         dt, _ = SPEC[name]
         dims = shape(name, size)
@@ -84,8 +84,8 @@ def _source(family: Family) -> str:
         for d, n in enumerate(dims):
             local.append(f"    {'    ' * d}for j{d} in range({n}):")
         local.append(f"    {'    ' * len(dims)}{name}[{index}] = 0")
-    buffers = ", ".join(rows)
-    fields_of = ", ".join(f"{name}[i]" if name in rows else name
+    buffers = ", ".join(BUFFERS + INPUTS)
+    fields_of = ", ".join(f"{name}[i]" if name in BUFFERS else name
                           for name in RunArrays._fields)
     nl = "\n"
     return f"""
@@ -244,8 +244,8 @@ def _compute_capability(cc):
 
 def signature(family: Family):
     """The Numba signature of a family's kernel (for ``compile_ptx``): its arguments as
-    ``_source`` makes them, the output buffers and the inputs as a row of each per
-    point."""
+    ``_source`` makes them, the output buffers as a row of each per point, the inputs
+    whole."""
     from numba import float64, int64, types, void
 
     def rows(name):
@@ -253,8 +253,8 @@ def signature(family: Family):
         return types.Array(float64 if dt.name == "float64" else int64, len(dims) + 1, "C")
 
     return void(float64[:, ::1], float64[:, :, ::1], float64[:, ::1], float64[:, ::1],
-                *map(rows, BUFFERS + INPUTS), float64[:, :, ::1], float64[:, ::1],
-                int64[:, ::1],
+                *map(rows, BUFFERS), *(float64[::1] for _ in INPUTS), float64[:, :, ::1],
+                float64[:, ::1], int64[:, ::1],
                 int64)
 
 

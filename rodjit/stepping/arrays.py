@@ -81,8 +81,8 @@ assert tuple(SPEC) == RunArrays._fields, "SPEC must list RunArrays' fields in or
 _BUFFER_SIZES = ("snapshots", "diagnostics", "events")
 # the output buffers: the fields sized by the buffers' row counts
 BUFFERS = tuple(name for name, (_, dims) in SPEC.items() if dims[0] in _BUFFER_SIZES)
-# the run's inputs that the loop only reads: the GPU passes them, as the buffers, as the
-# point's rows of device arrays rather than local arrays
+# the run's inputs that the loop only reads: the GPU passes them as device arrays that
+# every thread of a launch shares, rather than local arrays
 INPUTS = ("times",)
 
 

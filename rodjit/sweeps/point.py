@@ -30,6 +30,7 @@ from ..records.extremes import Extremes
 from ..records.impact import IMPACT_COLUMNS, ImpactStream
 from ..records.sink import Sink
 from ..stepping import layout as L
+from ..stepping import registry
 from .batch import BatchResult
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
@@ -110,16 +111,22 @@ def died(index: int, message: str) -> PointResult:
 
 
 def law_modules(config) -> tuple[str, ...]:
-    """Modules defining the point's stress laws, unless rodjit's own: a worker in a fresh
-    process imports them to find the laws by name (the module of ``from_config`` is the
-    one that registers a law, the kernels may come from others)."""
+    """Modules defining the point's stress laws and its integrator, unless rodjit's own: a
+    worker in a fresh process imports them to find the laws and the integrator by name
+    (the module of ``from_config`` is the one that registers a law, the kernels may come
+    from others; an integrator's is its ``Scheme.module``, which registers it on import)."""
     mods = []
+
+    def add(mod: str) -> None:
+        if mod and mod != "__main__" and not mod.startswith("rodjit.") and mod not in mods:
+            mods.append(mod)
+
     for kind, name in (("rod", config.rod.law), ("floor", config.floor.law)):
         law = get_law(kind, name)
         for part in (law.from_config, law.value, law.deriv, law.primitive, law.lower):
-            mod = getattr(getattr(part, "py_func", part), "__module__", None) or ""
-            if mod and mod != "__main__" and not mod.startswith("rodjit.") and mod not in mods:
-                mods.append(mod)
+            add(getattr(getattr(part, "py_func", part), "__module__", None) or "")
+    if config.time.integrator in registry.NAMES:
+        add(registry.get(config.time.integrator).module)
     return tuple(mods)
 
 
