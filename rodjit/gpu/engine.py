@@ -110,7 +110,7 @@ def _capacities(run) -> tuple[int, int]:
 
 def _times(runs) -> np.ndarray:
     """The listed snapshot times (``output.times``) of a launch's points, the same for all
-    (``run_sweep`` groups them so): the kernel's ``times`` input, one array for every
+    (``run_batch`` groups its points so): the kernel's ``times`` input, one array for every
     thread, so a long list costs its size once, not once per point (a placeholder row
     where there are none)."""
     times = runs[0].config.output.times
