@@ -125,6 +125,15 @@ def test_bad_times_are_refused_naming_the_entry(value, message):
         MU100.override({"output.times": value})
 
 
+def test_a_sweep_takes_one_list_for_all_its_points():
+    """The list is one value of the base configuration: a grid over it is refused, in one
+    line that says where to set it."""
+    with pytest.raises(ValueError, match=r"grid output.times: a list of times is one value "
+                                         r"for the whole sweep, not a swept key; set it "
+                                         r"with --set output.times=\[...\]"):
+        rodjit.sweep(MU100, {"output.times": [[0.1], [0.2]]}, scheduler="inline")
+
+
 def test_times_from_toml_and_the_command_line(tmp_path):
     cfg = rodjit.Config.from_toml_string(MU100.override({"output.times": TIMES}).to_toml())
     assert cfg.output.times == tuple(TIMES)

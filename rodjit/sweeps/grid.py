@@ -191,7 +191,10 @@ class Grid:
             raise ValueError("grid must map at least one configuration key to its values, "
                              "e.g. {'rod.mu': [0, 1, 10]}")
         for key in spec:
-            _field(str(key))
+            if _field(str(key)).kind == "times":
+                raise ValueError(f"grid {key}: a list of times is one value for the whole "
+                                 f"sweep, not a swept key; set it with --set "
+                                 f"{key}=[...] (or in the base configuration)")
         _check_size({key: _count(key, vals) for key, vals in spec.items()}, max_points)
         keys, values = [], []
         for key, vals in spec.items():
