@@ -149,6 +149,19 @@ def simulated_json(script: str):
     return json.loads(p.stdout.strip().splitlines()[-1])
 
 
+def simulated_sweeps(setup: str, grid: dict, columns) -> dict:
+    """The same sweep on the GPU engine (under the simulator) and inline on the CPU:
+    ``setup`` is Python that defines ``cfg``; ``{column: [gpu values, cpu values]}``."""
+    return simulated_json(f"""
+import json
+import rodjit
+{setup}
+gpu = rodjit.sweep(cfg, {grid!r}, device="cuda", progress=False)
+cpu = rodjit.sweep(cfg, {grid!r}, scheduler="inline", progress=False)
+print(json.dumps({{k: [gpu[k].tolist(), cpu[k].tolist()] for k in {tuple(columns)!r}}}))
+""")
+
+
 def rodjit_cli(*args, cwd=None, timeout=300, limit: int | None = None,
                code: str | None = None) -> subprocess.CompletedProcess:
     """Run ``rodjit ARGS`` in a fresh interpreter (as a user would).  ``limit``: its files

@@ -15,7 +15,7 @@ import pytest
 import rodjit
 from rodjit.config import ConfigError
 from rodjit.config.errors import ModelWarning
-from conftest import simulated_json
+from conftest import simulated_sweeps
 
 ROOT = Path(__file__).resolve().parent.parent
 # paper-mu100 for 0.6 s: the fall, the first impact (at 0.452 s) and its release (0.464 s)
@@ -130,7 +130,7 @@ def test_a_sweep_takes_one_list_for_all_its_points():
     line that says where to set it."""
     with pytest.raises(ValueError, match=r"grid output.times: a list of times is one value "
                                          r"for the whole sweep, not a swept key; set it "
-                                         r"with --set output.times=\[...\]"):
+                                         r"in the base configuration"):
         rodjit.sweep(MU100, {"output.times": [[0.1], [0.2]]}, scheduler="inline")
 
 
@@ -157,17 +157,10 @@ def test_times_from_toml_and_the_command_line(tmp_path):
     assert p.stderr.strip().splitlines()[-1].startswith("Error: output.times[1] = 0.2 is out")
 
 
-GPU_SCRIPT = """
-import json
-import rodjit
+GPU_SETUP = """
 cfg = rodjit.load_preset("paper-mu100").override({
     "time.t_end": 0.6, "time.integrator": "energy",
     "output.times": [0.0, 0.01, 0.123456789, 0.4567, 0.46, 0.6]})
-grid = {"rod.mu": [100.0, 150.0]}
-gpu = rodjit.sweep(cfg, grid, device="cuda", progress=False)
-cpu = rodjit.sweep(cfg, grid, scheduler="inline", progress=False)
-print(json.dumps({k: [gpu[k].tolist(), cpu[k].tolist()] for k in ("steps",
-                                                                   "restitution_first")}))
 """
 
 
@@ -175,7 +168,8 @@ print(json.dumps({k: [gpu[k].tolist(), cpu[k].tolist()] for k in ("steps",
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None,
                     reason="the GPU engine's extra is not installed")
 def test_the_gpu_engine_lands_on_the_listed_times_as_the_cpu_does():
-    got = simulated_json(GPU_SCRIPT)
+    got = simulated_sweeps(GPU_SETUP, {"rod.mu": [100.0, 150.0]},
+                           ("steps", "restitution_first"))
     gpu, cpu = got["steps"]
     assert gpu == cpu
     gpu, cpu = got["restitution_first"]

@@ -12,7 +12,7 @@ import rodjit
 from rodjit.analysis import lift_energy
 from rodjit.config import ConfigError
 from rodjit.records.sink import Sink
-from conftest import simulated_json
+from conftest import simulated_sweeps
 
 MU0 = rodjit.load_preset("paper-mu0").override({"output.snapshot_interval": 0.01})
 STICKY = rodjit.load_preset("paper-mu100").override({"rod.mu": 20.0, "time.t_end": 4.0})
@@ -102,17 +102,9 @@ def test_a_stopped_run_file_is_complete(tmp_path):
         rodjit.resume_file(path)
 
 
-GPU_SCRIPT = """
-import json, sys
-import numpy as np
-import rodjit
+GPU_SETUP = """
 cfg = rodjit.load_preset("paper-mu100").override({"time.t_end": 3.0, "time.stop_at_rest": True,
                                                   "time.integrator": "energy"})
-grid = {"rod.mu": [20.0, 100.0]}
-gpu = rodjit.sweep(cfg, grid, device="cuda", progress=False)
-cpu = rodjit.sweep(cfg, grid, scheduler="inline", progress=False)
-print(json.dumps({k: [gpu[k].tolist(), cpu[k].tolist()] for k in ("t_final", "steps",
-                                                                   "n_bounces")}))
 """
 
 
@@ -120,7 +112,8 @@ print(json.dumps({k: [gpu[k].tolist(), cpu[k].tolist()] for k in ("t_final", "st
 @pytest.mark.skipif(importlib.util.find_spec("numba_cuda") is None,
                     reason="the GPU engine's extra is not installed")
 def test_the_gpu_engine_stops_where_the_cpu_does():
-    got = simulated_json(GPU_SCRIPT)
+    got = simulated_sweeps(GPU_SETUP, {"rod.mu": [20.0, 100.0]},
+                           ("t_final", "steps", "n_bounces"))
     gpu, cpu = got["t_final"]
     assert gpu == pytest.approx(cpu, rel=1e-9) and gpu[0] < gpu[1] < 3.0
     assert got["steps"][0] == got["steps"][1]

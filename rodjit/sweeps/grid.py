@@ -193,8 +193,8 @@ class Grid:
         for key in spec:
             if _field(str(key)).kind == "times":
                 raise ValueError(f"grid {key}: a list of times is one value for the whole "
-                                 f"sweep, not a swept key; set it with --set "
-                                 f"{key}=[...] (or in the base configuration)")
+                                 f"sweep, not a swept key; set it in the base "
+                                 f"configuration")
         _check_size({key: _count(key, vals) for key, vals in spec.items()}, max_points)
         keys, values = [], []
         for key, vals in spec.items():
