@@ -67,12 +67,12 @@ def test_import_registers_what_a_module_defines_and_refuses_one_that_fails(tmp_p
 def test_a_sweeps_workers_import_the_modules_of_its_law_and_integrator(extending):
     import position_verlet  # noqa: F401
     import square_floor  # noqa: F401
-    from rodjit.sweeps.point import law_modules
+    from rodjit.sweeps.point import user_modules
 
     cfg = rodjit.Config().override({"floor.law": "square-floor",
                                     "time.integrator": "position-verlet"})
-    assert law_modules(cfg) == ("square_floor", "position_verlet")
-    assert law_modules(rodjit.Config()) == ()
+    assert user_modules(cfg) == ("square_floor", "position_verlet")
+    assert user_modules(rodjit.Config()) == ()
 
 
 @pytest.mark.slow      # compiles the loop for the new floor law (a new parameter type)

@@ -6,7 +6,7 @@ import pytest
 
 import custom_law  # noqa: F401  (registers "log-test")
 import rodjit
-from rodjit.sweeps.point import BOUNCE_COLUMNS, PointTask, SUMMARY_COLUMNS, law_modules, run_point
+from rodjit.sweeps.point import BOUNCE_COLUMNS, PointTask, SUMMARY_COLUMNS, user_modules, run_point
 
 from conftest import assert_same_files
 
@@ -46,7 +46,7 @@ def assert_row(values, expected):
 def test_row_matches_the_run(over, tmp_path):
     cfg = rodjit.Config().override({"time.t_end": 3.0, **over})
     res = rodjit.simulate(cfg)
-    got = run_point(PointTask(0, cfg, None, law_modules(cfg)))
+    got = run_point(PointTask(0, cfg, None, user_modules(cfg)))
     assert got.status == "completed" and got.values["message"] == ""
     assert_row(got.values, expected_row(res))
     assert got.values["wall_time"] > 0 and got.values["run_file"] == ""
@@ -54,7 +54,7 @@ def test_row_matches_the_run(over, tmp_path):
         assert np.array_equal(got.bounces[name], res.bounces[name], equal_nan=True), name
     # saved: the run file is the one run_to_file writes, and the row is the same
     path = tmp_path / "p.h5"
-    saved = run_point(PointTask(0, cfg, str(path), law_modules(cfg)))
+    saved = run_point(PointTask(0, cfg, str(path), user_modules(cfg)))
     assert saved.values["run_file"] == "p.h5"
     assert {k: v for k, v in saved.values.items() if k not in TIMINGS} == pytest.approx(
         {k: v for k, v in got.values.items() if k not in TIMINGS}, nan_ok=True)
@@ -90,5 +90,5 @@ def test_an_unexpected_error_fails_only_the_point():
 
 
 def test_law_modules_name_user_laws_only():
-    assert law_modules(rodjit.Config()) == ()
-    assert law_modules(rodjit.Config().override({"rod.law": "log-test"})) == ("custom_law",)
+    assert user_modules(rodjit.Config()) == ()
+    assert user_modules(rodjit.Config().override({"rod.law": "log-test"})) == ("custom_law",)

@@ -11,7 +11,7 @@ per unit β (σ_b'(0) = −2κ_b/β against −3κ_b/β) and a milder barrier, w
 From Python, import this module before naming the law; from the command line,
 ``rodjit --import square_floor run --set floor.law=square-floor`` with this folder as the
 working directory (or on ``PYTHONPATH``).  A sweep's worker processes import it themselves
-(``rodjit.sweeps.point.law_modules``).  docs/extending.md walks through it.
+(``rodjit.sweeps.point.user_modules``).  docs/extending.md walks through it.
 """
 from typing import NamedTuple
 

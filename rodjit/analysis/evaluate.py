@@ -51,9 +51,9 @@ def _batched(configs, columns, jobs: int, scheduler) -> list[dict]:
 
     from ..config import ModelWarning
     from ..sweeps.ensemble import BatchTask
-    from ..sweeps.point import law_modules
+    from ..sweeps.point import user_modules
 
-    laws = tuple(dict.fromkeys(m for c in configs for m in law_modules(c)))
+    laws = tuple(dict.fromkeys(m for c in configs for m in user_modules(c)))
     n = len(configs)
     per = -(-n // (2 * jobs))                 # about two tasks per worker
     tasks = (BatchTask(np.arange(i, min(i + per, n), dtype=np.int64), None,
@@ -183,7 +183,7 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
     from ..driver.run import SimulationError
     from ..driver.simulate import simulate
     from ..sweeps.executors import check_scheduler, default_jobs
-    from ..sweeps.point import PointTask, law_modules
+    from ..sweeps.point import PointTask, user_modules
 
     configs = list(configs)
     check_limits(configs, max_output=max_output, max_steps=max_steps)
@@ -210,8 +210,8 @@ def evaluate(configs, *, jobs: int | None = None, scheduler: str | None = None,
     results: list[dict | None] = [None] * len(configs)
     with tempfile.TemporaryDirectory(prefix="rodjit-evaluate-") as tmp:
         paths = [os.path.join(tmp, f"{i:06d}.h5") for i in range(len(configs))]
-        tasks = (PointTask(i, cfg, paths[i], law_modules(cfg)) for i, cfg in enumerate(configs))
-        warm = configs[0] if not law_modules(configs[0]) else None
+        tasks = (PointTask(i, cfg, paths[i], user_modules(cfg)) for i, cfg in enumerate(configs))
+        warm = configs[0] if not user_modules(configs[0]) else None
         for res in _results(scheduler, min(jobs, len(configs)), warm, False, tasks,
                             len(configs), set()):
             i = res.index

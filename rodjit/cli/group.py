@@ -30,7 +30,7 @@ def import_modules(names: tuple[str, ...]) -> None:
     """Import the modules ``--import`` names, the working directory first on the path (as
     ``python -m`` has it): what they register (a stress law, an integrator) is then
     selectable by name, here and in a sweep's worker processes, which import the modules
-    that define a point's laws and integrator (``sweeps.point.law_modules``).  A module
+    that define a point's laws and integrator (``sweeps.point.user_modules``).  A module
     that cannot be imported is a usage error, one line naming it."""
     import importlib
     import os

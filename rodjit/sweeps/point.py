@@ -34,7 +34,7 @@ from ..stepping import registry
 from .batch import BatchResult
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
-           "empty_columns", "empty_bounces", "law_modules", "BOUNCE_COLUMNS",
+           "empty_columns", "empty_bounces", "user_modules", "BOUNCE_COLUMNS",
            "default_jobs", "worker_info", "reissue_warnings", "bounce_values", "pass_on"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
@@ -72,7 +72,8 @@ class PointTask:
     index: int
     config: Any                 # rodjit.Config of the point
     save_path: str | None       # full run file to write, or None
-    laws: tuple[str, ...]       # modules to import first: they register non-built-in laws
+    laws: tuple[str, ...]       # modules to import first (user_modules: they register the
+                                # laws and the integrator that are not rodjit's own)
 
 
 @dataclass
@@ -110,7 +111,7 @@ def died(index: int, message: str) -> PointResult:
     return PointResult(index, empty_values("failed", message), empty_bounces())
 
 
-def law_modules(config) -> tuple[str, ...]:
+def user_modules(config) -> tuple[str, ...]:
     """Modules defining the point's stress laws and its integrator, unless rodjit's own: a
     worker in a fresh process imports them to find the laws and the integrator by name
     (the module of ``from_config`` is the one that registers a law, the kernels may come

@@ -35,7 +35,7 @@ from .plan import check_memory, check_runs_dir, plan_sweep
 from .sweep_check import read_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
-from .point import SUMMARY_COLUMNS, PointTask, empty_columns, law_modules, reissue_warnings
+from .point import SUMMARY_COLUMNS, PointTask, empty_columns, user_modules, reissue_warnings
 from .errors import FileHeldOpen, ResumeMismatch, SweepWriteFailed, resume_note
 from .outcome import SweepFailed, SweepInterrupted, SweepProgress, sweep_stats
 from .sweep_table import SweepTable
@@ -224,7 +224,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
     first = grid.config(base, todo[0])
     # workers load the first point's kernels before they report ready, unless that means
     # running a user's law (which could crash a worker before it has taken any point)
-    warm = first if not law_modules(first) else None
+    warm = first if not user_modules(first) else None
     if device == "cuda":   # every point checked for the GPU engine, before the file is made
         from ..gpu.executor import cuda_executor
         executor = cuda_executor(base, grid, todo[0])
@@ -358,13 +358,13 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
         # the ensemble engine: batches of points (an executor that batches the points
         # itself, the GPU engine's, takes them one by one)
         if runs_dir is None and ENGINE and not getattr(executor, "takes_points", False):
-            yield from batches(todo, base, grid, law_modules(grid.config(base, todo[0])),
+            yield from batches(todo, base, grid, user_modules(grid.config(base, todo[0])),
                                 batch_size, timing, executor.jobs)
             return
         for i in todo:
             cfg = grid.config(base, i)
             path = str(runs_dir / grid.run_name(i)) if runs_dir is not None else None
-            yield PointTask(i, cfg, path, law_modules(cfg))
+            yield PointTask(i, cfg, path, user_modules(cfg))
 
     ran = failed = written = 0
     said: set = set()      # the points' warnings issued so far (each text once)
