@@ -254,7 +254,7 @@ class Kernel:
         runs the machine code, releasing the GIL as the dispatcher's call does.
 
         Why: the dispatcher types every argument of every call, about 5 µs for the time
-        loop's arguments (five parameter tuples and a tuple of 16 arrays), which a short
+        loop's arguments (six parameter tuples and a tuple of 16 arrays), which a short
         rod's whole run of a few hundred steps pays twice; the entry costs under 1 µs.  It does not check
         its arguments, so a caller must pass only arguments of exactly these types (the
         driver keeps one per ``stepping.aot.key`` of a run, whose arrays it allocates

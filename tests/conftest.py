@@ -279,7 +279,7 @@ def trial_step(cfg, step, dt):
     from rodjit.records.result import MemorySink
     run = Run(cfg)
     run.start(MemorySink())
-    scheme, _, system, rod, floor = run._args()
+    scheme, _, system, rod, floor, _ = run._args()
     a = run.arrays
     before = a.state.copy()
     trial = np.zeros_like(a.state)

@@ -42,7 +42,7 @@ FLOORS = (
     ("version", "_jit", "_display", "_extras", "_cache_names", "_lazy"),
     ("model", "laws"),
     ("kernels",),
-    ("stepping",),
+    ("stepping", "observers"),
     ("config",),
     ("presets",),
     ("records",),

@@ -14,6 +14,7 @@ EXPECTED = {
     "paper_figures.py": ["paper-mu0.h5", "paper-mu100.h5", "paper_mu0.png", "paper_mu100.png"],
     "sweep_mu.py": ["sweep_mu.h5", "sweep_mu.png"],
     "convergence.py": ["convergence.h5"],
+    "custom_observer.py": ["apex_sweep.h5"],
 }
 
 
@@ -35,7 +36,10 @@ def _tracked_files() -> dict[str, int] | None:
             if p and (ROOT / p).is_file()}
 
 
-@pytest.mark.parametrize("script", [pytest.param(s, marks=pytest.mark.slow) if s == "sweep_mu.py"
+SLOW = ("sweep_mu.py", "custom_observer.py")
+
+
+@pytest.mark.parametrize("script", [pytest.param(s, marks=pytest.mark.slow) if s in SLOW
                                     else s for s in sorted(EXPECTED)])
 def test_example_runs(script, tmp_path):
     """Run as a user does (no argument: the current directory), it writes its files there

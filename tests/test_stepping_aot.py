@@ -94,8 +94,8 @@ def test_the_wrappers_rebuild_every_schemes_parameters(integrator):
         "restored", ts))
     passed = {}
     for name in aot.ENTRIES:
-        glob[f"_{name}"] = lambda *a, _n=name: (seen.setdefault(_n, a[:5]),
-                                                passed.setdefault(_n, a[5:])) and 7
+        glob[f"_{name}"] = lambda *a, _n=name: (seen.setdefault(_n, a[:6]),
+                                                passed.setdefault(_n, a[6:])) and 7
     exec(source, glob)
     p = aot.pack(args)
     assert p.dtype == np.float64 and p.ndim == 1

@@ -68,7 +68,7 @@ def test_the_gpu_kernel_builds_it_from_local_arrays_and_its_rows_of_the_buffers(
     arrays."""
     fam = family_of(Run(rodjit.Config().override({"rod.N": 9}))._args())
     src = _source(fam)
-    size = {"n1": fam.n1, "work": fam.work_rows}
+    size = {"n1": fam.n1, "work": fam.work_rows, "observed": max(1, fam.observed)}
     assert A.INPUTS == ("times",)
     for name in RunArrays._fields:
         if name in BUFFERS:

@@ -61,7 +61,7 @@ def _one_step(integrator, h, thetas, **over):
     (old (u, v), new (u, v), [interpolated (u, v)], [dissipated to θ], step's dissipated)."""
     run = Run(_cfg(integrator, **FLIGHT, **over))
     run.start(MemorySink())
-    scheme, _, system, rod, floor = run._args()
+    scheme, _, system, rod, floor, _ = run._args()
     s = run.arrays.state
     new = np.zeros_like(s)
     mod = registry.load(registry.get(integrator))[0]

@@ -39,7 +39,7 @@ def energy_config(**over):
 
 # ---- the real loop, one step at a time ------------------------------------------------------
 @numba.njit
-def _record(scheme, ctrl, system, rod, floor, arrays, out, max_bounces):
+def _record(scheme, ctrl, system, rod, floor, obs, arrays, out, max_bounces):
     """Call the compiled loop for one step at a time; per step record dt, E before/after,
     the loop's dissipation increment, μ dt Σ h (Δv̄/h)² recomputed from the two states, the
     rounding scale of E, u_0, the bounces so far and t.  Returns the number of steps."""
@@ -59,7 +59,7 @@ def _record(scheme, ctrl, system, rod, floor, arrays, out, max_bounces):
         t0 = clock[L.T]
         d0 = clock[L.DISSIPATED]
         v_old[:] = state[1]
-        code = advance(scheme, ctrl, system, rod, floor, arrays, 1)
+        code = advance(scheme, ctrl, system, rod, floor, obs, arrays, 1)
         count[L.N_EP] = 0        # drain the event buffers (their rows are not needed)
         count[L.N_BOUNCE] = 0
         if code == L.FAILED:

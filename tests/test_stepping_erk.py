@@ -175,7 +175,7 @@ def test_step_is_ok_and_fsal():
     cfg = _cfg("dp54", {"rod.mu": 0.3, "rod.gamma": 1e-3})
     run, trial, r = trial_step(cfg, erk.step, 1e-4)
     assert r.status == OK
-    _, _, system, rod, floor = run._args()
+    _, _, system, rod, floor, _ = run._args()
     a = np.zeros_like(trial[2])
     full_accel(system, rod, floor, trial[0], trial[1], a, run.arrays.work[0], run.arrays.work[1], False)
     np.testing.assert_array_equal(a, trial[2])

@@ -20,7 +20,7 @@ from rodjit.stepping.extremes import monotone, search_extremes, state_at, step_e
 @pytest.fixture(scope="module", params=["energy", "semi-implicit"])
 def model(request):
     cfg = load_preset("paper-mu100").override({"time.integrator": request.param})
-    scheme, _, system, _, floor = parameters(cfg)
+    scheme, _, system, _, floor, _ = parameters(cfg)
     return scheme, system, floor, cfg.rod.N + 1
 
 
@@ -79,7 +79,7 @@ def test_a_monotone_step_has_its_extremes_at_its_ends(model):
 
 def test_dense_output_steps_are_always_searched():
     cfg = load_preset("paper-mu100").override({"time.integrator": "dp54"})
-    scheme, _, system, _, _ = parameters(cfg)
+    scheme, _, system, _, _, _ = parameters(cfg)
     n1 = cfg.rod.N + 1
     old, new, dt = _step(np.random.default_rng(3), n1, system.h, linear=True)
     assert not monotone(scheme, old, new, dt)

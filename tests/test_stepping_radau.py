@@ -110,7 +110,7 @@ def test_transformed_solves_invert_lambda_minus_the_jacobian(gamma):
                           "initial.strain": 0.05})
     run = Run(cfg)
     run.start(MemorySink())
-    scheme, _, system, rod, floor = run._args()
+    scheme, _, system, rod, floor, _ = run._args()
     u, v = run.arrays.state[0].copy(), run.arrays.state[1].copy()
     u[3] += 0.01
     J = _dense_jacobian(u, v, system, rod, floor)
@@ -221,7 +221,7 @@ def test_step_leaves_the_full_acceleration_of_the_new_state():
     cfg = _cfg("radau5", {"rod.mu": 0.3, "rod.gamma": 1e-3})
     run, trial, r = trial_step(cfg, radau.step, 1e-4)
     assert r.status == OK
-    _, _, system, rod, floor = run._args()
+    _, _, system, rod, floor, _ = run._args()
     a = np.zeros_like(trial[2])
     full_accel(system, rod, floor, trial[0], trial[1], a, run.arrays.work[0], run.arrays.work[1],
                       False)

@@ -136,6 +136,11 @@ def _law_check(kind: str) -> Callable[[str], None]:
     return check
 
 
+def _observer_check(name: str) -> None:
+    from ..stepping.observers import get_observer   # a ValueError naming the registered
+    get_observer(name)
+
+
 # ``Config`` runs every check; a sweep grid checks each key's values once and these only
 # over the combinations of the swept keys they name, not over every point.
 CROSS_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., None]], ...] = (
@@ -177,4 +182,7 @@ def _check_regime(integrator: str, control: str, dt: float | None, mu: float,
 # What a run checks beyond ``CROSS_CHECKS`` before it steps (``Config.check_runnable``):
 # configurations that are valid (a file may hold one) but that a run refuses.
 RUN_CHECKS: tuple[tuple[tuple[str, ...], Callable[..., Any]], ...] = (
-    (("time.integrator", "time.control", "time.dt", "rod.mu", "rod.N"), _check_regime),)
+    (("time.integrator", "time.control", "time.dt", "rod.mu", "rod.N"), _check_regime),
+    # a run needs its observer registered; a file that names one is read without it (its
+    # values are in the file)
+    (("output.observer",), _observer_check))

@@ -336,6 +336,10 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
                          unit="s",
                          meaning="the times of the snapshots of u and v, in place of "
                                  "output.snapshot_interval's grid (solve_ivp's t_eval)"),
+        "observer": KeySpec("str", "a registered observer ('none': off)",
+                            meaning="compiled code watching every step, whose values are "
+                                    "Result.observed and sweep columns "
+                                    "(rodjit.observers)"),
         "compression": KeySpec("str", choices=COMPRESSIONS,
                                meaning="compression of the HDF5 tables"),
         "interpolate": KeySpec("bool",

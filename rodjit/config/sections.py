@@ -164,13 +164,17 @@ class OutputConfig(Section):
     for SciPy's ``solve_ivp``: the snapshots are taken at those times, by the same rule
     (dense output or landing), and ``snapshot_interval`` is not used; the diagnostics
     keep their own interval (the bounce and first-impact observables are read from
-    them)."""
+    them).
+
+    ``observer`` names a registered observer (``rodjit.observers``; "none", the default:
+    none), compiled code that watches every accepted step and gives named values."""
 
     SECTION: ClassVar[str] = "output"
 
     snapshot_interval: float = 0.005
     diagnostics_interval: float = 0.001
     times: tuple[float, ...] = ()
+    observer: str = "none"
     compression: str = "none"
     interpolate: bool = True
 

@@ -32,6 +32,7 @@ from ..stepping import layout as L
 from ..stepping.events import write_bounce
 from ..stepping.loop import advance, start
 from ..stepping.arrays import allocate
+from ..stepping.observers import state_size, values_of
 from .setup import parameters, positions, rows_needed, snapshot_bound, tolerance
 from .setup import start as set_up
 
@@ -184,7 +185,7 @@ class Run:
         # time (``driver.setup``): the arrays are copied, the tuples shared
         s = set_up(config, u0, v0)
         self.config = config = s.config
-        self.scheme, self.ctrl, self.system, self.rod, self.floor = s.params()
+        self.scheme, self.ctrl, self.system, self.rod, self.floor, self.obs = s.params()
         n1 = config.rod.N + 1
         snapshot_capacity, diag_capacity = capacities(config, self.ctrl, snapshot_capacity,
                                                       diag_capacity)
@@ -192,7 +193,8 @@ class Run:
         # v rows, the clock row (t_end, the output intervals and tolerance set) and ``ev``
         # (the flight time)
         self.arrays = a = allocate(n1, self.scheme, snapshot_capacity, diag_capacity,
-                                   event_capacity, config.output.times)
+                                   event_capacity, config.output.times,
+                                   state_size(self.obs))
         a.state[:2] = s.state
         a.clock[:] = s.clock
         a.ev[:] = s.ev()
@@ -243,6 +245,11 @@ class Run:
             self.arrays.count[i] for i in (L.N_SNAP, L.N_DIAG, L.N_EP, L.N_BOUNCE))
 
     @property
+    def observed(self) -> dict:
+        """The observer's values now (``output.observer``; empty without one)."""
+        return values_of(self.obs, self.arrays.observed)
+
+    @property
     def u(self) -> np.ndarray:
         return self.arrays.state[0]
 
@@ -263,7 +270,7 @@ class Run:
 
     # ---- stepping ----------------------------------------------------------------------
     def _args(self):
-        return (self.scheme, self.ctrl, self.system, self.rod, self.floor)
+        return (self.scheme, self.ctrl, self.system, self.rod, self.floor, self.obs)
 
     def start(self, sink: Sink | None) -> None:
         """Compile (or load from cache) the kernels, then evaluate the initial state; its
@@ -414,7 +421,7 @@ class Run:
                             self.config, self.rod, self.floor)
 
     # ---- checkpoint ------------------------------------------------------------------------
-    _CHECKPOINT_ARRAYS = ("state", "clock", "count", "ev", "sstats")
+    _CHECKPOINT_ARRAYS = ("state", "clock", "count", "ev", "sstats", "observed")
 
     def checkpoint(self) -> dict[str, np.ndarray]:
         """Copies of everything needed to continue (taken when the run is ``drained``)."""
@@ -429,6 +436,8 @@ class Run:
         """A run that continues exactly where ``ck`` (from ``checkpoint``) left off."""
         run = cls(config, u0=np.asarray(ck["state"])[0], v0=np.asarray(ck["state"])[1], **kwargs)
         for name in cls._CHECKPOINT_ARRAYS:
+            if name == "observed" and name not in ck:
+                continue    # a file's run without an observer: its array is zeros
             src = np.asarray(ck[name])
             dst = getattr(run.arrays, name)
             if src.shape != dst.shape:

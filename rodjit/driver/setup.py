@@ -3,7 +3,7 @@ single run (``driver.run.Run``), the CPU engine's batches (``sweeps.ensemble``) 
 GPU engine (``gpu.engine``).
 
 ``start(config)`` gives a point's ``Start``: the parameter tuples of the compiled loop
-(scheme, control, system, rod law, floor law), its initial (u, v) checked admissible, its
+(scheme, control, system, rod law, floor law, observer), its initial (u, v) checked admissible, its
 clock row and its flight time τ (the ``ev`` row's), or raises what its set-up raised;
 ``starts(configs)`` gives a list of them, an exception in place of a point that cannot
 start.  Here too: the bound and sizes of a run's output buffers (``snapshot_bound``,
@@ -43,6 +43,7 @@ from ..records.observables import flight_time
 from ..records.physics import lift_energy
 from ..stepping import control
 from ..stepping import layout as L
+from ..stepping.observers import params_of
 from ..stepping.schemes import make_scheme
 
 if TYPE_CHECKING:
@@ -65,13 +66,15 @@ class Start(NamedTuple):
     system: Any
     rod: Any
     floor: Any
+    obs: Any                   # the observer's parameters (``stepping.observers``)
     state: np.ndarray          # (2, N + 1): u, v
     clock: np.ndarray          # the clock row at the start (``clock_row``)
     tau: float                 # the flight time τ, the ``ev`` row's ``FLIGHT_TIME``
 
     def params(self) -> tuple:
-        """The loop's parameter tuples ``(scheme, control, system, rod law, floor law)``."""
-        return (self.scheme, self.ctrl, self.system, self.rod, self.floor)
+        """The loop's parameter tuples ``(scheme, control, system, rod law, floor law,
+        observer)``."""
+        return (self.scheme, self.ctrl, self.system, self.rod, self.floor, self.obs)
 
     def ev(self) -> np.ndarray:
         """A new ``ev`` row at the start: zeros but the flight time."""
@@ -224,7 +227,8 @@ def start(config, u0=None, v0=None) -> Start:
         state = _state(config, u0, v0)
         check_admissible(state[0], rod, floor, "u0" if u0 is not None else "initial state")
     clock = _get("clock", (time_t, _token(config.output)), clock_row, config)
-    return Start(config, scheme, ctrl, system, rod, floor, state, clock, tau)
+    return Start(config, scheme, ctrl, system, rod, floor, params_of(config), state, clock,
+                 tau)
 
 
 def _body(config, rod_t) -> tuple:
@@ -257,12 +261,13 @@ def _stepping(config, time_t, rest: float = -math.inf) -> tuple:
 
 
 def parameters(config) -> tuple:
-    """``(scheme, control, system, rod law, floor law)``: the parameter tuples the compiled
-    loop takes for ``config`` (no run checks, no initial state)."""
+    """``(scheme, control, system, rod law, floor law, observer)``: the parameter tuples the
+    compiled loop takes for ``config`` (no run checks, no initial state)."""
     config = config.resolve()
     system, rod, floor, laws = _body(config, _token(config.rod))
     rest = _rest(config, laws, _token(rod))
-    return (*_stepping(config, _token(config.time), rest), system, rod, floor)
+    return (*_stepping(config, _token(config.time), rest), system, rod, floor,
+            params_of(config))
 
 
 def starts(configs) -> list:

@@ -35,7 +35,7 @@ from ..stepping.packing import pack
 from ..sweeps import decode
 from ..sweeps.batch import BatchResult
 from ..sweeps.ensemble import run_starts
-from ..sweeps.point import empty_columns, pass_on
+from ..sweeps.point import SUMMARY_COLUMNS, empty_columns, pass_on, summary_columns
 from ._cuda import CudaUnavailable, import_cuda
 from .kernel import N_MAX, deep_call, family_of, make_kernel, signature, simulated
 
@@ -147,7 +147,8 @@ def _launch(runs, cuda):
     buffers = [cuda.device_array((n, *shape(name, size)), SPEC[name][0]) for name in BUFFERS]
     out = [d(params), d(state0), d(clock0), d(ev0), *buffers, d(_times(runs)),
            cuda.device_array((n, BOUNCE_ROWS, T.BOUT_SIZE)),
-           cuda.device_array((n, T.F_SIZE)), d(np.zeros((n, T.I_SIZE), np.int64))]
+           cuda.device_array((n, T.fout_width(runs[0].obs))),
+           d(np.zeros((n, T.I_SIZE), np.int64))]
     threads = min(THREADS, n) if not simulated() else min(32, n)
     max_steps = max(1, NODE_STEPS_PER_CALL // n1)
     t0 = time.perf_counter()
@@ -220,7 +221,7 @@ def run_batch(configs, index) -> BatchResult:
         check_point(c)
     t_start = time.perf_counter()
     n = len(configs)
-    cols = empty_columns(n)
+    cols = empty_columns(n, summary_columns(configs[0]) if n else SUMMARY_COLUMNS)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelWarning)
         runs: list = starts(configs)

@@ -2,9 +2,9 @@
 per-point driver ``stepping.trajectory.run_one`` (the CPU engine's, compiled for CUDA) on
 its own state in ``cuda.local.array``.
 
-A kernel is made per *family*: the classes of the five parameter tuples of the compiled loop
-(scheme, control, system, rod law, floor law, ``driver.run.parameters``), the kinds of
-their fields, and the node count N + 1 (local arrays need compile-time shapes).  Every
+A kernel is made per *family*: the classes of the six parameter tuples of the compiled loop
+(scheme, control, system, rod law, floor law, observer: ``driver.setup.parameters``), the
+kinds of their fields, and the node count N + 1 (local arrays need compile-time shapes).  Every
 point's tuples travel as one row of a float64 array; the kernel rebuilds them field by
 field (``stepping.packing``: an int or bool field is stored exactly as a double), so the
 values of a sweep's parameters stay run-time values and one compile serves the whole grid.
@@ -28,6 +28,7 @@ from ..stepping import layout as L
 from ..stepping import packing as P
 from ..stepping import trajectory as T
 from ..stepping.arrays import BUFFERS, INPUTS, SPEC, RunArrays, shape
+from ..stepping.observers import state_size
 from ..stepping.schemes import work_rows
 from ._cuda import import_cuda
 
@@ -43,17 +44,19 @@ N_MAX = 64
 class Family(NamedTuple):
     """What a compiled kernel depends on (module docstring)."""
 
-    classes: tuple          # the five parameter tuples' classes
+    classes: tuple          # the six parameter tuples' classes
     kinds: tuple            # per tuple, the kind of each field: "f", "i" or "b"
     n1: int                 # nodes N + 1
     work_rows: int
+    observed: int           # entries of the observer's array (``observers.state_size``)
 
 
 def family_of(params) -> Family:
     """The family of a point's parameter tuples ``params`` (``driver.run.parameters``);
     a TypeError for a field that is not a Python float, int or bool (``packing.kinds``)."""
     return Family(tuple(type(t) for t in params), P.kinds(params, exact=True),
-                  int(params[2].n) + 1, int(work_rows(params[0])))
+                  int(params[2].n) + 1, int(work_rows(params[0])),
+                  int(state_size(params[5])))
 
 
 def simulated() -> bool:
@@ -72,7 +75,7 @@ def _source(family: Family) -> str:
     # the kernel's arguments, the inputs those arguments themselves (the same for every
     # thread of a launch), the others local arrays, zeroed, then the state's u and v rows,
     # the clock and ev rows from the point's
-    size = {"n1": n1, "work": family.work_rows}
+    size = {"n1": n1, "work": family.work_rows, "observed": max(1, family.observed)}
     local = []
     for name in RunArrays._fields:
         if name in BUFFERS + INPUTS:
@@ -106,7 +109,7 @@ def sweep_kernel(params, state0, clock0, ev0, {buffers},
     for j in range({L.EV_SIZE}):
         ev[j] = ev0[i, j]
     arrays = RunArrays({fields_of})
-    run_one(t0, t1, t2, t3, t4, arrays, imp, bounce_out[i], fout[i], iout[i], max_steps)
+    run_one(t0, t1, t2, t3, t4, t5, arrays, imp, bounce_out[i], fout[i], iout[i], max_steps)
 """
 
 

@@ -14,7 +14,6 @@ import os
 import re
 import stat
 from pathlib import Path
-from typing import Any
 
 import h5py
 import numpy as np

@@ -36,7 +36,8 @@ __all__ = ["KIND", "FORMAT_VERSION", "READS", "x_path", "STATUSES", "TABLES", "C
            "EV_NAMES", "SUMMARY_ATTRS", "CK_ARRAYS", "CK_SCALARS", "CK_DATASETS",
            "DIGEST_PARTS", "DIGESTS_SINCE", "REQUIRED_ATTRS", "RunLayout", "build_layout",
            "add_digests", "digest_rows", "overwrite", "CK_COUNTERS", "counter_names",
-           "counters_by_name", "OLD_BOUNCE_FILL", "current_checkpoint"]
+           "counters_by_name", "OLD_BOUNCE_FILL", "current_checkpoint", "OBSERVED",
+           "ck_datasets", "digest_parts"]
 
 KIND = "run"            # root attribute rodjit_kind: what this file holds
 FORMAT_VERSION = 3
@@ -105,7 +106,7 @@ def x_path(f: h5py.File) -> str:
 # the checkpoint's dimensions (netCDF dimensions without values): name -> entries named
 _CK_DIMS = {"state": ("state_row", "node"), "clock": ("clock_entry",),
             "count": ("count_entry",), "ev": ("ev_entry",), "sstats": ("sstats_entry",),
-            "lengths": ("table",)}
+            "lengths": ("table",), "observed": ("observed_entry",)}
 _CK_LONG_NAMES = {
     "state": "heights u, velocities v and accelerations a of every node",
     "clock": "the run's real-valued state (entries named in 'names')",
@@ -115,7 +116,8 @@ _CK_LONG_NAMES = {
     "run_time": "wall time spent stepping in compiled code", "compile_time":
     "wall time spent compiling or loading kernels", "lengths":
     "rows of each table (in 'names' order) this checkpoint matches",
-    "current": "the valid checkpoint slot (0 or 1)"}
+    "current": "the valid checkpoint slot (0 or 1)",
+    "observed": "the observer's state, then its values (entries named in 'names')"}
 _CK_UNITS = {"run_time": "s", "compile_time": "s", "lengths": "1", "current": "1"}
 
 
@@ -152,6 +154,20 @@ CK_SCALARS = ("run_time", "compile_time")                     # and its numbers
 _CK_DATASETS = CK_DATASETS = CK_ARRAYS + CK_SCALARS + ("lengths",)
 # what a slot's ``digest`` covers, one row each: its datasets and the stored configuration
 DIGEST_PARTS = _CK_DATASETS + ("config_toml",)
+# The observer's array (``output.observer``: its state, then its values, named in its
+# ``names``), in the slots of a run with an observer only: the files of runs without one
+# are laid out as before, and every reader of format 3 reads them.
+OBSERVED = "observed"
+
+
+def ck_datasets(observed: bool) -> tuple[str, ...]:
+    """A checkpoint slot's datasets (``observed``: with the observer's array)."""
+    return _CK_DATASETS + ((OBSERVED,) if observed else ())
+
+
+def digest_parts(observed: bool) -> tuple[str, ...]:
+    """What the ``digest`` of such a slot covers, one row each, in order."""
+    return ck_datasets(observed) + ("config_toml",)
 DIGEST_SIZE = 16
 # the first format whose files carry a ``digest`` in both checkpoint slots: a file that
 # claims this format or a later one and lacks them is not complete (older files never had
@@ -206,7 +222,8 @@ class RunLayout(NamedTuple):
     def of(cls, f: h5py.File) -> "RunLayout":
         """Looked up in an existing run file."""
         ckg = f["checkpoint"]
-        names = _CK_DATASETS + (("digest",) if "digest" in ckg["slot0"] else ())
+        names = (ck_datasets(OBSERVED in ckg["slot0"])
+                 + (("digest",) if "digest" in ckg["slot0"] else ()))
         return cls({name: Table.of(f[name][c] for c in cols) for name, cols in TABLES.items()},
                    [{name: ckg[f"slot{i}"][name] for name in names} for i in (0, 1)],
                    ckg["current"])
@@ -297,24 +314,34 @@ def build_layout(f: h5py.File, config, ck: dict, attrs: dict) -> RunLayout:
     first = {name: np.asarray(ck[name], np.float64) for name in CK_SCALARS}
     first.update({name: ck[name] for name in CK_ARRAYS},
                  lengths=np.array([lengths.get(name, 0) for name in TABLES], np.int64))
+    entry_names = dict(_CK_NAMES)
+    if config.output.observer != "none":
+        from ..stepping.observers import get_observer
+        ob = get_observer(config.output.observer)
+        first[OBSERVED] = np.zeros(ob.size + len(ob.columns))
+        if OBSERVED in ck:
+            first[OBSERVED][:] = np.asarray(ck[OBSERVED])[:first[OBSERVED].size]
+        entry_names[OBSERVED] = (tuple(f"{ob.name}.state{i}" for i in range(ob.size))
+                                 + tuple(ob.columns)) or ("unused",)
+    datasets = ck_datasets(OBSERVED in first)
     dims = {}
-    for name, names in _CK_DIMS.items():
-        for dim, size in zip(names, np.shape(first[name])):
+    for name in datasets:
+        for dim, size in zip(_CK_DIMS.get(name, ()), np.shape(first[name])):
             dims[dim] = cf.pure_dimension(ckg, dim, size)
     slots: list[dict[str, h5py.Dataset]] = []
     for slot in (0, 1):                       # slot 1: zeros (its fill value), unwritten
         g = ckg.create_group(f"slot{slot}")
         slots.append({})
-        for name in _CK_DATASETS:
+        for name in datasets:
             value = np.asarray(first[name])
             ds = slots[-1][name] = (g.create_dataset(name, data=value) if slot == 0 else
                                     g.create_dataset(name, value.shape, value.dtype))
-            if name in _CK_NAMES:
-                _attr(ds, "names", _CK_NAMES[name])
+            if name in entry_names:
+                _attr(ds, "names", entry_names[name])
             _ck_attrs(ds, name)
             for axis, dim in enumerate(_CK_DIMS.get(name, ())):
                 ds.dims[axis].attach_scale(dims[dim])
-    first_values = {name: np.asarray(first[name]) for name in _CK_DATASETS}
+    first_values = {name: np.asarray(first[name]) for name in datasets}
     add_digests(ckg, slots, digest_rows(first_values, base["config_toml"]))
     return RunLayout(tables, slots, current)
 
@@ -323,8 +350,9 @@ def digest_rows(values: dict, config_toml: str) -> np.ndarray:
     """The ``digest`` of a checkpoint slot: one BLAKE2b row per ``DIGEST_PARTS`` entry,
     over the dtype, shape and bytes of each of its datasets (``values``: name -> the array
     as stored) and over the stored configuration."""
-    rows = np.zeros((len(DIGEST_PARTS), DIGEST_SIZE), np.uint8)
-    for i, name in enumerate(DIGEST_PARTS):
+    parts = digest_parts(OBSERVED in values)
+    rows = np.zeros((len(parts), DIGEST_SIZE), np.uint8)
+    for i, name in enumerate(parts):
         h = hashlib.blake2b(name.encode(), digest_size=DIGEST_SIZE, person=b"rodjit-ck")
         if name == "config_toml":
             h.update(str(config_toml).encode("utf-8", "surrogatepass"))
@@ -340,7 +368,8 @@ def add_digests(ckg: h5py.Group, slots: list, first=None) -> None:
     """Create the ``digest`` dataset of both slots (``first``: slot 0's rows; slot 1 and a
     missing ``first`` stay zeros, which match no content), adding them to ``slots``.  Run
     files written before digests existed lack them and get them when continued."""
-    shape = (len(DIGEST_PARTS), DIGEST_SIZE)
+    parts = digest_parts(OBSERVED in ckg["slot0"])
+    shape = (len(parts), DIGEST_SIZE)
     # its axes are netCDF dimensions without values, as the other checkpoint datasets'
     dims = [ckg[d] if d in ckg else cf.pure_dimension(ckg, d, n)
             for d, n in zip(("digest_part", "digest_byte"), shape)]
@@ -348,7 +377,7 @@ def add_digests(ckg: h5py.Group, slots: list, first=None) -> None:
         g = ckg[f"slot{slot}"]
         ds = (g.create_dataset("digest", data=first) if slot == 0 and first is not None
               else g.create_dataset("digest", shape, np.uint8))
-        _attr(ds, "names", DIGEST_PARTS)
+        _attr(ds, "names", parts)
         _attr(ds, "long_name", "checkpoint: BLAKE2b-128 of each of the slot's datasets and "
                                "of the root attribute config_toml (in 'names' order)")
         for axis, dim in enumerate(dims):

@@ -17,10 +17,10 @@ from ..records.stats import run_stats
 from ..stepping import layout as L
 from .cf import as_bool
 from .h5files import NotARunFile, check_kind, damaged, open_file
-from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGEST_PARTS, DIGESTS_SINCE,
+from .run_layout import (CK_ARRAYS, CK_DATASETS, CK_SCALARS, DIGESTS_SINCE,
                          KIND, OLD_BOUNCE_FILL, READS, REQUIRED_ATTRS, STATUSES, TABLES,
-                         counter_names, counters_by_name, current_checkpoint, digest_rows,
-                         x_path)
+                         OBSERVED, ck_datasets, counter_names, counters_by_name,
+                         current_checkpoint, digest_parts, digest_rows, x_path)
 
 __all__ = ["check_run_file", "check_not_lost", "read_config", "read_checkpoint", "read_table", "read_x",
            "load_file"]
@@ -87,12 +87,13 @@ def _read_checkpoint(f: h5py.File) -> dict:
     if slot not in (0, 1):
         raise NotARunFile(f"{f.filename!r} holds no valid checkpoint yet")
     g = ck[f"slot{slot}"]
+    datasets = ck_datasets(OBSERVED in g)
     if f.swmr_mode:
-        for name in CK_DATASETS + (("digest",) if "digest" in g else ()):
+        for name in datasets + (("digest",) if "digest" in g else ()):
             g[name].refresh()
-    values = {name: g[name][()] for name in CK_DATASETS}
+    values = {name: g[name][()] for name in datasets}
     verify_checkpoint(f, slot, values, g["digest"][()] if "digest" in g else None)
-    out = {name: values[name] for name in CK_ARRAYS}
+    out = {name: values[name] for name in CK_ARRAYS + datasets[len(CK_DATASETS):]}
     # the per-scheme counters by name, laid out as this version counts them
     out["sstats"] = counters_by_name(out["sstats"], counter_names(g["sstats"]))
     for name in CK_SCALARS:
@@ -117,7 +118,8 @@ def verify_checkpoint(f: h5py.File, slot: int, values: dict, digest) -> None:
             raise NotARunFile(f"{name!r} fails its integrity check: the digest of {where} "
                               f"has shape {np.shape(digest)}, not {expected.shape}")
         bad = [_PART_NAMES.get(part, f"'{part}'") for part, a, b in
-               zip(DIGEST_PARTS, digest, expected) if not np.array_equal(a, b)]
+               zip(digest_parts(OBSERVED in values), digest, expected)
+               if not np.array_equal(a, b)]
         if bad:
             raise NotARunFile(f"{name!r} fails its integrity check: the digest of {where} "
                               f"does not match its {', '.join(bad)} (the file was altered or "
@@ -214,4 +216,15 @@ def load_file(path: str | os.PathLike[str]) -> Result:
             status=str(f.attrs["status"]), message=str(f.attrs["message"]),
             t_final=float(ck["clock"][L.T]), u_final=ck["state"][0].copy(),
             v_final=ck["state"][1].copy(), energy0=float(ck["clock"][L.E0]),
-            dissipated=float(ck["clock"][L.DISSIPATED]))
+            dissipated=float(ck["clock"][L.DISSIPATED]), observed=read_observed(f, ck))
+
+
+def read_observed(f: h5py.File, ck: dict) -> dict:
+    """The observer's values in the checkpoint ``ck`` of ``f`` (``Result.observed``): the
+    entries of its ``observed`` array that its ``names`` do not mark as the observer's
+    state; empty for a run without an observer."""
+    if OBSERVED not in ck:
+        return {}
+    names = counter_names(f["checkpoint/slot0"][OBSERVED])
+    return {n: float(x) for n, x in zip(names, np.asarray(ck[OBSERVED]))
+            if ".state" not in n and n != "unused"}

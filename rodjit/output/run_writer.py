@@ -25,10 +25,10 @@ from ..stepping import layout as L
 from .cf import LIBVER
 from .h5files import (WriteFailed, abandon, disk_cause, history_with, now, open_for_writing,
                       stamp_writer)
-from .run_layout import (CK_ARRAYS, CK_COUNTERS, CK_DATASETS, FORMAT_VERSION, OLD_BOUNCE_FILL,
+from .run_layout import (CK_ARRAYS, CK_COUNTERS, FORMAT_VERSION, OLD_BOUNCE_FILL,
                          STATUSES, SUMMARY_ATTRS, TABLES, RunLayout, add_digests,
-                         build_layout, counter_names, counters_by_name, digest_rows,
-                         overwrite)
+                         OBSERVED, build_layout, ck_datasets, counter_names,
+                         counters_by_name, digest_rows, overwrite)
 from .run_reader import check_run_file, read_checkpoint, read_config
 from .writer_id import LEGACY_ATTRS, WRITER_ATTRS
 
@@ -129,10 +129,11 @@ class RunWriter(Sink):
         slot = 1 if self.current == 0 else 0
         g = self._slots[slot]
         # what the slot stores: the counters by the file's own names
+        arrays = CK_ARRAYS + ((OBSERVED,) if OBSERVED in g else ())
         stored = {name: ck[name] if name != "sstats" else
                   counters_by_name(ck[name], CK_COUNTERS, self._counters)
-                  for name in CK_ARRAYS}
-        for name in CK_ARRAYS:
+                  for name in arrays}
+        for name in arrays:
             overwrite(g[name], stored[name])
         overwrite(g["run_time"], float(ck["run_time"]))
         overwrite(g["compile_time"], compile_time)
@@ -142,13 +143,14 @@ class RunWriter(Sink):
             values = {"run_time": float(ck["run_time"]), "compile_time": compile_time,
                       "lengths": lengths, **stored}
             overwrite(g["digest"], digest_rows(
-                {name: np.asarray(values[name], self._dtypes[name]) for name in CK_DATASETS},
+                {name: np.asarray(values[name], self._dtypes[name])
+                 for name in ck_datasets(OBSERVED in g)},
                 self._config_toml))
         self.file.flush()
         overwrite(self._current, slot)
         self.file.flush()
         self.current = slot
-        self.checkpoint = {name: ck[name] for name in CK_ARRAYS}
+        self.checkpoint = {name: ck[name] for name in arrays}
         self.checkpoint.update(run_time=float(ck["run_time"]), compile_time=compile_time,
                                lengths=dict(zip(TABLES, lengths)))
 
@@ -267,7 +269,7 @@ def _sign_current(f: h5py.File) -> None:
     if "digest" not in ckg["slot0"]:
         add_digests(ckg, [{}, {}])
     g = ckg[f"slot{int(ckg['current'][()])}"]
-    values = {name: g[name][()] for name in CK_DATASETS}
+    values = {name: g[name][()] for name in ck_datasets(OBSERVED in g)}
     overwrite(g["digest"], digest_rows(values, str(f.attrs["config_toml"])))
 
 

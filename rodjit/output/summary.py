@@ -15,9 +15,10 @@ from ..records.overview import RunFacts, energy_label
 from ..records.impact import run_impact
 from ..records.stats import node_steps_per_second
 from ..stepping import layout as L
+from ..stepping.observers import params_of, values_of
 from .h5files import open_file, writer_alive
-from .run_layout import SUMMARY_ATTRS, TABLES
-from .run_reader import check_run_file, read_checkpoint, read_config, read_table
+from .run_layout import OBSERVED, SUMMARY_ATTRS, TABLES
+from .run_reader import check_run_file, read_checkpoint, read_config, read_observed, read_table
 from .run_writer import RunWriter
 
 __all__ = ["RunSummary", "summarize", "closed_summary"]
@@ -50,6 +51,8 @@ class RunSummary:
     impact: dict = field(default_factory=dict)   # the first macroscopic contact
                                                  # (records.impact.IMPACT_COLUMNS)
     writer_alive: bool | None = None
+    observed: dict = field(default_factory=dict)   # the observer's values
+                                                   # (``Result.observed``)
 
     @property
     def warnings(self) -> tuple[str, ...]:
@@ -73,7 +76,7 @@ class RunSummary:
             min_strain=self.min_strain, min_u0=self.min_u0, steps=self.steps,
             rejected=self.rejected_steps, compile_time=self.compile_time,
             run_time=self.run_time, node_steps_per_second=self.node_steps_per_second,
-            warnings=self.warnings, impact=self.impact)
+            warnings=self.warnings, impact=self.impact, observed=self.observed)
 
     def report(self, max_bounces: int | None = 20) -> str:
         """A short plain-text report: bounces (at most ``max_bounces`` rows, None: all),
@@ -105,7 +108,7 @@ def summarize(path) -> RunSummary:
         return _summary(
             path, status, str(f.attrs["message"]), config, ck, counts, bounces, extremes,
             impact, {k: f.attrs[k] for k in SUMMARY_ATTRS if k in f.attrs},
-            writer_alive(f) if status == "running" else None)
+            writer_alive(f) if status == "running" else None, read_observed(f, ck))
 
 
 def closed_summary(writer: RunWriter) -> RunSummary:
@@ -116,13 +119,15 @@ def closed_summary(writer: RunWriter) -> RunSummary:
         raise ValueError(f"{writer.path!r} is not closed yet: no summary to take")
     ck = writer.checkpoint
     impact = writer.impact.values(float(ck["clock"][L.T]), ck["state"][0], writer.pending)
+    observed = (values_of(params_of(writer.config), ck[OBSERVED]) if OBSERVED in ck
+                else {})
     return _summary(writer.path, fin["status"], fin["message"], writer.config, ck,
                     fin["counts"], fin["bounces"], writer.extremes, impact, fin["attrs"],
-                    None)
+                    None, observed)
 
 
 def _summary(path, status, message, config, ck, counts, bounces, extremes: Extremes,
-             impact: dict, attrs, alive) -> RunSummary:
+             impact: dict, attrs, alive, observed: dict) -> RunSummary:
     clock, count = ck["clock"], ck["count"]
     e0 = float(clock[L.E0])
     ext = extremes.with_bounces(bounces)
@@ -139,5 +144,5 @@ def _summary(path, status, message, config, ck, counts, bounces, extremes: Extre
         compile_time=ck["compile_time"], run_time=run_time,
         node_steps_per_second=node_steps_per_second(steps, config.rod.N + 1, run_time),
         attrs=attrs, writer_alive=alive,
-        impact=impact,
+        impact=impact, observed=observed,
     )

@@ -24,10 +24,12 @@ class RunFacts:
 
     def __init__(self, *, name, status, message, config, t_start, t, t_end, bounces,
                  n_episodes, energy_error, min_strain, min_u0, steps, rejected,
-                 compile_time, run_time, node_steps_per_second, warnings=(), impact=None):
+                 compile_time, run_time, node_steps_per_second, warnings=(), impact=None,
+                 observed=None):
         self.name, self.status, self.message, self.config = name, status, message, config
         self.warnings = tuple(warnings)   # what the results do not mean (Config.warnings)
         self.impact = impact or {}        # the first macroscopic contact (records.impact)
+        self.observed = observed or {}    # the observer's values (``output.observer``)
         self.t_start, self.t, self.t_end = t_start, t, t_end
         self.bounces, self.n_episodes = bounces, n_episodes
         self.energy_error, self.min_strain, self.min_u0 = energy_error, min_strain, min_u0
@@ -136,6 +138,9 @@ class RunFacts:
                              "end, or the approach below 0.2 of the vibration speed)")
         if self.impact:
             lines.append(f"  {'first impact':<22}{impact_line(self.impact)}")
+        if self.observed:
+            lines.append(f"  {'observer ' + c.output.observer:<22}"
+                         + ", ".join(f"{k} = {v:.9g}" for k, v in self.observed.items()))
         label = energy_label(c.rod.mu)
         if math.isnan(self.energy_error):
             lines.append(f"  {label:<22}not measured (no diagnostics: "

@@ -63,6 +63,9 @@ class Result:
         Total energy at t = 0 [J].
     dissipated : float
         Energy dissipated by the viscosity up to ``t_final`` [J].
+    observed : dict
+        Column name -> value of the run's observer (``output.observer``,
+        ``rodjit.observers``) at ``t_final``; empty without one.
     """
 
     config: Config
@@ -81,6 +84,7 @@ class Result:
     v_final: np.ndarray = field(default_factory=lambda: np.zeros(0))
     energy0: float = 0.0
     dissipated: float = 0.0
+    observed: dict = field(default_factory=dict)
 
     @property
     def n_bounces(self) -> int:
@@ -114,7 +118,7 @@ class Result:
             compile_time=float(s.get("compile_time", 0.0)),
             run_time=float(s.get("run_time", 0.0)),
             node_steps_per_second=float(s.get("node_steps_per_second", 0.0)),
-            warnings=self.config.warnings(), impact=self.impact())
+            warnings=self.config.warnings(), impact=self.impact(), observed=self.observed)
 
     def impact(self) -> dict:
         """The first macroscopic contact (``records.impact.IMPACT_COLUMNS``), as a run
@@ -246,4 +250,5 @@ class MemorySink(Sink):
             v_final=run.v.copy(),
             energy0=run.energy0,
             dissipated=run.dissipated,
+            observed=run.observed,
         )

@@ -36,7 +36,7 @@ ahead-of-time compiler of Numba code, and it compiles the same kernels with the 
 options as the JIT (``_jit.JIT_OPTIONS``: fused multiply-adds, no reference counting),
 for the host CPU as the JIT does, so both paths give the same bits
 (tests/test_stepping_aot.py).  Its exported functions take arrays and scalars only, so a
-run's five parameter tuples travel as one float64 row (``pack``, ``stepping.packing``) and
+run's six parameter tuples travel as one float64 row (``pack``, ``stepping.packing``) and
 the generated wrappers (``wrapper_source``) rebuild them inside compiled code, and take the
 run's arrays one by one and pass them on as the loop's one ``arrays.RunArrays``; the wrappers
 release the GIL around the loop, as a JIT call does (``nogil``), so the process's other
@@ -126,9 +126,9 @@ def _flat(args) -> list:
 
 def key(args) -> tuple:
     """What the compiled loop's signature depends on in the parameter tuples ``args``
-    (scheme, control, system, rod law, floor law) beyond the fixed array types: each one's
-    class and its fields' Python types (each field a scalar, whose type fixes its Numba
-    type), as names, so that a record can hold it."""
+    (scheme, control, system, rod law, floor law, observer) beyond the fixed array types:
+    each one's class and its fields' Python types (each field a scalar, whose type fixes its
+    Numba type), as names, so that a record can hold it."""
     # the classes, then every field's type: unambiguous, a class fixing its field count
     types = (*map(type, args), *map(type, chain.from_iterable(args)))
     k = _KEYS.get(types)
@@ -173,6 +173,7 @@ def wrapper_source(args, suffix: str) -> tuple[str, dict]:
         names.append(f"_P{j}")
         glob[f"_P{j}"] = type(p)
     fields = P.rebuild_source(P.kinds(args, exact=True), "p", names)
+    tuples = ", ".join(f"a{j}" for j in range(len(args)))
     glob["_RunArrays"] = A.RunArrays
     run_arrays = f"_RunArrays({', '.join(A.RunArrays._fields)})"
     lines = []
@@ -180,9 +181,9 @@ def wrapper_source(args, suffix: str) -> tuple[str, dict]:
         arrays = ", ".join(a for a, _ in _expand(extra))
         passed = ", ".join(run_arrays if a == ARRAYS else a[0] for a in extra)
         lines += [f"def {name}_{suffix}(p, {arrays}):",
-                  f"    a0, a1, a2, a3, a4 = {', '.join(fields)}",
+                  f"    {tuples} = {', '.join(fields)}",
                   "    ts = _save_thread()",
-                  f"    code = _{name}(a0, a1, a2, a3, a4, {passed})",
+                  f"    code = _{name}({tuples}, {passed})",
                   "    _restore_thread(ts)",
                   "    return code", ""]
     return "\n".join(lines), glob

@@ -15,8 +15,9 @@ rod in ``cuda.local.array``, the output buffers as the point's rows of device ar
 
 A dimension of a shape is a number or the name of a size (``sizes``): ``"n1"`` nodes
 N + 1, ``"work"`` the scheme's work rows (``schemes.work_rows``), the buffers' row
-counts ``"snapshots"``, ``"diagnostics"`` and ``"events"``, and ``"times"`` the listed
-snapshot times.  The fields sized by the buffers' counts are the output buffers
+counts ``"snapshots"``, ``"diagnostics"`` and ``"events"``, ``"times"`` the listed
+snapshot times, and ``"observed"`` the observer's state and values
+(``observers.state_size``).  The fields sized by the buffers' counts are the output buffers
 (``BUFFERS``); ``times`` is the one input (``INPUTS``).
 """
 from __future__ import annotations
@@ -50,6 +51,7 @@ class RunArrays(NamedTuple):
     episodes: np.ndarray
     bounces: np.ndarray
     fail: np.ndarray
+    observed: np.ndarray    # the observer's state, then its values (``observers``)
     times: np.ndarray       # the listed snapshot times (``output.times``; read only)
 
 
@@ -74,6 +76,7 @@ SPEC: dict[str, tuple[np.dtype, tuple]] = {
     "episodes": (_F8, ("events", len(L.EPISODE_COLUMNS))),
     "bounces": (_F8, ("events", len(L.BOUNCE_ROW_COLUMNS))),
     "fail": (_F8, (L.FAIL_SIZE,)),
+    "observed": (_F8, ("observed",)),
     "times": (_F8, ("times",)),
 }
 assert tuple(SPEC) == RunArrays._fields, "SPEC must list RunArrays' fields in order"
@@ -87,12 +90,13 @@ INPUTS = ("times",)
 
 
 def sizes(n1: int, scheme, snapshots: int, diagnostics: int, events: int,
-          times: int = 0) -> dict:
+          times: int = 0, observed: int = 0) -> dict:
     """The named sizes of a run's shapes (module docstring); ``times`` listed snapshot
-    times (``output.times``; the array has a row even when there are none)."""
+    times (``output.times``), ``observed`` the entries of the observer's array (each array
+    has an entry even when there are none)."""
     return {"n1": int(n1), "work": int(work_rows(scheme)), "snapshots": int(snapshots),
             "diagnostics": int(diagnostics), "events": int(events),
-            "times": max(1, int(times))}
+            "times": max(1, int(times)), "observed": max(1, int(observed))}
 
 
 def shape(name: str, size: dict) -> tuple:
@@ -102,11 +106,12 @@ def shape(name: str, size: dict) -> tuple:
 
 
 def allocate(n1: int, scheme, snapshots: int, diagnostics: int, events: int,
-             times=()) -> RunArrays:
+             times=(), observed: int = 0) -> RunArrays:
     """Zeroed arrays for a run of ``n1`` nodes with ``scheme`` and output buffers of
     ``snapshots``, ``diagnostics`` and ``events`` rows, its ``times`` the listed snapshot
-    times (``output.times``)."""
-    size = sizes(n1, scheme, snapshots, diagnostics, events, len(times))
+    times (``output.times``), ``observed`` entries for its observer
+    (``observers.state_size``)."""
+    size = sizes(n1, scheme, snapshots, diagnostics, events, len(times), observed)
     arrays = RunArrays(*(np.zeros(shape(name, size), dtype=dt)
                          for name, (dt, _) in SPEC.items()))
     arrays.times[:len(times)] = times

@@ -1,8 +1,8 @@
 """The ensemble engine's compiled batch call: many points of one sweep in one call.
 
-A *batch* is points whose five parameter tuples (scheme, control, system, rod law, floor
-law: ``driver.run.parameters``) have the same classes and field types; only their values
-differ.  Each point's tuples travel as one row of ``params`` (``packing.pack``), and
+A *batch* is points whose six parameter tuples (scheme, control, system, rod law, floor
+law, observer: ``driver.setup.parameters``) have the same classes and field types; only
+their values differ.  Each point's tuples travel as one row of ``params`` (``packing.pack``), and
 ``packing.rebuild`` makes them again in compiled code, so the values stay run-time values
 and one compile serves the whole grid (as the GPU engine does).
 
@@ -22,8 +22,8 @@ from .._jit import kernel
 
 
 @kernel
-def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, flight, first,
-              arrays, imp, bout, fout, iout, max_steps):
+def run_batch(scheme0, ctrl0, system0, rod0, floor0, obs0, params, init, clock0, flight,
+              first, arrays, imp, bout, fout, iout, max_steps):
     """Run the points (rows) of ``params`` from ``first`` on; ``init[i]`` holds a point's u
     and v rows, ``clock0[i]`` its clock, ``flight[i]`` its flight time τ.  ``arrays`` and
     ``imp`` are one point's (reused: a ``Run``'s ``arrays.RunArrays``, and its first-impact
@@ -33,13 +33,13 @@ def run_batch(scheme0, ctrl0, system0, rod0, floor0, params, init, clock0, fligh
     rows in ``bout`` from ``iout[i, I_BSTART]``.  Returns the point that stopped with
     ``bout`` full (``first`` of the next call, which goes on with it), or the number of
     points when all have ended."""
-    protos = (scheme0, ctrl0, system0, rod0, floor0)
+    protos = (scheme0, ctrl0, system0, rod0, floor0, obs0)
     nbo = 0
     for i in range(first, params.shape[0]):
-        scheme, ctrl, system, rod, floor = rebuild(protos, params[i])
+        scheme, ctrl, system, rod, floor, obs = rebuild(protos, params[i])
         if iout[i, T.I_STOPPED] == 0:
             _set_up(init[i], clock0[i], flight[i], arrays)
-        T.run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout[nbo:], fout[i],
+        T.run_one(scheme, ctrl, system, rod, floor, obs, arrays, imp, bout[nbo:], fout[i],
                   iout[i], max_steps)
         iout[i, T.I_BSTART] = nbo
         nbo += iout[i, T.I_BOUNCES]
@@ -61,6 +61,7 @@ def _set_up(init, clock0, tau, arrays):
     count = arrays.count
     ev = arrays.ev
     fail = arrays.fail
+    observed = arrays.observed
     n1 = state.shape[1]
     for r in range(state.shape[0]):
         for j in range(n1):
@@ -83,3 +84,5 @@ def _set_up(init, clock0, tau, arrays):
     ev[L.FLIGHT_TIME] = tau
     for j in range(fail.size):
         fail[j] = 0.0
+    for j in range(observed.size):
+        observed[j] = 0.0

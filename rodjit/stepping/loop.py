@@ -57,6 +57,7 @@ from . import layout as L
 from . import registry
 from .events import crossing, hermite_exit, open_contact, stop_due, track, vibration_energy
 from .extremes import step_extremes
+from .observers import observe_start, observe_step, observe_stop, observe_values
 from .outputs import dense_target, emit, emit_dense, emit_final, grid_time, next_target
 from .schemes import dense_setup, has_dense, initial, step
 from .._jit import kernel, overload
@@ -95,10 +96,11 @@ def _sides_ov(scheme, floor):
 
 
 @kernel
-def start(scheme, ctrl, system, rod, floor, arrays):
-    """Initial acceleration, energy, first step proposal, contact state and the outputs
-    at t0, in the run's ``arrays`` (``arrays.RunArrays``).  Returns OK or a failure code
-    (then ``arrays.fail`` says why)."""
+def start(scheme, ctrl, system, rod, floor, obs, arrays):
+    """Initial acceleration, energy, first step proposal, contact state, the observer's
+    start (``obs``: its parameters, ``observers``) and the outputs at t0, in the run's
+    ``arrays`` (``arrays.RunArrays``).  Returns OK or a failure code (then ``arrays.fail``
+    says why)."""
     state = arrays.state
     work = arrays.work
     clock = arrays.clock
@@ -133,15 +135,19 @@ def start(scheme, ctrl, system, rod, floor, arrays):
         open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin, ke - 0.5 * w * w + st + be)
     emit(state, work, system, rod, floor, clock, count, arrays.times, clock[L.T],
          clock[L.DT], count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
+    observe_start(obs, arrays.observed, system, clock[L.T], u, v)
+    observe_values(obs, arrays.observed)
     count[L.STARTED] = 1
     return OK
 
 
 @kernel
-def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
+def advance(scheme, ctrl, system, rod, floor, obs, arrays, max_steps):
     """Step from the state in ``arrays.state`` (u, v, a rows) and leave the new state
     there; ``arrays.trial`` (3 rows) holds the trial states, ``arrays.interp`` (2 rows) the
-    interpolated (u, v) of a dense output (module docstring; ``arrays.RunArrays``).
+    interpolated (u, v) of a dense output (module docstring; ``arrays.RunArrays``).  The
+    observer ``obs`` sees every accepted step and may end the run; its values are in
+    ``arrays.observed`` when the call returns (``observers``).
 
     Returns layout.DONE, FULL, PAUSED or FAILED.
     """
@@ -162,6 +168,7 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
     bounces = arrays.bounces
     fail = arrays.fail
     times = arrays.times
+    observed = arrays.observed
     cur = state
     nxt = trial
     swapped = False
@@ -193,8 +200,10 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
         if t >= t_end - tol:
             code = L.DONE
             break
-        if stop_due(ctrl, count, cur[0], cur[1], work[1], system, rod, floor):
-            # the run ends here (``time.stop_after_bounces``, ``time.stop_at_rest``): its
+        if (stop_due(ctrl, count, cur[0], cur[1], work[1], system, rod, floor)
+                or observe_stop(obs, observed)):
+            # the run ends here (``time.stop_after_bounces``, ``time.stop_at_rest``, the
+            # observer's ``stop``): its
             # last rows at t, once the buffers have room for them
             if count[L.N_SNAP] >= cap_s or count[L.N_DIAG] >= cap_d:
                 code = L.FULL
@@ -345,6 +354,7 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
         swapped = not swapped
         count[L.STEP] += 1
         taken += 1
+        observe_step(obs, observed, system, t_old, t, nxt[0], nxt[1], cur[0], cur[1])
         dtp = C.propose(ctrl, r.dt_suggest, dtp, after_reject)
         after_reject = bool(False)
         if ctrl.gap > 0.0 and not fixed:
@@ -373,6 +383,7 @@ def advance(scheme, ctrl, system, rod, floor, arrays, max_steps):
     clock[L.DISSIPATED] = diss
     clock[L.W] = w
     clock[L.EMIN] = emin_cur
+    observe_values(obs, observed)
     if swapped:
         for r in range(state.shape[0]):
             for i in range(state.shape[1]):

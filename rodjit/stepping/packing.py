@@ -1,7 +1,7 @@
 """How a point's parameter tuples travel into compiled code: one row of doubles.
 
-The compiled loop takes five parameter tuples (scheme, control, system, rod law, floor law:
-``driver.setup.parameters``).  Three callers pass them through an interface that takes
+The compiled loop takes six parameter tuples (scheme, control, system, rod law, floor law,
+observer: ``driver.setup.parameters``).  Three callers pass them through an interface that takes
 arrays, not tuples: the CPU engine's batch kernel (``stepping.ensemble.run_batch``, many
 points in one call), the GPU kernel (``gpu.kernel``, one thread a point) and the exported
 functions of the extension compiled ahead of time (``stepping.aot``).  Each gets a point's

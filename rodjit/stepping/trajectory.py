@@ -44,6 +44,7 @@ from . import impact_stream as S
 from . import layout as L
 from .events import write_bounce
 from .loop import advance, start
+from .observers import state_size
 from .._jit import kernel
 
 # per point, ``fout`` columns
@@ -59,6 +60,7 @@ F_T_END = 8        # clock[T_END] (a failure message names it)
 F_FAIL = 9                         # the loop's ``fail`` row (FAIL_SIZE values)
 F_IMPACT = F_FAIL + L.FAIL_SIZE    # impact_stream.finish's ``out`` (OUT_SIZE values)
 F_SIZE = F_IMPACT + S.OUT_SIZE
+F_OBSERVED = F_SIZE     # from here: the run's ``observed`` array (``fout_width``)
 
 # per point, ``iout`` columns
 I_CODE = 0         # the loop's last code (layout.DONE, FAILED, ...) or BAD_DIAGNOSTICS
@@ -77,6 +79,12 @@ BAD_DIAGNOSTICS = 101   # a block of diagnostics held a non-finite value (``Run.
 # a row of ``bout``: the loop's bounce row (``layout.BOUNCE_ROW_COLUMNS``), then ``open``
 B_OPEN = len(L.BOUNCE_ROW_COLUMNS)
 BOUT_SIZE = B_OPEN + 1
+
+
+def fout_width(obs) -> int:
+    """Columns of ``fout`` for points with the observer parameters ``obs``: ``F_SIZE``,
+    then the run's ``observed`` array (the observer's state, then its values)."""
+    return F_SIZE + max(1, state_size(obs))
 
 
 @kernel
@@ -137,11 +145,12 @@ def _finite(x):
 
 
 @kernel
-def run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout, fo, io, max_steps):
+def run_one(scheme, ctrl, system, rod, floor, obs, arrays, imp, bout, fo, io, max_steps):
     """Run one point from its ``arrays`` (``arrays.RunArrays``) as ``Run.__init__`` leaves
     them (``io`` zero) to t_end or its failure, or on from where it stopped
-    (``io[I_STOPPED]``); its results in ``fo``, ``io`` and the first ``io[I_BOUNCES]`` rows
-    of ``bout`` (module docstring).  ``imp`` holds the first-impact state
+    (``io[I_STOPPED]``); its results in ``fo`` (the observer's ``obs`` array from
+    ``F_OBSERVED``), ``io`` and the first ``io[I_BOUNCES]`` rows of ``bout`` (module
+    docstring).  ``imp`` holds the first-impact state
     (``impact_stream.SIZE`` doubles)."""
     state = arrays.state
     clock = arrays.clock
@@ -161,7 +170,7 @@ def run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout, fo, io, max_ste
         fo[F_MIN_STRAIN] = math.inf
         fo[F_MIN_U0] = math.inf
         fo[F_MAX_FF] = -math.inf
-        code = start(scheme, ctrl, system, rod, floor, arrays)
+        code = start(scheme, ctrl, system, rod, floor, obs, arrays)
         # the outputs at t0 stay in the buffers: the first drain takes them with the first
         # call's (``sweeps.point``: ``run.start(None)``)
         io[I_CODE] = L.FAILED if code == L.FAILED else L.PAUSED
@@ -173,7 +182,7 @@ def run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout, fo, io, max_ste
                 break
             t = clock[L.T]
             steps = count[L.STEP]
-            code = advance(scheme, ctrl, system, rod, floor, arrays, max_steps)
+            code = advance(scheme, ctrl, system, rod, floor, obs, arrays, max_steps)
             if ((code == L.PAUSED or code == L.FULL) and count[L.STEP] > steps
                     and clock[L.T] <= t):
                 # every step of the call left t where it was (``Run.compute``)
@@ -246,6 +255,9 @@ def run_one(scheme, ctrl, system, rod, floor, arrays, imp, bout, fo, io, max_ste
     fo[F_T_END] = clock[L.T_END]
     for j in range(L.FAIL_SIZE):
         fo[F_FAIL + j] = fail[j]
+    observed = arrays.observed
+    for j in range(observed.size):
+        fo[F_OBSERVED + j] = observed[j]
     io[I_IMPACT] = S.finish(imp, pending, p_impact, p_release, pending and is_open,
                             p_min_u0, system.g, ev[L.FLIGHT_TIME], clock[L.T],
                             state[0, 0] < 0.0, fo[F_IMPACT:F_IMPACT + S.OUT_SIZE],

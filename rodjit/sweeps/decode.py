@@ -21,6 +21,7 @@ from ..records.observables import lift_energy
 from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping import trajectory as T
+from ..stepping.observers import observer_of
 
 __all__ = ["summarize", "stopped", "take_rows", "bounce_tables", "point_lift_energy",
            "NONFINITE_MESSAGE"]
@@ -47,6 +48,10 @@ def summarize(values: dict, at, starts, fout, iout) -> None:
     values["energy_error"][at] = fout[:, T.F_ENERGY_ERROR]
     values["t_final"][at] = fout[:, T.F_T_FINAL]
     values["status"][at] = np.where(code == L.DONE, "completed", "failed")
+    if len(starts):       # the observer's values (the points share it: one family)
+        ob = observer_of(starts[0].obs)
+        for j, column in enumerate(ob.columns):
+            values[column][at] = fout[:, T.F_OBSERVED + ob.size + j]
     impact_columns(values, at, fout[:, T.F_IMPACT:T.F_IMPACT + S.OUT_SIZE],
                    iout[:, T.I_IMPACT],
                    lambda j: point_lift_energy(starts[j].config, starts[j].rod))

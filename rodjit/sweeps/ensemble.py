@@ -40,9 +40,11 @@ from ..stepping import impact_stream as S
 from ..stepping import layout as L
 from ..stepping import trajectory as T
 from ..stepping.arrays import allocate
+from ..stepping.observers import state_size
 from . import decode
 from .batch import BatchResult
-from .point import SUMMARY_COLUMNS, died, empty_columns, pass_on, run_point, worker_info
+from .point import (SUMMARY_COLUMNS, died, empty_columns, pass_on, run_point,
+                    summary_columns, worker_info)
 
 __all__ = ["BatchTask", "run_batch", "run_task", "run_tasks", "lost", "lost_batch", "task_key",
            "timed", "batches", "check_batch_size", "split_bounces", "as_batch",
@@ -141,10 +143,18 @@ def timed(result) -> tuple[int, float]:
 def lost_batch(task: BatchTask, message: str) -> BatchResult:
     """The result of a batch whose worker died twice: every point failed with ``message``."""
     idx = np.asarray(task.index, dtype=np.int64)
-    values = empty_columns(idx.size)
+    values = empty_columns(idx.size, _columns(task))
     values["status"][:] = "failed"
     values["message"][:] = message
     return BatchResult(idx, values, _no_bounces(), np.zeros(idx.size, np.int64))
+
+
+def _columns(task: BatchTask) -> dict:
+    """The summary columns of ``task``'s points (their observer's: the points of a batch
+    share it, ``summary_columns``)."""
+    if len(task.index) == 0:
+        return SUMMARY_COLUMNS
+    return summary_columns(task.grid.config(task.base, int(task.index[0])))
 
 
 def _no_bounces() -> dict:
@@ -159,13 +169,13 @@ def run_batch(task: BatchTask) -> BatchResult:
     t0 = time.perf_counter()
     idx = np.asarray(task.index, dtype=np.int64)
     n = idx.size
-    values = empty_columns(n)
     rows_of: list[list] = [[] for _ in range(n)]
     caught: list = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ModelWarning)
         for mod in task.laws:
             importlib.import_module(mod)
+        values = empty_columns(n, _columns(task))
         members = []
         for k, i in enumerate(idx):
             try:
@@ -211,11 +221,12 @@ def run_starts(members, values: dict, rows_of: list) -> tuple[float, float]:
 _LOADED: set = set()      # the families whose batch kernel this process has loaded
 
 
-def _scratch(n1, scheme, cap_s, cap_d, ev_cap, times=()) -> tuple:
+def _scratch(n1, scheme, cap_s, cap_d, ev_cap, times=(), observed: int = 0) -> tuple:
     """One point's arrays of ``run_batch`` (reused by every point of the call): a Run's
-    arrays and buffers (``stepping.arrays``; its listed snapshot ``times``, the same for
-    the call's points), and the first-impact state."""
-    return allocate(n1, scheme, cap_s, cap_d, ev_cap, times), np.zeros(S.SIZE)
+    arrays and buffers (``stepping.arrays``; its listed snapshot ``times`` and the
+    ``observed`` entries of its observer, the same for the call's points), and the
+    first-impact state."""
+    return (allocate(n1, scheme, cap_s, cap_d, ev_cap, times, observed), np.zeros(S.SIZE))
 
 
 EV_CAP = 1024    # event rows of a point's scratch
@@ -245,9 +256,11 @@ def _load_kernel(s: Start) -> float:
     t0 = time.perf_counter()
     _batch_kernel(params)(np.zeros((0, len(E.pack(params)))), np.zeros((0, 2, n1)),
                           np.zeros((0, L.CLOCK_SIZE)), np.zeros(0), 0,
-                          *_scratch(n1, s.scheme, cap_s, cap_d, EV_CAP),
+                          *_scratch(n1, s.scheme, cap_s, cap_d, EV_CAP, (),
+                                    state_size(s.obs)),
                           np.zeros((BOUNCE_ROWS, T.BOUT_SIZE)),
-                          np.zeros((0, T.F_SIZE)), np.zeros((0, T.I_SIZE), dtype=np.int64), 1)
+                          np.zeros((0, T.fout_width(s.obs))),
+                          np.zeros((0, T.I_SIZE), dtype=np.int64), 1)
     _LOADED.add(key)
     return time.perf_counter() - t0
 
@@ -277,8 +290,9 @@ def run_group(members, values: dict, rows_of: list) -> tuple[float, float]:
         clock0[j] = s.clock
         flight[j] = s.tau
     cap_s, cap_d = capacities(cfg, s0.ctrl)
-    scratch = _scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP, cfg.output.times)
-    fout = np.zeros((m, T.F_SIZE))
+    scratch = _scratch(n1, s0.scheme, cap_s, cap_d, EV_CAP, cfg.output.times,
+                       state_size(s0.obs))
+    fout = np.zeros((m, T.fout_width(s0.obs)))
     iout = np.zeros((m, T.I_SIZE), dtype=np.int64)
     pos = np.array([k for k, _ in members], dtype=np.int64)
     max_steps = int(max(1, NODE_STEPS_PER_CALL // n1))
@@ -314,7 +328,7 @@ def as_batch(results) -> BatchResult:
     idx = np.concatenate([p.index for p in parts])
     counts = np.concatenate([p.bounce_count for p in parts])
     values = {name: np.concatenate([np.asarray(p.values[name]) for p in parts])
-              for name in SUMMARY_COLUMNS}
+              for name in parts[0].values}
     starts = np.cumsum(counts) - counts
     order = np.argsort(idx, kind="stable")
     rows = (np.concatenate([np.arange(starts[k], starts[k] + counts[k]) for k in order])
@@ -326,8 +340,9 @@ def as_batch(results) -> BatchResult:
 
 
 def _from_point(r) -> BatchResult:
-    values = empty_columns(1)
-    for name in SUMMARY_COLUMNS:
+    values = empty_columns(1, {name: SUMMARY_COLUMNS.get(name, ("float", ""))
+                               for name in r.values})
+    for name in values:
         values[name][0] = r.values[name]
     return BatchResult(np.array([r.index], np.int64), values,
                        {name: np.asarray(r.bounces[name]) for name in BOUNCE_COLUMNS},

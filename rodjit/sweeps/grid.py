@@ -195,6 +195,10 @@ class Grid:
                 raise ValueError(f"grid {key}: a list of times is one value for the whole "
                                  f"sweep, not a swept key; set it in the base "
                                  f"configuration")
+            if str(key) == "output.observer":
+                raise ValueError(f"grid {key}: the observer gives the sweep's columns, one "
+                                 f"for the whole sweep, not a swept key; set it in the base "
+                                 f"configuration")
         _check_size({key: _count(key, vals) for key, vals in spec.items()}, max_points)
         keys, values = [], []
         for key, vals in spec.items():

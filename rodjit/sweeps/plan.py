@@ -21,6 +21,7 @@ from ..output.estimate import (ESTIMATE_KEYS, MAX_OUTPUT, MAX_STEPS, Estimate, e
 from ..output.h5files import check_output
 from .errors import RunsDirUnusable, SweepFileTooLarge
 from .grid import MAX_POINTS, Grid
+from .point import summary_columns
 
 __all__ = ["SweepPlan", "plan_sweep", "check_runs_dir", "check_memory", "memory_bytes",
            "SWEEP_OVERHEAD", "POINT_BYTES"]
@@ -155,6 +156,7 @@ def plan_sweep(config: Config | None = None, grid: Mapping[str, Any] | Grid | No
     base = (config if config is not None else Config()).resolve()
     grid = Grid.from_spec(grid, max_points=max_points)
     grid.validate(base)
+    summary_columns(base)          # its observer's columns beside the built-in ones
     worst_index, worst, runs_bytes = _points(base, grid, max_steps)
     runs_dir = check_runs_dir(save_runs, grid, range(len(grid)), overwrite, False, output)
     replaces = False

@@ -31,11 +31,13 @@ from ..records.impact import IMPACT_COLUMNS, ImpactStream
 from ..records.sink import Sink
 from ..stepping import layout as L
 from ..stepping import registry
+from ..stepping.observers import columns_of, get_observer
 from .batch import BatchResult
 
 __all__ = ["PointTask", "PointResult", "SUMMARY_COLUMNS", "run_point", "run_points", "died",
            "empty_columns", "empty_bounces", "user_modules", "BOUNCE_COLUMNS",
-           "default_jobs", "worker_info", "reissue_warnings", "bounce_values", "pass_on"]
+           "default_jobs", "worker_info", "reissue_warnings", "bounce_values", "pass_on",
+           "summary_columns"]
 
 # the summary columns a point fills, after the swept keys: name -> (dtype, description)
 SUMMARY_COLUMNS: dict[str, tuple[str, str]] = {
@@ -92,18 +94,35 @@ class PointResult:
         return self.values["status"]
 
 
-def empty_values(status: str = "pending", message: str = "") -> dict:
-    """A summary row with nothing measured (NaN, 0, '')."""
-    values = {name: _FILL[kind] for name, (kind, _) in SUMMARY_COLUMNS.items()}
+def summary_columns(config) -> dict[str, tuple[str, str]]:
+    """The summary columns of a sweep of ``config``: ``SUMMARY_COLUMNS``, then its
+    observer's (``output.observer``), floats; a ValueError (one line) for an observer's
+    column named as a built-in one."""
+    extra = columns_of(config)
+    if not extra:
+        return SUMMARY_COLUMNS
+    clash = [c for c in extra if c in SUMMARY_COLUMNS]
+    if clash:
+        raise ValueError(f"output.observer = {config.output.observer!r} names a column "
+                         f"{clash[0]!r}, which is a built-in summary column; rename it")
+    return {**SUMMARY_COLUMNS, **{c: ("float", text) for c, text in extra.items()}}
+
+
+def empty_values(status: str = "pending", message: str = "",
+                 columns: dict = SUMMARY_COLUMNS) -> dict:
+    """A summary row of ``columns`` (``summary_columns``) with nothing measured (NaN, 0,
+    '')."""
+    values = {name: _FILL[kind] for name, (kind, _) in columns.items()}
     values.update(status=status, message=message)
     return values
 
 
-def empty_columns(n: int) -> dict[str, np.ndarray]:
-    """The summary columns of ``n`` points that have not run (status "pending")."""
-    row = empty_values()
+def empty_columns(n: int, columns: dict = SUMMARY_COLUMNS) -> dict[str, np.ndarray]:
+    """The summary ``columns`` (``summary_columns``) of ``n`` points that have not run
+    (status "pending")."""
+    row = empty_values(columns=columns)
     return {name: np.full(n, row[name], dtype=_NP_DTYPES[kind])
-            for name, (kind, _) in SUMMARY_COLUMNS.items()}
+            for name, (kind, _) in columns.items()}
 
 
 def died(index: int, message: str) -> PointResult:
@@ -112,8 +131,8 @@ def died(index: int, message: str) -> PointResult:
 
 
 def user_modules(config) -> tuple[str, ...]:
-    """Modules defining the point's stress laws and its integrator, unless rodjit's own: a
-    worker in a fresh process imports them to find the laws and the integrator by name
+    """Modules defining the point's stress laws, its integrator and its observer, unless
+    rodjit's own: a worker in a fresh process imports them to find them by name
     (the module of ``from_config`` is the one that registers a law, the kernels may come
     from others; an integrator's is its ``Scheme.module``, which registers it on import)."""
     mods = []
@@ -128,6 +147,9 @@ def user_modules(config) -> tuple[str, ...]:
             add(getattr(getattr(part, "py_func", part), "__module__", None) or "")
     if config.time.integrator in registry.NAMES:
         add(registry.get(config.time.integrator).module)
+    ob = get_observer(config.output.observer)
+    for part in (ob.from_config, ob.start, ob.step, ob.stop, ob.values):
+        add(getattr(getattr(part, "py_func", part), "__module__", None) or "")
     return tuple(mods)
 
 
@@ -190,7 +212,7 @@ def _run_in_memory(config) -> tuple[dict, dict]:
               "max_floor_force": _finite(ext.force_max), "min_strain": _finite(ext.strain_min),
               "energy_error": ext.energy_error(run.energy0), "steps": run.steps,
               "rejected_steps": run.rejected, "compile_time": run.compile_time,
-              "run_time": run.run_time, "t_final": run.t, "run_file": ""}
+              "run_time": run.run_time, "t_final": run.t, "run_file": "", **run.observed}
     values.update(sink.impact.values(run.t, run.u, pending))
     return values, bounces
 
@@ -219,14 +241,14 @@ def _run_to_file(config, path: str) -> tuple[dict, dict]:
               "energy_error": s.energy_error,
               "steps": s.steps, "rejected_steps": s.rejected_steps,
               "compile_time": s.compile_time, "run_time": s.run_time, "t_final": s.t,
-              "run_file": os.path.basename(path), **s.impact}
+              "run_file": os.path.basename(path), **s.impact, **s.observed}
     return values, {name: np.asarray(s.bounces[name]) for name in BOUNCE_COLUMNS}
 
 
 def run_point(task: PointTask) -> PointResult:
     """Run one point; every failure of the point itself becomes ``status = failed``."""
     t0 = time.perf_counter()
-    values = empty_values()
+    values = empty_values(columns=summary_columns(task.config))
     bounces = empty_bounces()
     disk = ""
     said: tuple = ()

@@ -35,7 +35,7 @@ from .plan import check_memory, check_runs_dir, plan_sweep
 from .sweep_check import read_sweep
 from .batch import BatchResult
 from .ensemble import batches, check_batch_size, split_bounces, timed
-from .point import SUMMARY_COLUMNS, PointTask, empty_columns, user_modules, reissue_warnings
+from .point import PointTask, empty_columns, reissue_warnings, summary_columns, user_modules
 from .errors import FileHeldOpen, ResumeMismatch, SweepWriteFailed, resume_note
 from .outcome import SweepFailed, SweepInterrupted, SweepProgress, sweep_stats
 from .sweep_table import SweepTable
@@ -56,8 +56,9 @@ def check_jobs(jobs) -> int:
     return jobs
 
 
-def _new_columns(grid: Grid) -> dict[str, np.ndarray]:
-    return {**sweep_file.key_columns(grid), **empty_columns(len(grid))}
+def _new_columns(grid: Grid, base) -> dict[str, np.ndarray]:
+    return {**sweep_file.key_columns(grid),
+            **empty_columns(len(grid), summary_columns(base))}
 
 
 def _open_resume(output, config, grid, max_points):
@@ -204,7 +205,7 @@ def _sweep(config, grid, output, jobs, scheduler, save_runs, resume, overwrite, 
         base, grid = plan.config, plan.grid
         if output is not None:         # again, now that no one else can write it
             output = check_output(output, overwrite, "sweep", held=True)
-        columns = _new_columns(grid)
+        columns = _new_columns(grid, base)
     todo = [i for i in range(len(grid)) if columns["status"][i] != "completed"]
     runs_dir = (plan.runs_dir if plan is not None else
                 check_runs_dir(save_runs, grid, todo, overwrite, resume, output))
@@ -351,6 +352,7 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
     output = table.path
     n = len(grid)
     done0 = n - len(todo)
+    summary = summary_columns(base)
 
     timing = {"points": 0, "wall": 0.0}
 
@@ -381,7 +383,7 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
             for result in results:
                 if isinstance(result, BatchResult):
                     reissue_warnings(result, said)
-                    for name in SUMMARY_COLUMNS:
+                    for name in summary:
                         cols[name][result.index] = result.values[name]
                     if output is None:
                         for k, table_k in enumerate(split_bounces(result)):
@@ -396,7 +398,7 @@ def _write_sweep(table: SweepTable, executor, todo, runs_dir, progress, command,
                     t_last = time.perf_counter()
                 elif result is not None:
                     reissue_warnings(result, said)
-                    for name in SUMMARY_COLUMNS:
+                    for name in summary:
                         cols[name][result.index] = result.values[name]
                     if output is None:
                         table.keep_bounces(result.index, result.bounces)

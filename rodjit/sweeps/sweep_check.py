@@ -76,6 +76,8 @@ def _summary_dtypes(header: dict, version: int) -> dict[str, object]:
     out[F.POINT] = _DTYPES["int"]
     for name, (kind, _) in SUMMARY_COLUMNS.items():
         out[name] = "str" if kind == "str" else _DTYPES[kind]
+    for name in header["observed"]:
+        out[name] = _DTYPES["float"]
     for name in F.RAGGED:
         out[name] = _DTYPES["int"]
     if header["row_digests"]:
@@ -189,7 +191,8 @@ def _check_rows(f: h5py.File, header: dict, columns: dict, version: int,
     digest = s[F.ROW_DIGEST][()] if header["row_digests"] else None
     pending = status == "pending"
     empty = empty_values()
-    for name, (kind, _) in SUMMARY_COLUMNS.items():
+    for name, (kind, _) in {**SUMMARY_COLUMNS,
+                            **dict.fromkeys(header["observed"], ("float", ""))}.items():
         if name == "status":
             continue
         col = columns[name][pending]
@@ -230,7 +233,7 @@ def _check_rows(f: h5py.File, header: dict, columns: dict, version: int,
         idx = np.flatnonzero(done)
         table = {name: g[name][()] for name in BOUNCE_COLUMNS}
         got = F.row_digests(idx, {k: v[idx] for k, v in columns.items()}, start[idx],
-                            count[idx], table)
+                            count[idx], table, 0, header["observed"])
         wrong = got != digest[idx]
         if wrong.any():
             i = int(idx[_first(wrong)])

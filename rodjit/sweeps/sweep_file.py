@@ -59,7 +59,7 @@ from ..version import __version__
 from .grid import Grid
 from .ensemble import as_batch
 from .errors import FormatNotContinued
-from .point import SUMMARY_COLUMNS, empty_columns
+from .point import SUMMARY_COLUMNS, empty_columns, summary_columns
 
 __all__ = ["KIND", "FORMAT_VERSION", "STATUSES", "create", "write_results", "finish",
            "read_header", "read_summary", "read_bounces", "read_all_bounces", "join_bounces",
@@ -97,6 +97,8 @@ REQUIRED_ATTRS = ("base_config_toml", "grid", "n_points", "status")
 
 _STR = h5py.string_dtype("utf-8")
 _DTYPES = {"str": _STR, "int": np.int64, "float": np.float64}
+# the attribute that marks a summary column as the observer's (``output.observer``), naming it
+OBSERVER = "observer"
 
 
 def key_kind(values) -> str:
@@ -201,10 +203,21 @@ def header_digest(base_toml: str, grid_json: str, n_points: int,
     return h.hexdigest()
 
 
+def observer_columns(f: h5py.File, base) -> tuple[str, ...]:
+    """The summary columns of the sweep's observer (``output.observer`` of its ``base``
+    configuration), in file order: the datasets of ``/summary`` whose attribute
+    ``observer`` names it (none in a sweep without one)."""
+    name = base.output.observer
+    if name == "none" or "summary" not in f:
+        return ()
+    return tuple(c for c, ds in f["summary"].items() if ds.attrs.get(OBSERVER) == name)
+
+
 def row_digests(index, values: dict, starts, counts, table: dict,
-                offset: int = 0) -> np.ndarray:
+                offset: int = 0, observed: tuple = ()) -> np.ndarray:
     """The summary column ``row_digest`` of the points ``index``: BLAKE2b-128 (hex) of each
-    point's summary row (``values``: ``SUMMARY_COLUMNS`` over those points, as they read
+    point's summary row (``values``: ``SUMMARY_COLUMNS``, then the ``observed`` columns of
+    its observer, over those points, as they read
     back), where its bounce rows are (``starts``, ``counts``) and those rows (``table``:
     the bounce columns as stored, row ``starts[k] - offset`` the point's first).  It proves
     a written row: a byte changed anywhere in it, or in its bounce rows, no longer
@@ -218,6 +231,7 @@ def row_digests(index, values: dict, starts, counts, table: dict,
             texts.append(values[name])
         else:
             numbers.append(np.asarray(values[name], _DTYPES[kind]))
+    numbers += [np.asarray(values[name], np.float64) for name in observed]
     fixed = np.ascontiguousarray(np.column_stack([a.view(np.uint64) for a in numbers]))
     # each bounce row's bytes, column after column: a point's rows are one slice
     rows = [np.ascontiguousarray(table[name]) for name in BOUNCE_COLUMNS]
@@ -272,11 +286,16 @@ def create(path, base, grid: Grid, *, command: str, attrs: dict) -> None:
                 ds.attrs["units"] = spec.unit
             ds.dims[0].attach_scale(point)
         coordinates = " ".join(grid.keys)      # CF auxiliary coordinates of every column
-        for name, col in empty_columns(n).items():
-            kind, text = SUMMARY_COLUMNS[name]
+        columns = summary_columns(base)
+        for name, col in empty_columns(n, columns).items():
+            kind, text = columns[name]
             ds = s.create_dataset(name, data=col, dtype=_DTYPES[kind], chunks=chunk)
             ds.attrs["description"] = text
-            ds.attrs.update(cf.column_attrs("summary", name))
+            if name in SUMMARY_COLUMNS:
+                ds.attrs.update(cf.column_attrs("summary", name))
+            else:       # a column of the sweep's observer
+                ds.attrs.update(long_name=text, units="1")
+                ds.attrs[OBSERVER] = base.output.observer
             if coordinates:
                 ds.attrs["coordinates"] = coordinates
             ds.dims[0].attach_scale(point)
@@ -352,14 +371,16 @@ def write_batch(path, result, wait: float = LOCK_WAIT) -> None:
     counts = np.asarray(result.bounce_count, np.int64)
     with _writing(path, wait) as f:
         s = f["summary"]
-        for name in SUMMARY_COLUMNS:
+        observed = tuple(c for c, ds in s.items() if OBSERVER in ds.attrs)
+        v.update({name: np.asarray(result.values[name], np.float64) for name in observed})
+        for name in v:
             if name == "status":
                 continue      # last: a row counts as done only once all of it is there
             s[name][idx] = v[name]
         n0, table = _append_rows(f, idx, result.bounces, counts)
         if ROW_DIGEST in s:       # (a format-3 file written before rows had digests: none)
             s[ROW_DIGEST][idx] = row_digests(idx, v, s["bounce_start"][idx], counts, table,
-                                             n0)
+                                             n0, observed)
         s["status"][idx] = v["status"]
 
 
@@ -447,7 +468,7 @@ def read_header(f: h5py.File) -> dict:
     base = Config.from_stored_toml(base_toml).chosen(
         str(attrs.get("base_integrator_choice", "")))
     return {"base": base, "grid": grid, "attrs": attrs,
-            "row_digests": rows}
+            "row_digests": rows, "observed": observer_columns(f, base)}
 
 
 def _format(f: h5py.File) -> int:
