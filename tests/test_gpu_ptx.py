@@ -187,3 +187,17 @@ def test_compile_from_a_deep_stack_names_the_cause():
     its frames, so the refusal still names the cause, not Python's recursion limit."""
     line = _in_fresh_process("_deep_reason")
     assert "Unknown attribute 'random'" in line and line.endswith("limit restored: True")
+
+
+@pytest.mark.slow
+def test_observer_registered_from_outside_compiles_to_ptx():
+    """A user's observer (examples/custom_observer.py: its step calls a kernel of its own)
+    is compiled into the GPU kernel like the loop around it."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
+    import custom_observer  # noqa: F401  (registers "rebound-apex")
+
+    _check(_ptx({"output.observer": "rebound-apex", "time.integrator": "verlet",
+                 "rod.N": 5}))

@@ -134,6 +134,29 @@ def test_refusals_are_one_line():
                           step_observer.values))
 
 
+def test_a_function_that_fails_its_dry_run_is_refused_at_register():
+    from typing import NamedTuple
+
+    @observer_kernel
+    def past_the_end(p, st, out):
+        out[2] = 1.0           # two columns: out has 2 entries
+
+    @observer_kernel
+    def no_system(p, st, t, u, v):      # start without ``system``
+        pass
+
+    with pytest.raises(TypeError, match=r"observer 'bad-values': values fails a dry run on "
+                                        r"a rod of 4 segments: IndexError"):
+        register(Observer("bad-values", NamedTuple("BadValues", [("limit", int)]), {"a": "", "b": ""}, 3,
+                          step_observer.start, step_observer.step, step_observer.stop,
+                          past_the_end))
+    with pytest.raises(TypeError, match="observer 'bad-start': start fails a dry run"):
+        register(Observer("bad-start", NamedTuple("BadStart", [("limit", int)]), {}, 3, no_system,
+                          step_observer.step, step_observer.stop, step_observer.values))
+    from rodjit.observers import observer_names
+    assert "bad-values" not in observer_names() and "bad-start" not in observer_names()
+
+
 def test_a_column_named_as_a_built_in_one_is_refused():
     from typing import NamedTuple
 
@@ -141,7 +164,7 @@ def test_a_column_named_as_a_built_in_one_is_refused():
     def values(p, st, out):
         out[0] = 1.0
 
-    register(Observer("clashing", NamedTuple("Clash", []), {"steps": "a clash"}, 0,
+    register(Observer("clashing", NamedTuple("Clash", [("limit", int)]), {"steps": "a clash"}, 3,
                       step_observer.start, step_observer.step, step_observer.stop, values))
     with pytest.raises(ValueError, match="names a column 'steps', which is a built-in"):
         rodjit.sweep(_cfg(**{"output.observer": "clashing"}), {"rod.mu": [100.0]},

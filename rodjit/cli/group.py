@@ -28,9 +28,10 @@ class Commands(click.Group):
 
 def import_modules(names: tuple[str, ...]) -> None:
     """Import the modules ``--import`` names, the working directory first on the path (as
-    ``python -m`` has it): what they register (a stress law, an integrator) is then
-    selectable by name, here and in a sweep's worker processes, which import the modules
-    that define a point's laws and integrator (``sweeps.point.user_modules``).  A module
+    ``python -m`` has it): what they register (a stress law, an integrator, an observer)
+    is then selectable by name, here and in a sweep's worker processes, which import the
+    modules that define a point's laws, integrator and observer
+    (``sweeps.point.user_modules``).  A module
     that cannot be imported is a usage error, one line naming it."""
     import importlib
     import os
@@ -49,7 +50,8 @@ def import_modules(names: tuple[str, ...]) -> None:
 @click.version_option(package_name="rodjit", prog_name="rodjit")
 @click.option("--import", "imports", multiple=True, metavar="MODULE",
               help="Import MODULE first (from the working directory or the Python path): "
-                   "a module of one's own that registers a stress law or an integrator, "
+                   "a module of one's own that registers a stress law, an integrator or an "
+                   "observer, "
                    "e.g. rodjit --import myfloor run --set floor.law=my-floor. Repeatable.")
 @click.pass_context
 def main(ctx: click.Context, imports: tuple[str, ...]) -> None:

@@ -111,7 +111,8 @@ def register(observer: Observer) -> Observer:
     ------
     TypeError
         A part of the wrong kind (``params`` not a NamedTuple class, a function not
-        compiled), named in the message.
+        compiled), or a function that fails a dry run (``_dry_run``), named in the
+        message.
     ValueError
         Its name is taken or not letters, digits, '-' and '_', its parameter class belongs
         to another observer, its ``size`` is negative, or a column is not an identifier.
@@ -144,10 +145,43 @@ def register(observer: Observer) -> Observer:
         if not (isinstance(column, str) and column.isidentifier()):
             raise ValueError(f"observer {observer.name!r}: column {column!r} must be an "
                              f"identifier")
+    _dry_run(observer)
     _adopt(observer)
     _BY_TYPE[observer.params] = observer
     _BY_NAME[observer.name] = observer
     return observer
+
+
+def _dry_run(observer: Observer) -> None:
+    """Call the observer's Python functions once on a small rod (zero parameters, NumPy
+    arrays of the sizes the loop gives them), so a wrong signature, a read or write past
+    its state or its ``out``, or a ``stop`` that answers no bool is refused at ``register``
+    in one line, not as a compile error in a run's first call (compiled code does not
+    check bounds)."""
+    import numpy as np
+
+    from ..model.system import RodSystem
+
+    kinds = getattr(observer.params, "__annotations__", {})
+    zero = {bool: False, "bool": False, int: 0, "int": 0}
+    p = observer.params(*(zero.get(kinds.get(f), 0.0) for f in observer.params._fields))
+    system = RodSystem(4, 0.25, 0.0, 0.0, -9.81)
+    u = np.linspace(0.1, 1.1, 5)
+    v = np.zeros(5)
+    st = np.zeros(observer.size)
+    out = np.zeros(len(observer.columns))
+    calls = (("start", (p, st, system, 0.0, u, v)),
+             ("step", (p, st, system, 0.0, 1e-3, u, v, u + 1e-3, v)),
+             ("stop", (p, st)), ("values", (p, st, out)))
+    for part, args in calls:
+        try:
+            got = python_function(getattr(observer, part))(*args)
+        except Exception as exc:
+            raise TypeError(f"observer {observer.name!r}: {part} fails a dry run on a rod of "
+                            f"4 segments: {type(exc).__name__}: {exc}") from None
+        if part == "stop" and not isinstance(got, (bool, np.bool_)):
+            raise TypeError(f"observer {observer.name!r}: stop must return a bool, not "
+                            f"{type(got).__name__}")
 
 
 def _adopt(observer: Observer) -> None:

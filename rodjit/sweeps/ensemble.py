@@ -98,7 +98,8 @@ class BatchTask(NamedTuple):
     index: Any                  # (n,) int64 grid indices
     base: Any                   # the sweep's base Config
     grid: Any                   # its Grid
-    laws: tuple[str, ...]       # modules to import first (user_modules: laws, integrator)
+    laws: tuple[str, ...]       # modules to import first (user_modules: laws, integrator,
+                                # observer)
     retry: bool = False         # its worker died once: this is the second try
 
 

@@ -148,8 +148,8 @@ def user_modules(config) -> tuple[str, ...]:
     if config.time.integrator in registry.NAMES:
         add(registry.get(config.time.integrator).module)
     ob = get_observer(config.output.observer)
-    for part in (ob.from_config, ob.start, ob.step, ob.stop, ob.values):
-        add(getattr(getattr(part, "py_func", part), "__module__", None) or "")
+    for piece in (ob.from_config, ob.start, ob.step, ob.stop, ob.values):
+        add(getattr(getattr(piece, "py_func", piece), "__module__", None) or "")
     return tuple(mods)
 
 
