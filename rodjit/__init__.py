@@ -23,7 +23,7 @@ if _sys.argv[:1] == ["-m"] or _os.path.basename(_sys.argv[0] if _sys.argv else "
 # modules their work needs; ``rodjit.X`` and ``from rodjit import X`` read as if all were
 # imported here.
 _WHERE = {
-    "laws": ".laws",
+    "laws": ".laws", "observers": ".observers",
     "Convergence": ".analysis", "FitError": ".analysis", "FitResult": ".analysis",
     "TableFit": ".analysis", "converge": ".analysis", "fit": ".analysis",
     "fit_table": ".analysis", "load_convergence": ".analysis", "observables": ".analysis",
@@ -48,7 +48,7 @@ _WHERE = {
 }
 
 if TYPE_CHECKING:      # what static tools and editors see: the same names, imported
-    from . import laws
+    from . import laws, observers
     from .analysis import (Convergence, FitError, FitResult, TableFit, load_convergence)
     from .analysis.converge import converge
     from .analysis.fit import fit
@@ -78,7 +78,7 @@ __getattr__, __dir__ = _lazy.public_names(__name__, _WHERE)
 __all__ = ["Config", "simulate", "Result", "SimulationError", "run_to_file", "resume_file",
            "load_file", "RunInterrupted", "OutputExists", "sweep", "load_sweep", "SweepTable",
            "load_preset", "preset_names", "SweepInterrupted", "SweepFailed", "MissingMainGuard",
-           "open_run", "plot", "animate", "laws", "converge", "fit", "fit_table", "observables",
+           "open_run", "plot", "animate", "laws", "observers", "converge", "fit", "fit_table", "observables",
            "Convergence", "FitResult", "FitError", "TableFit", "load_convergence", "plan_run",
            "RunPlan", "plan_sweep", "SweepPlan", "restitution_curve", "compare_laws", "LawComparison",
            "__version__"]

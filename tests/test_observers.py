@@ -103,6 +103,8 @@ def test_sweep_columns_equal_simulate_inline_and_in_a_pool(tmp_path):
         for name in step_observer.COLUMNS:
             assert table[name].tolist() == [a[name] for a in alone], name
     assert inline["observed_steps"].tolist() == inline["steps"].tolist()
+    head = back.report().splitlines()[0].split()      # rodjit info's table shows them
+    assert head[-3:] == list(step_observer.COLUMNS)
 
 
 def test_a_point_with_a_run_file_gives_the_same_columns(tmp_path):

@@ -29,8 +29,8 @@ ROOT = Path(__file__).resolve().parents[2]
 
 # The modules a user imports; each gets an API page.  Modules named in rodjit.__all__ are
 # added automatically (public_modules()).
-PUBLIC_MODULES = ["rodjit", "rodjit.config", "rodjit.laws", "rodjit.analysis",
-                  "rodjit.sweeps", "rodjit.plotting", "rodjit.presets"]
+PUBLIC_MODULES = ["rodjit", "rodjit.config", "rodjit.laws", "rodjit.observers",
+                  "rodjit.analysis", "rodjit.sweeps", "rodjit.plotting", "rodjit.presets"]
 
 INTEGRATOR_MARKER = "<!-- rodjit:integrators -->"
 MEASURED_MARKER = re.compile(r"<!-- rodjit:measured (\S+) -->")

@@ -107,6 +107,16 @@ def register(observer: Observer) -> Observer:
 
     Registering the same ``Observer`` again is a no-op.
 
+    Parameters
+    ----------
+    observer : Observer
+        The observer to register.
+
+    Returns
+    -------
+    Observer
+        ``observer`` itself.
+
     Raises
     ------
     TypeError
@@ -201,8 +211,22 @@ def _adopt(observer: Observer) -> None:
 
 
 def get_observer(name: str) -> Observer:
-    """The observer registered as ``name`` ("" or "none": ``NoObserver``'s); a ValueError
-    naming the registered ones otherwise."""
+    """The observer registered as ``name``.
+
+    Parameters
+    ----------
+    name : str
+        Its name (``output.observer``); "" or "none": ``NoObserver``'s.
+
+    Returns
+    -------
+    Observer
+
+    Raises
+    ------
+    ValueError
+        No observer is registered as ``name`` (the message names the registered ones).
+    """
     got = _BY_NAME.get("none" if name == "" else name)
     if got is None:
         raise ValueError(f"output.observer = {name!r} is not a registered observer; choose "

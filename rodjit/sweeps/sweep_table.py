@@ -319,7 +319,10 @@ class SweepTable:
         str
         """
         keys = list(self.grid.keys)
-        head = ["#"] + keys + list(TABLE_COLUMNS)
+        shown = list(TABLE_COLUMNS)
+        if self.base.output.observer != "none":      # then the observer's columns
+            shown += [c for c in self.columns if c not in keys and c not in SUMMARY_COLUMNS]
+        head = ["#"] + keys + shown
         n = len(self)
         show = list(range(n))
         if max_rows is not None and n > max_rows:
@@ -330,7 +333,7 @@ class SweepTable:
             if i < 0:
                 rows.append(["..."] + [""] * (len(head) - 1))
                 continue
-            rows.append([str(i)] + [_cell(self.columns[c][i], c) for c in keys + list(TABLE_COLUMNS)])
+            rows.append([str(i)] + [_cell(self.columns[c][i], c) for c in keys + shown])
         lines = aligned(head, rows)
         failed = np.flatnonzero(self.columns["status"] == "failed")
         if failed.size:
@@ -367,7 +370,7 @@ def _cell(value, column: str) -> str:
         return "-"
     if column in ("wall_time",):
         return f"{value:.3g}"
-    if column in SUMMARY_COLUMNS:
+    if column in SUMMARY_COLUMNS or "." not in column:    # a swept key has a dot
         return f"{value:.5g}"
     return format_value(value)
 
