@@ -43,14 +43,14 @@ def centre(h, u):
 
 
 @observer_kernel
-def start(p, st, system, t, u, v):
+def start(p, st, system, rod, floor, t, u, v):
     st[PHASE] = 1.0 if u[0] < 0.0 else 0.0
     st[HEIGHT] = math.nan
     st[TIME] = math.nan
 
 
 @observer_kernel
-def step(p, st, system, t0, t1, u0, v0, u1, v1):
+def step(p, st, system, rod, floor, t0, t1, u0, v0, u1, v1):
     phase = st[PHASE]
     if phase == 3.0:
         return

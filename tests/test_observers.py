@@ -42,6 +42,10 @@ def test_the_observer_sees_every_accepted_step(observed_run):
     # below only to the interpolation error
     assert r.observed["top_max"] >= r.u[:, -1].max() - 1e-6
     assert r.observed["top_max"] >= r.u[0, -1]
+    # the floor law reaches the observer: its largest stress at a step's end is at most the
+    # run's, whose bounce extremes are searched inside the steps too, and close to it
+    peak = float(np.max(r.bounces["max_floor_force"]))
+    assert 0.9 * peak < r.observed["floor_max"] <= peak
 
 
 def test_an_observer_changes_no_bit_of_the_run(observed_run):
@@ -104,7 +108,7 @@ def test_sweep_columns_equal_simulate_inline_and_in_a_pool(tmp_path):
             assert table[name].tolist() == [a[name] for a in alone], name
     assert inline["observed_steps"].tolist() == inline["steps"].tolist()
     head = back.report().splitlines()[0].split()      # rodjit info's table shows them
-    assert head[-3:] == list(step_observer.COLUMNS)
+    assert head[-4:] == list(step_observer.COLUMNS)
 
 
 def test_a_point_with_a_run_file_gives_the_same_columns(tmp_path):
@@ -149,11 +153,13 @@ def test_a_function_that_fails_its_dry_run_is_refused_at_register():
 
     with pytest.raises(TypeError, match=r"observer 'bad-values': values fails a dry run on "
                                         r"a rod of 4 segments: IndexError"):
-        register(Observer("bad-values", NamedTuple("BadValues", [("limit", int)]), {"a": "", "b": ""}, 3,
+        register(Observer("bad-values", NamedTuple("BadValues", [("limit", int)]),
+                          {"a": "", "b": ""}, 4,
                           step_observer.start, step_observer.step, step_observer.stop,
                           past_the_end))
     with pytest.raises(TypeError, match="observer 'bad-start': start fails a dry run"):
-        register(Observer("bad-start", NamedTuple("BadStart", [("limit", int)]), {}, 3, no_system,
+        register(Observer("bad-start", NamedTuple("BadStart", [("limit", int)]), {}, 4,
+                          no_system,
                           step_observer.step, step_observer.stop, step_observer.values))
     from rodjit.observers import observer_names
     assert "bad-values" not in observer_names() and "bad-start" not in observer_names()
@@ -166,7 +172,8 @@ def test_a_column_named_as_a_built_in_one_is_refused():
     def values(p, st, out):
         out[0] = 1.0
 
-    register(Observer("clashing", NamedTuple("Clash", [("limit", int)]), {"steps": "a clash"}, 3,
+    register(Observer("clashing", NamedTuple("Clash", [("limit", int)]), {"steps": "a clash"},
+                      4,
                       step_observer.start, step_observer.step, step_observer.stop, values))
     with pytest.raises(ValueError, match="names a column 'steps', which is a built-in"):
         rodjit.sweep(_cfg(**{"output.observer": "clashing"}), {"rod.mu": [100.0]},
@@ -187,8 +194,8 @@ def test_the_command_line_refuses_an_unknown_observer(tmp_path):
 def test_the_gpu_engine_gives_the_same_columns():
     got = simulated_sweeps(
         f"import sys; sys.path.insert(0, {str(HERE)!r}); import step_observer\n"
-        "cfg = rodjit.load_preset('paper-mu100').override({'time.t_end': 0.3, "
+        "cfg = rodjit.load_preset('paper-mu100').override({'time.t_end': 0.6, "
         "'output.observer': 'step-count'})",
-        {"rod.mu": [100.0, 150.0]}, ("observed_steps", "top_max", "t_last", "steps"))
+        {"rod.mu": [100.0, 150.0]}, (*step_observer.COLUMNS, "steps"))
     for name, (gpu, cpu) in got.items():
         assert gpu == cpu, name

@@ -135,7 +135,7 @@ def start(scheme, ctrl, system, rod, floor, obs, arrays):
         open_contact(ev, clock[L.T], w, u[0], r.floor_force, emin, ke - 0.5 * w * w + st + be)
     emit(state, work, system, rod, floor, clock, count, arrays.times, clock[L.T],
          clock[L.DT], count[L.STEP], snap_t, snap_step, snap_u, snap_v, diag, bool(False))
-    observe_start(obs, arrays.observed, system, clock[L.T], u, v)
+    observe_start(obs, arrays.observed, system, rod, floor, clock[L.T], u, v)
     observe_values(obs, arrays.observed)
     count[L.STARTED] = 1
     return OK
@@ -354,7 +354,8 @@ def advance(scheme, ctrl, system, rod, floor, obs, arrays, max_steps):
         swapped = not swapped
         count[L.STEP] += 1
         taken += 1
-        observe_step(obs, observed, system, t_old, t, nxt[0], nxt[1], cur[0], cur[1])
+        observe_step(obs, observed, system, rod, floor, t_old, t, nxt[0], nxt[1],
+                     cur[0], cur[1])
         dtp = C.propose(ctrl, r.dt_suggest, dtp, after_reject)
         after_reject = bool(False)
         if ctrl.gap > 0.0 and not fixed:

@@ -5,13 +5,16 @@ An observer is four compiled functions (``rodjit._jit.kernel``: they must not al
 its parameters ``p`` (a NamedTuple, one class per observer) and its state ``st`` (a float64
 array of ``size`` entries, zero at the start of a run)::
 
-    start(p, st, system, t, u, v)                     # once, at the run's initial state
-    step(p, st, system, t0, t1, u0, v0, u1, v1)       # after each accepted step t0 -> t1
-    stop(p, st) -> bool                               # True: the run ends here (an event)
-    values(p, st, out)                                # its ``columns`` into ``out``
+    start(p, st, system, rod, floor, t, u, v)              # once, at the initial state
+    step(p, st, system, rod, floor, t0, t1, u0, v0, u1, v1)
+                                         # after each accepted step from t0 to t1
+    stop(p, st) -> bool                  # True: the run ends here (an event)
+    values(p, st, out)                   # its ``columns`` into ``out``
 
-``system`` is the rod's ``model.system.RodSystem`` (node spacing ``h``, gravity ``g``, ...);
-``u``, ``v`` are the heights and velocities of the N + 1 nodes.  ``register`` makes it
+``system`` is the rod's ``model.system.RodSystem`` (node spacing ``h``, gravity ``g``, ...),
+``rod`` and ``floor`` the parameters of its stress laws (``rodjit.laws.value(x, floor)`` is
+the floor's stress in compiled code); ``u``, ``v`` are the heights and velocities of the
+N + 1 nodes.  ``register`` makes it
 selectable as ``output.observer``.  The compiled loop calls it inside the time loop
 (``loop.start``, ``loop.advance``: its type is a sixth parameter tuple, so the loop is
 compiled for it and a run without one compiles nothing of it), ``stop`` where the loop
@@ -79,12 +82,12 @@ class NoObserver(NamedTuple):
 
 
 @kernel
-def _no_start(p, st, system, t, u, v):
+def _no_start(p, st, system, rod, floor, t, u, v):
     pass
 
 
 @kernel
-def _no_step(p, st, system, t0, t1, u0, v0, u1, v1):
+def _no_step(p, st, system, rod, floor, t0, t1, u0, v0, u1, v1):
     pass
 
 
@@ -170,6 +173,7 @@ def _dry_run(observer: Observer) -> None:
     check bounds)."""
     import numpy as np
 
+    from ..model.laws import AikiKosugiFloor, AikiKosugiRod
     from ..model.system import RodSystem
 
     kinds = getattr(observer.params, "__annotations__", {})
@@ -180,8 +184,9 @@ def _dry_run(observer: Observer) -> None:
     v = np.zeros(5)
     st = np.zeros(observer.size)
     out = np.zeros(len(observer.columns))
-    calls = (("start", (p, st, system, 0.0, u, v)),
-             ("step", (p, st, system, 0.0, 1e-3, u, v, u + 1e-3, v)),
+    rod, floor = AikiKosugiRod(1000.0), AikiKosugiFloor(1000.0, 0.05)
+    calls = (("start", (p, st, system, rod, floor, 0.0, u, v)),
+             ("step", (p, st, system, rod, floor, 0.0, 1e-3, u, v, u + 1e-3, v)),
              ("stop", (p, st)), ("values", (p, st, out)))
     for part, args in calls:
         try:
@@ -278,14 +283,15 @@ def values_of(params, observed) -> dict:
 
 # Generic entry points: the loop calls these; the overloads pick the observer by the Numba
 # type of its parameters at compile time (as ``model.laws`` does for laws).
-def observe_start(p, st, system, t, u, v):
+def observe_start(p, st, system, rod, floor, t, u, v):
     """The observer's ``start`` (zeroed state ``st``)."""
-    python_function(_BY_TYPE[type(p)].start)(p, st, system, t, u, v)
+    python_function(_BY_TYPE[type(p)].start)(p, st, system, rod, floor, t, u, v)
 
 
-def observe_step(p, st, system, t0, t1, u0, v0, u1, v1):
+def observe_step(p, st, system, rod, floor, t0, t1, u0, v0, u1, v1):
     """The observer's ``step`` after the accepted step from (t0, u0, v0) to (t1, u1, v1)."""
-    python_function(_BY_TYPE[type(p)].step)(p, st, system, t0, t1, u0, v0, u1, v1)
+    python_function(_BY_TYPE[type(p)].step)(p, st, system, rod, floor, t0, t1, u0, v0, u1,
+                                            v1)
 
 
 def observe_stop(p, st):
@@ -307,16 +313,17 @@ def _of(p) -> Observer:
 
 
 @overload(observe_start)
-def _start_ov(p, st, system, t, u, v):
+def _start_ov(p, st, system, rod, floor, t, u, v):
     impl = _of(p).start
-    return lambda p, st, system, t, u, v: impl(p, st, system, t, u, v)
+    return lambda p, st, system, rod, floor, t, u, v: impl(p, st, system, rod, floor, t, u,
+                                                           v)
 
 
 @overload(observe_step)
-def _step_ov(p, st, system, t0, t1, u0, v0, u1, v1):
+def _step_ov(p, st, system, rod, floor, t0, t1, u0, v0, u1, v1):
     impl = _of(p).step
-    return lambda p, st, system, t0, t1, u0, v0, u1, v1: impl(p, st, system, t0, t1, u0, v0,
-                                                               u1, v1)
+    return (lambda p, st, system, rod, floor, t0, t1, u0, v0, u1, v1:
+            impl(p, st, system, rod, floor, t0, t1, u0, v0, u1, v1))
 
 
 @overload(observe_stop)
