@@ -203,8 +203,7 @@ def advance(scheme, ctrl, system, rod, floor, obs, arrays, max_steps):
         if (stop_due(ctrl, count, cur[0], cur[1], work[1], system, rod, floor)
                 or observe_stop(obs, observed)):
             # the run ends here (``time.stop_after_bounces``, ``time.stop_at_rest``, the
-            # observer's ``stop``): its
-            # last rows at t, once the buffers have room for them
+            # observer's ``stop``): its last rows at t, once the buffers have room for them
             if count[L.N_SNAP] >= cap_s or count[L.N_DIAG] >= cap_d:
                 code = L.FULL
                 break
