@@ -31,12 +31,11 @@ rod's state changes fastest).  ``NoObserver``, the default, does nothing.
 """
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass, field
 from typing import Any, Callable, NamedTuple
 
-from .._cache_names import placeholder_getattr
 from .._jit import kernel, overload, python_function
+from . import registered
 
 __all__ = ["Observer", "NoObserver", "register", "get_observer", "observer_names",
            "observer_of", "params_of", "state_size", "columns_of", "observe_start",
@@ -159,7 +158,10 @@ def register(observer: Observer) -> Observer:
             raise ValueError(f"observer {observer.name!r}: column {column!r} must be an "
                              f"identifier")
     _dry_run(observer)
-    _adopt(observer)
+    # named through the cache namespace by an alias that identifies the implementation:
+    # compiled code cached for one observer is never loaded for another of the same name
+    registered.adopt(observer.params, f"observer_{observer.name}",
+                     (observer.start, observer.step, observer.stop, observer.values))
     _BY_TYPE[observer.params] = observer
     _BY_NAME[observer.name] = observer
     return observer
@@ -197,22 +199,6 @@ def _dry_run(observer: Observer) -> None:
         if part == "stop" and not isinstance(got, (bool, np.bool_)):
             raise TypeError(f"observer {observer.name!r}: stop must return a bool, not "
                             f"{type(got).__name__}")
-
-
-def _adopt(observer: Observer) -> None:
-    """Name the parameter class through this module under an alias that identifies the
-    implementation (as ``stepping.registered`` does for integrators): compiled code cached
-    for one observer is never loaded for another of the same name."""
-    h = hashlib.sha1(f"{observer.params.__module__}.{observer.params.__qualname__}".encode())
-    for part in (observer.start, observer.step, observer.stop, observer.values):
-        code = python_function(part).__code__
-        h.update(code.co_code)
-        h.update(repr(code.co_consts).encode())
-        h.update(repr(code.co_names).encode())
-    alias = f"observer_{observer.name.replace('-', '_')}_{h.hexdigest()[:16]}"
-    observer.params.__module__ = __name__
-    observer.params.__qualname__ = alias
-    globals()[alias] = observer.params
 
 
 def get_observer(name: str) -> Observer:
@@ -341,6 +327,3 @@ def _values_ov(p, st):
 
 
 register(Observer("none", NoObserver, {}, 0, _no_start, _no_step, _no_stop, _no_values))
-# the namespace of adopted parameter classes (``_adopt``): an unknown name unpickled from
-# Numba's cache index is a placeholder class, the foreign entry a cache miss
-__getattr__ = placeholder_getattr(__name__, "an unregistered observer")

@@ -1,5 +1,5 @@
 """The namespace through which compiled-code caches name the parameter types of integrators
-registered from outside (``registry.register``).
+and observers registered from outside (``registry.register``, ``observers.register``).
 
 Numba's on-disk cache index pickles the types of every signature it has compiled, so it
 names each scheme's parameter class by module and qualified name.  ``adopt`` moves a
@@ -12,11 +12,12 @@ import hashlib
 
 from .._cache_names import placeholder_getattr
 
-def adopt(params: type, name: str, module) -> str:
-    """Name ``params`` (the parameter class of scheme ``name`` in ``module``) through this
-    namespace; returns its alias there."""
-    h = hashlib.sha1(f"{module.__name__}.{params.__qualname__}".encode())
-    for part in (getattr(module, "initial", None), getattr(module, "step", None)):
+def adopt(params: type, name: str, parts) -> str:
+    """Name ``params`` (the parameter class of the integrator or observer ``name``, whose
+    compiled functions are ``parts``) through this namespace, under an alias made of the
+    name and a digest of the functions' code; returns the alias."""
+    h = hashlib.sha1(f"{params.__module__}.{params.__qualname__}".encode())
+    for part in parts:
         code = getattr(getattr(part, "py_func", part), "__code__", None)
         if code is not None:
             h.update(code.co_code)

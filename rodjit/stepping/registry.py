@@ -191,7 +191,8 @@ def register(scheme: Scheme) -> Scheme:
                          f"{list(SCHEME_STATS)}")
     module, params = load(scheme)      # imports the scheme's module (nothing compiled)
     from . import registered           # how the compiled-code cache names its type
-    registered.adopt(params, scheme.name, module)
+    registered.adopt(params, scheme.name,
+                     (getattr(module, "initial", None), getattr(module, "step", None)))
     SCHEMES = SCHEMES + (scheme,)
     NAMES = NAMES + (scheme.name,)
     return scheme
