@@ -254,11 +254,9 @@ def state_size(params) -> int:
     return ob.size + len(ob.columns)
 
 
-def columns_of(config_or_params) -> dict:
-    """The observer's columns (name -> description) of a ``Config`` or of parameters."""
-    if hasattr(config_or_params, "output"):
-        return dict(get_observer(config_or_params.output.observer).columns)
-    return dict(observer_of(config_or_params).columns)
+def columns_of(config) -> dict:
+    """The columns (name -> description) of the observer of a run's ``Config``."""
+    return dict(get_observer(config.output.observer).columns)
 
 
 def values_of(params, observed) -> dict:
