@@ -95,12 +95,15 @@ def test_sweep_matches_golden(tmp_path):
 
 
 def test_golden_comparison_detects_a_change(tmp_path):
-    """The comparison is not vacuous: one bit of one value changed is caught."""
+    """The comparison is not vacuous: one bit of one value changed is caught on the CPU
+    that wrote the golden; elsewhere (rounding tolerated) a change beyond rounding."""
     path = tmp_path / "verlet_mu0.h5"
     make_golden.write_run("verlet_mu0", path)
     data = make_golden.extract(path)
     u = data["snapshots/u"].copy()
-    u[3, 2] = np.nextafter(u[3, 2], np.inf)
+    with np.load(GOLDEN / "verlet_mu0.npz") as gold:
+        exact = str(gold["machine"]) == make_golden.machine()
+    u[3, 2] = np.nextafter(u[3, 2], np.inf) if exact else u[3, 2] + 1e-6 * np.abs(u).max()
     data["snapshots/u"] = u
     with pytest.raises(AssertionError, match="snapshots/u"):
         _compare(data, GOLDEN / "verlet_mu0.npz")

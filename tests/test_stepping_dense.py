@@ -59,7 +59,7 @@ def _simulate(cfg):
 def _one_step(integrator, h, thetas, **over):
     """One step of length h from the initial state, then the dense output at each θ:
     (old (u, v), new (u, v), [interpolated (u, v)], [dissipated to θ], step's dissipated)."""
-    run = Run(_cfg(integrator, **FLIGHT, **over))
+    run = Run(_cfg(integrator, **{**FLIGHT, **over}))
     run.start(MemorySink())
     scheme, _, system, rod, floor, _ = run._args()
     s = run.arrays.state
@@ -77,7 +77,8 @@ def _one_step(integrator, h, thetas, **over):
         mod.dense(scheme, s[0], s[1], s[2], new[0], new[1], new[2], run.arrays.work, h, theta,
                   y[0], y[1])
         out.append(y)
-        diss.append(mod.dense_dissipated(scheme, system, s[1], new[1], run.arrays.work, h, theta))
+        diss.append(mod.dense_dissipated(scheme, system, floor, s[0], s[1], new[0], new[1],
+                                         run.arrays.work, h, theta))
     return s[:2].copy(), new[:2], out, diss, r.dissipated
 
 
@@ -479,3 +480,18 @@ def test_snapshots_inside_a_step_that_ends_across_the_switch_keep_the_steps_accu
            for k, r in got.items()}
     assert err[False] < 1e-4
     assert err[True] < 2 * err[False]
+
+
+@pytest.mark.parametrize("integrator", sorted(DENSE))
+def test_the_dissipated_extension_takes_the_floors_damping(integrator):
+    """In contact with the floor's damping and no viscosity, the extension of the
+    dissipated energy is the floor's alone: 0 at θ = 0, the step's own increment at θ = 1,
+    growing in between (the step is short next to the contact)."""
+    over = {"rod.mu": 0.0, "floor.damping": 0.3, "initial.height": -0.005,
+            "initial.velocity": -3.0}
+    h = 1e-5
+    thetas = (0.0, 0.25, 0.5, 0.75, 1.0)
+    _, _, _, diss, step_diss = _one_step(integrator, h, thetas, **over)
+    assert diss[0] == 0.0 and step_diss > 0.0
+    assert abs(diss[-1] - step_diss) < 1e-13 * step_diss
+    assert np.all(np.diff(diss) > 0), diss

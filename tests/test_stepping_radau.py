@@ -101,11 +101,13 @@ def _dense_jacobian(u, v, system, rod, floor):
     return J
 
 
-@pytest.mark.parametrize("gamma", [0.0, 1e-3])
-def test_transformed_solves_invert_lambda_minus_the_jacobian(gamma):
+@pytest.mark.parametrize("gamma, damping", [(0.0, 0.0), (1e-3, 0.0), (0.0, 0.3)])
+def test_transformed_solves_invert_lambda_minus_the_jacobian(gamma, damping):
     """The banded real and complex solves give (λI − J)⁻¹r for J from central differences
-    of the NumPy reference right-hand side (in contact, viscous, with and without bending)."""
+    of the NumPy reference right-hand side (in contact, viscous, with and without bending,
+    with the floor's damping: its derivatives in u₀ and v₀)."""
     cfg = _cfg("radau5", {"rod.N": 7, "rod.mu": 0.7, "rod.gamma": gamma,
+                          "floor.damping": damping,
                           "initial.height": -0.01, "initial.velocity": -0.5,
                           "initial.strain": 0.05})
     run = Run(cfg)
@@ -117,7 +119,7 @@ def test_transformed_solves_invert_lambda_minus_the_jacobian(gamma):
     n1 = u.size
     work = np.zeros((radau.WORK_ROWS, n1))
     dt = 3e-3
-    qb = radau.hessian_diagonal(system, rod, floor, u, work[radau.FP])
+    qb = radau.hessian_diagonal(system, rod, floor, u, v, work[radau.FP])
     rng = np.random.default_rng(1)
     lr = radau.MU_REAL / dt
     radau.real_matrix(system, work, lr, qb)

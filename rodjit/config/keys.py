@@ -272,6 +272,10 @@ FIELDS: dict[str, dict[str, KeySpec]] = {
                                 "warns)"),
         "law": KeySpec("str", "a registered floor law",
                        meaning="stress law sigma_b of the floor"),
+        "damping": KeySpec("float", ">= 0 (0: none)", _nonneg, unit="s m-1",
+                           meaning="Hunt-Crossley damping alpha of the floor: its force is "
+                                   "sigma_b(u_0) max(0, 1 - alpha v_0), alpha times the "
+                                   "penetration rate"),
     },
     "gravity": {
         "g": KeySpec("float", "finite, signed along +u (negative pulls down)",

@@ -81,14 +81,15 @@ class RodConfig(Section):
 @_documented
 @dataclass(frozen=True)
 class FloorConfig(Section):
-    """The floor: stiffness κ_b, bending limit β and its stress law
-    (``rodjit.laws.law_names("floor")``)."""
+    """The floor: stiffness κ_b, bending limit β, its stress law
+    (``rodjit.laws.law_names("floor")``) and its Hunt–Crossley damping α (0: none)."""
 
     SECTION: ClassVar[str] = "floor"
 
     kappa_b: float = 1000.0
     beta: float = 0.05
     law: str = "aiki-kosugi"
+    damping: float = 0.0
 
 
 @_documented

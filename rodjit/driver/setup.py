@@ -235,10 +235,11 @@ def _body(config, rod_t) -> tuple:
     """``(system, rod law, floor law, law tokens)`` of ``config``."""
     rod_law, floor_law = get_law("rod", config.rod.law), get_law("floor", config.floor.law)
     laws = (_identity(rod_law), _identity(floor_law))
-    system = _get("system", (rod_t, _token(config.gravity)), rod_system, config.rod,
-                  config.gravity)
+    floor_t = _token(config.floor)
+    system = _get("system", (rod_t, _token(config.gravity), floor_t), rod_system, config.rod,
+                  config.gravity, config.floor)
     rod = _get("rod", (rod_t, laws[0]), law_params, "rod", config.rod)
-    floor = _get("floor", (_token(config.floor), laws[1]), law_params, "floor", config.floor)
+    floor = _get("floor", (floor_t, laws[1]), law_params, "floor", config.floor)
     return system, rod, floor, laws
 
 

@@ -14,7 +14,7 @@ from .system import masses
 
 __all__ = ["rod_stress", "rod_energy_density", "floor_stress", "floor_energy",
            "forces", "acceleration", "energies", "rhs", "discrete_gradient",
-           "discrete_gradient_residual"]
+           "discrete_gradient_residual", "damping_factor"]
 
 
 def rod_stress(eps, rod):
@@ -69,8 +69,14 @@ def forces(u, v, system, rod, floor):
         F[:-1] += system.mu * dv
         F[1:] -= system.mu * dv
     F += m * system.g
-    F[0] += floor_stress(u[0], floor)
+    F[0] += floor_stress(u[0], floor) * damping_factor(v[0], system)
     return F
+
+
+def damping_factor(v0, system):
+    """The Hunt–Crossley factor max(0, 1 + α·(−v₀)) of the floor force (MODEL.md §1): α
+    times the penetration rate −v₀, held at 0 so the floor never pulls."""
+    return max(0.0, 1.0 - system.alpha * v0)
 
 
 def acceleration(u, v, system, rod, floor):
@@ -98,7 +104,10 @@ def energies(u, v, system, rod, floor):
         "energy_gravity": -system.g * np.sum(m * u),
     }
     out["energy_total"] = sum(out.values())
-    out["dissipation_rate"] = system.mu * np.sum(h * (np.diff(v) / h) ** 2)  # 2R(v)
+    # 2R(v) and the power of the floor's damping, σ_b (1 − factor) v₀
+    out["dissipation_rate"] = (system.mu * np.sum(h * (np.diff(v) / h) ** 2)
+                               + floor_stress(u[0], floor)
+                               * (1.0 - damping_factor(v[0], system)) * v[0])
     out["u_bottom"] = u[0]
     out["floor_force"] = floor_stress(u[0], floor)
     out["min_strain"] = eps.min()
@@ -144,7 +153,8 @@ def discrete_gradient(u1, u2, system, rod, floor):
 
 def discrete_gradient_residual(u1, v1, u2, v2, dt, system, rod, floor):
     """Residuals of the energy-conserving step: (u2 − u1 − dt v̄, M(v2 − v1) + dt ∇̄V +
-    dt μ K v̄) with v̄ = (v1 + v2)/2 and μKv̄ the gradient of the dissipation R."""
+    dt μ K v̄ − dt F_d e₀) with v̄ = (v1 + v2)/2, μKv̄ the gradient of the dissipation R and
+    F_d the floor's damping on the floor's quotient at v̄₀."""
     vb = (v1 + v2) / 2
     visc = np.zeros_like(vb)
     if system.mu:
@@ -153,4 +163,10 @@ def discrete_gradient_residual(u1, v1, u2, v2, dt, system, rod, floor):
         visc[1:] += system.mu * dv
     r_u = u2 - u1 - dt * vb
     r_v = masses(system.n) * (v2 - v1) + dt * discrete_gradient(u1, u2, system, rod, floor) + dt * visc
+    if system.alpha:
+        # the floor's damping on the quotient q_b of the floor's gradient: −q_b (φ(v̄₀) − 1)
+        fl = np.vectorize(lambda x: floor_energy(float(x), floor))
+        fs = np.vectorize(lambda x: floor_stress(float(x), floor))
+        qb = _quotient(fl, fs, [u1[0]], [u2[0]])[0]
+        r_v[0] -= dt * qb * (damping_factor(vb[0], system) - 1.0)
     return r_u, r_v

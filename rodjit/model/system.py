@@ -20,18 +20,22 @@ class RodSystem(NamedTuple):
     gamma: float    # beam regularisation
     mu: float       # viscosity
     g: float        # signed gravity along +u
+    alpha: float = 0.0   # Hunt–Crossley floor damping α [s/m] (MODEL.md §1): 0 is none
 
 
 def build_system(config):
     """``(RodSystem, rod law params, floor law params)`` for a Config."""
-    return (rod_system(config.rod, config.gravity), law_params("rod", config.rod),
-            law_params("floor", config.floor))
+    return (rod_system(config.rod, config.gravity, config.floor),
+            law_params("rod", config.rod), law_params("floor", config.floor))
 
 
-def rod_system(rod, gravity) -> RodSystem:
-    """The RodSystem of a configuration's ``rod`` and ``gravity`` sections."""
+def rod_system(rod, gravity, floor=None) -> RodSystem:
+    """The RodSystem of a configuration's ``rod``, ``gravity`` and ``floor`` sections (the
+    floor's damping α; none without ``floor``)."""
     n = rod.N
-    return RodSystem(int(n), 1.0 / n, float(rod.gamma), float(rod.mu), float(gravity.g))
+    alpha = 0.0 if floor is None else float(floor.damping)
+    return RodSystem(int(n), 1.0 / n, float(rod.gamma), float(rod.mu), float(gravity.g),
+                     alpha)
 
 
 def law_params(kind: str, section):

@@ -45,9 +45,11 @@ COLUMN_MEANINGS: dict[str, dict[str, Meaning]] = {
         "energy_floor": Meaning("elastic energy stored in the floor", "J"),
         "energy_gravity": Meaning("gravitational potential energy", "J"),
         "energy_total": Meaning("total discrete energy", "J"),
-        "dissipated": Meaning("energy dissipated by viscosity since the start", "J"),
+        "dissipated": Meaning("energy dissipated (viscosity, floor damping) since the start",
+                              "J"),
         "u_bottom": Meaning("height of the bottom end u_0", "m"),
-        "floor_force": Meaning("upward floor force sigma_b(u_0)", "N"),
+        "floor_force": Meaning("elastic upward floor force sigma_b(u_0) (floor.damping "
+                               "not included)", "N"),
         "min_strain": Meaning("smallest segment strain", "1"),
         "cm_height": Meaning("height of the centre of mass", "m"),
         "cm_velocity": Meaning("velocity of the centre of mass", "m s-1"),
@@ -64,7 +66,7 @@ COLUMN_MEANINGS: dict[str, dict[str, Meaning]] = {
         "w_release": Meaning("centre-of-mass velocity at release", "m s-1"),
         "restitution": Meaning("coefficient of restitution -w_release/w_impact", "1"),
         "min_u0": Meaning("lowest bottom height during the bounce", "m"),
-        "max_floor_force": Meaning("largest floor force during the bounce", "N"),
+        "max_floor_force": Meaning("largest elastic floor force during the bounce", "N"),
         "min_strain": Meaning("smallest segment strain during the bounce", "1"),
         "energy_vibration_impact": Meaning("vibration energy about the centre of mass at "
                                            "impact", "J"),
@@ -98,7 +100,7 @@ COLUMN_MEANINGS["summary"] = {
     "restitution_energy_mean": Meaning("mean energy restitution over the bounces not "
                                        "marked ambiguous", "1"),
     "min_u0": Meaning("lowest bottom height u_0", "m"),
-    "max_floor_force": Meaning("largest floor force sigma_b(u_0)", "N"),
+    "max_floor_force": Meaning("largest elastic floor force sigma_b(u_0)", "N"),
     "min_strain": Meaning("smallest segment strain", "1"),
     "energy_error": Meaning("relative energy error", "1"),
     "steps": Meaning("accepted steps", "1"),

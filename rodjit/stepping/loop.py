@@ -363,8 +363,8 @@ def advance(scheme, ctrl, system, rod, floor, obs, arrays, max_steps):
         emin_cur = emin
         if interpolate:
             if inside:
-                emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, clock, count,
-                           times, t_old, dt, t, diss_old, dtp, count[L.STEP], snap_t,
+                emit_dense(scheme, nxt, cur, work, interp, system, rod, floor, tfloor, clock,
+                           count, times, t_old, dt, t, diss_old, dtp, count[L.STEP], snap_t,
                            snap_step, snap_u, snap_v, diag)
             clock[L.DISSIPATED] = diss
             # an output time at the step's end: its own state (at the grid's time unless

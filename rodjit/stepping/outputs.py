@@ -154,12 +154,13 @@ def dense_target(ctrl, fixed, clock, count, times, t, dtp):
 
 
 @step_kernel
-def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, times,
-                     t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
-                     snap_v, diag):
+def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, tfloor, clock, count,
+                     times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step,
+                     snap_u, snap_v, diag):
     """The rows of every output time in (t, t_new − tol) of the step of length dt from the
     state ``old`` to ``new``, by the scheme's dense output into ``interp`` (module
-    docstring); ``dense_setup`` has run for the step."""
+    docstring); ``dense_setup`` has run for the step, which took the floor law
+    ``tfloor``."""
     tol = clock[L.TOL]
     while True:
         ts = grid_time(clock, count, times, L.K_SNAP, L.SNAP_DT, int(0))
@@ -175,28 +176,29 @@ def _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, 
                           snap_u, snap_v)
             count[L.K_SNAP] += 1
         if td == tau:
-            diss = diss_old + dense_dissipated(scheme, system, old[1], new[1], work, dt, theta)
+            diss = diss_old + dense_dissipated(scheme, system, tfloor, old[0], old[1], new[0],
+                                               new[1], work, dt, theta)
             _diag_row(interp[0], interp[1], work, system, rod, floor, count, tau, dt_prop,
                       diss, diag)
             count[L.K_DIAG] += 1
 
 
-def emit_dense(scheme, old, new, work, interp, system, rod, floor, clock, count, times, t,
-               dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u, snap_v,
-               diag):
+def emit_dense(scheme, old, new, work, interp, system, rod, floor, tfloor, clock, count,
+               times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
+               snap_v, diag):
     """``_emit_dense_rows`` for a scheme with a dense output; compiled for one without, a
     no-op, so its loop does not compile the interpolation it never runs."""
-    _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, clock, count, times,
-                     t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
-                     snap_v, diag)
+    _emit_dense_rows(scheme, old, new, work, interp, system, rod, floor, tfloor, clock, count,
+                     times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step,
+                     snap_u, snap_v, diag)
 
 
 @overload(emit_dense)
-def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, clock, count, times,
-                   t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
-                   snap_v, diag):
+def _emit_dense_ov(scheme, old, new, work, interp, system, rod, floor, tfloor, clock, count,
+                   times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step,
+                   snap_u, snap_v, diag):
     if not has_dense_type(scheme):
-        return (lambda scheme, old, new, work, interp, system, rod, floor, clock, count,
-                times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step, snap_u,
-                snap_v, diag: None)
+        return (lambda scheme, old, new, work, interp, system, rod, floor, tfloor, clock,
+                count, times, t, dt, t_new, diss_old, dt_prop, step_no, snap_t, snap_step,
+                snap_u, snap_v, diag: None)
     return emit_dense

@@ -15,8 +15,9 @@ length dt from (u, v, a) to (u2, v2, a2) that it has just taken,
       accepts it (OK, or a failure code that makes the loop retry the step shorter)
   ``dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)``: (u, v) at t + θ dt,
       0 < θ ≤ 1, into the caller's rows ``uo``, ``vo``, for each output time of the step
-  ``dense_dissipated(scheme, system, v, v2, work, dt, theta)`` -> the viscous energy
-      dissipated from t to t + θ dt, consistent with the step's own increment at θ = 1
+  ``dense_dissipated(scheme, system, floor, u, v, u2, v2, work, dt, theta)`` -> the energy
+      dissipated (viscosity and the floor's damping, ``floor`` the law the step took)
+      from t to t + θ dt, consistent with the step's own increment at θ = 1
 (all may use only ``work`` rows the step leaves alone).  For a scheme without one the loop
 never calls them (``control.build`` turns interpolation off); they compile to a failure
 code and NaN rows, so a call by mistake cannot pass unnoticed.
@@ -121,17 +122,18 @@ def _dense_ov(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
         scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo)
 
 
-def dense_dissipated(scheme, system, v, v2, work, dt, theta):
-    return _module(type(scheme)).dense_dissipated(scheme, system, v, v2, work, dt, theta)
+def dense_dissipated(scheme, system, floor, u, v, u2, v2, work, dt, theta):
+    return _module(type(scheme)).dense_dissipated(scheme, system, floor, u, v, u2, v2, work,
+                                                  dt, theta)
 
 
 @overload(dense_dissipated)
-def _dense_dissipated_ov(scheme, system, v, v2, work, dt, theta):
+def _dense_dissipated_ov(scheme, system, floor, u, v, u2, v2, work, dt, theta):
     if not has_dense_type(scheme):
-        return lambda scheme, system, v, v2, work, dt, theta: np.nan
+        return lambda scheme, system, floor, u, v, u2, v2, work, dt, theta: np.nan
     impl = _module_for(scheme).dense_dissipated
-    return lambda scheme, system, v, v2, work, dt, theta: impl(
-        scheme, system, v, v2, work, dt, theta)
+    return lambda scheme, system, floor, u, v, u2, v2, work, dt, theta: impl(
+        scheme, system, floor, u, v, u2, v2, work, dt, theta)
 
 
 def has_dense(scheme) -> bool:

@@ -1,7 +1,8 @@
-"""Viscous sub-steps v' = −μ M⁻¹K v (K: the discrete −∂²/∂x² of R(v) = μ/2 vᵀKv).
+"""Viscous sub-steps v' = −μ M⁻¹K v (K: the discrete −∂²/∂x² of R(v) = μ/2 vᵀKv), and the
+floor's damping sub-step m₀v₀' = F_d (``rates.floor_damping``) at fixed heights.
 
-Both conserve momentum (K annihilates constants) and return the kinetic energy they
-remove, computed as −Σ m (v₁−v₀)(v₁+v₀)/2 (no cancellation when it is small).
+The viscous ones conserve momentum (K annihilates constants); all return the kinetic energy
+they remove, computed as −Σ m (v₁−v₀)(v₁+v₀)/2 (no cancellation when it is small).
 """
 import math
 
@@ -102,3 +103,34 @@ def viscous_sdirk2(vin, vout, tau, system, work):
         rhs[i] = m * (v0[i] + r * (vout[i] - v0[i]))
     tridiag_solve(off, work[W.VCP], work[W.VINV], rhs, vout)       # stage 2 = result
     return _kinetic_drop(v0, vout, h, n)
+
+
+@step_kernel
+def floor_damping_flow(system, fl, v, tau):
+    """v₀ after τ of m₀ v₀' = −σ_b·min(1, α v₀) with the heights held (σ_b = ``fl``, the
+    elastic floor stress at them), solved exactly: at c = σ_b/m₀ a constant deceleration
+    −c while α v₀ > 1 (the force held at 0), then v₀ ∝ exp(−cα t).  Unconditionally
+    stable, however stiff c·α·τ.  Returns the kinetic energy it removes (≥ 0: |v₀|
+    decreases, or v₀ > 1/α falls toward 1/α)."""
+    if not (system.alpha > 0.0 and fl > 0.0):
+        return 0.0
+    n = system.n
+    h = system.h
+    a = system.alpha
+    m = node_mass(0, n, h)
+    c = fl / m
+    w0 = v[0]
+    w = w0
+    t = tau
+    if a * w > 1.0:
+        t1 = (w - 1.0 / a) / c          # when α v₀ reaches 1
+        if t <= t1:
+            w -= c * t
+            t = 0.0
+        else:
+            w = 1.0 / a
+            t -= t1
+    if t > 0.0:
+        w *= math.exp(-c * a * t)
+    v[0] = w
+    return max(0.5 * m * (w0 - w) * (w0 + w), 0.0)

@@ -15,4 +15,5 @@ BDINV = 12
 BY = 13      #   u + dt/4 v
 BVK = 14     #   incoming velocity
 MEMO = 15    # [0]: the c whose viscous factorisation VCP, VINV hold (0: none)
-WORK_ROWS = 16
+VF = 16      # the incoming velocity after the floor's damping sub-step
+WORK_ROWS = 17

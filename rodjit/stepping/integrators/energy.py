@@ -3,16 +3,17 @@
 The step from (uⁿ, vⁿ) solves, on the semi-discrete system of MODEL.md §2,
 
     uⁿ⁺¹ − uⁿ = dt v̄,   v̄ = (vⁿ + vⁿ⁺¹)/2,
-    M(vⁿ⁺¹ − vⁿ) = −dt ∇̄V(uⁿ, uⁿ⁺¹) − dt μ K v̄,
+    M(vⁿ⁺¹ − vⁿ) = −dt ∇̄V(uⁿ, uⁿ⁺¹) − dt μ K v̄ + dt F̄_d e₀,
 
 with K = DᵀD/h (R(v) = μ/2 vᵀKv) and the discrete gradient ∇̄V: per segment the quotient
 q_i = (f̂(εⁿ⁺¹) − f̂(εⁿ))/(εⁿ⁺¹ − εⁿ) (force +q_i on node i, −q_i on node i+1), at node 0
 the quotient of σ̂_b, and the exact midpoint values γB(uⁿ + uⁿ⁺¹)/2 and −g m of the quadratic
 bending and linear gravity energies.  Since (uⁿ⁺¹ − uⁿ)·∇̄V = V(uⁿ⁺¹) − V(uⁿ),
 
-    Eⁿ⁺¹ − Eⁿ = −dt μ Σ h ((v̄_{i+1} − v̄_i)/h)²                              (exactly),
+    Eⁿ⁺¹ − Eⁿ = −dt μ Σ h ((v̄_{i+1} − v̄_i)/h)² + dt F̄_d v̄₀                 (exactly),
 
-which is the dissipation this step reports.  The barriers f̂ → ∞, −σ̂_b → ∞ then keep every
+which is the dissipation this step reports; F̄_d = −q_b·min(1, α v̄₀) is the floor's damping
+(MODEL.md §1) on the floor's quotient q_b at the mean velocity, 0 at α = 0.  The barriers f̂ → ∞, −σ̂_b → ∞ then keep every
 solution admissible, whatever dt.
 
 Solve: with the unknown increment d = uⁿ⁺¹ − uⁿ and vⁿ⁺¹ = 2d/dt − vⁿ, the step is the root of
@@ -53,7 +54,7 @@ from ...kernels.discrete_gradient import difference
 from ...kernels.forces import (BAD_FLOOR, BAD_STRAIN, INACCURATE, NO_CONVERGENCE, NON_FINITE,
                                OK, add_beam_term, assemble)
 from ...kernels.mass import inv_node_mass as _inv_mass, node_mass as _mass
-from ...kernels.rates import add_viscous, jerk
+from ...kernels.rates import add_floor_damping, add_viscous, jerk
 from ...model.laws import lower
 from ..control import (height_scale, per_unit_step, taylor_start, unit_step_factor,
                        velocity_scale)
@@ -214,6 +215,18 @@ def _evaluate(system, rod, floor, u, v, d, u2, dt, work, jac):
             if jac:
                 ji -= c2 * qbp
                 si += c2 * abs(qb)
+            if system.alpha > 0.0:
+                # the floor's damping at the mean velocity v̄₀ = d₀/dt: the force term
+                # −q_b·min(1, α v̄₀) (``rates.floor_damping`` with σ_b → q_b); with the
+                # elastic term −q_b' φ + q_b α/dt [α v̄₀ < 1] ≥ 0 on the diagonal
+                av = system.alpha * (d[0] / dt)
+                fd = -qb * min(1.0, av)
+                ri -= c2 * fd
+                if jac:
+                    ji += c2 * qbp * min(1.0, av)
+                    if av < 1.0:
+                        ji += c2 * qb * (system.alpha / dt)
+                    si += c2 * abs(fd)
         r[i] = ri
         if jac:
             j0[i] = ji
@@ -392,6 +405,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     # which was at this state (``full_accel`` without evaluating the laws again)
     assemble(u2, a2, work[S], work[K], fl, system, bool(True))
     add_viscous(system, v2, a2)
+    add_floor_damping(system, fl, v2, a2)
     # error estimate (module docstring), momentum, dissipation μ dt Σ h ((v̄_{i+1} − v̄_i)/h)²;
     # max(|eu|/su, |ev|/sv) as max(|eu| sv, |ev| su)/(su sv): one division per node
     err = 0.0
@@ -414,6 +428,11 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             dv = 0.5 * ((v[i + 1] + v2[i + 1]) - (v[i] + v2[i]))
             diss += dv * dv
         diss *= dt * system.mu * ih
+    if system.alpha > 0.0:
+        # the floor's damping: −dt F_d v̄₀ = q_b·min(1, α v̄₀)·d₀ with v̄₀ = d₀/dt, the
+        # force of the step's residual, so the balance stays exact
+        qb = difference(u[0], u2[0], floor)[0]
+        diss += qb * min(1.0, system.alpha * (d[0] / dt)) * d[0]
     if not math.isfinite(err):
         return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
     fac = unit_step_factor(err)

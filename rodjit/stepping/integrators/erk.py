@@ -15,10 +15,11 @@ next step reuses it; a resumed run reads it from the checkpointed state (``a`` r
 Error norm: the one norm of every integrator (``control.height_scale``,
 ``velocity_scale``), the largest over the 2(N+1) components of u and v of the error divided
 by atol + rtol·max(|yⁿ|, |yⁿ⁺¹|) (velocities: atol·``control.VELOCITY_SCALE``); for dop853
-Hairer's combined 5th/3rd-order estimate err₅²/√(err₅² + 0.01 err₃²), each in that norm.  ≤ 1 accepts; > 1 returns INACCURATE and the loop
-retries at ``dt_suggest``.  The next step is dt·0.9·err^(−1/(q+1)), at least 0.2 dt (q = 4
-for dp54, 7 for dop853); how much it may exceed the previous proposal is the loop's rule
-(``control.PAIR_GROWTH``: 10× for dp54, 6× for dop853, none right after a rejection).  Under fixed steps (``time.dt``) the loop accepts every valid step.
+Hairer's combined 5th/3rd-order estimate err₅²/√(err₅² + 0.01 err₃²), each in that norm.
+≤ 1 accepts; > 1 returns INACCURATE and the loop retries at ``dt_suggest``.  The next step
+is dt·0.9·err^(−1/(q+1)), at least 0.2 dt (q = 4 for dp54, 7 for dop853); how much it may
+exceed the previous proposal is the loop's rule (``control.PAIR_GROWTH``: 10× for dp54, 6×
+for dop853, none right after a rejection).  Fixed steps (``time.dt``) are all accepted.
 
 Admissibility: every stage state is checked (ε > −1, u_0 > −β, finite); a stage outside
 returns its failure code and the loop retries a quarter of the step.  The floor force has
@@ -46,7 +47,8 @@ rounding seeded in that mode would grow each step; the next step is therefore ca
 
 The energy is not conserved exactly: at μ = 0 it drifts by an amount that follows the
 tolerance (tests/test_stepping_erk.py).  The dissipated energy is the pair's quadrature
-of ∫2R(v) dt over the stages (weights b_j), consistent to the pair's order.
+(weights b_j) of the dissipation rate D over the stages (``rates.total_dissipation_rate``:
+2R(v) and the floor's damping), consistent to the pair's order.
 
 Dense output (``dense_setup``, ``dense``): after an accepted step from yⁿ at t to yⁿ⁺¹ at
 t + dt, the pair's continuous extension gives y(t + θ dt), 0 ≤ θ ≤ 1, in Hairer's form
@@ -68,12 +70,11 @@ y' = λy (``dense_amplification``): near the edge of the step's region dop853's 
 about 15 at interior θ (z ≈ −6, and ±5.9i; uncapped, rows of the paper's runs at
 rtol = atol = 1e-2 had 10⁴ times the initial energy), dp54's about 1.07 at −3.3.  The
 caps of the next step (``STABILITY_CAP``, ``VISCOUS_CAP``) keep z where neither the step
-nor its extension grows a mode by more than ``DENSE_GROWTH``.  The dissipated
-energy D, D' = 2R(v), is the same extension of the step's quadrature
-(``dense_dissipated``: the pair applied to the quadrature component, k_j = 2R of stage j's
-velocity), so E + D at an interpolated row keeps the balance to the extension's order, and
-D(1) is the step's own increment.  The extension's code is written for any pair in
-``DENSE`` (extra stages, up to ``DENSE_TERMS_MAX`` terms R_m).
+nor its extension grows a mode by more than ``DENSE_GROWTH``.  The dissipated energy is
+the same extension of the step's quadrature (``dense_dissipated``: k_j = D at stage j), so
+E + dissipated at an interpolated row keeps the balance to the extension's order, and θ = 1
+gives the step's own increment.  The extension's code is written for any pair in ``DENSE``
+(extra stages, up to ``DENSE_TERMS_MAX`` terms R_m).
 """
 from __future__ import annotations
 
@@ -83,7 +84,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels.forces import INACCURATE, NON_FINITE, OK, momentum
-from ...kernels.rates import dissipation_rate, full_accel
+from ...kernels.rates import full_accel, total_dissipation_rate
 from ..control import height_scale, velocity_scale
 from ..step_result import StepResult
 from . import erk_tableau as T
@@ -278,9 +279,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     A, B, E, E3, combined, q = tableau(scheme)
     ns = B.size
     n1 = u.size
-    diss = 0.0
-    if system.mu > 0.0:
-        diss = B[0] * dissipation_rate(system, v)
+    diss = B[0] * total_dissipation_rate(system, floor, v, u[0])
     # stages 1 … ns−1; the stage height goes into u2 (scratch until the new point)
     for j in range(1, ns):
         rv, ra = stage_rows(j)
@@ -300,8 +299,8 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                                               work[K], bool(False))
         if status != OK:
             return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
-        if system.mu > 0.0 and B[j] != 0.0:
-            diss += B[j] * dissipation_rate(system, vj)
+        if B[j] != 0.0:
+            diss += B[j] * total_dissipation_rate(system, floor, vj, u2[0])
     # the new point
     for i in range(n1):
         du = B[0] * v[i]
@@ -438,18 +437,30 @@ def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
 
 
 @step_kernel
-def dense_dissipated(scheme, system, v, v2, work, dt, theta):
-    """The viscous energy dissipated from the step's start to t + θ dt: the continuous
-    extension of the step's quadrature Σ b_j 2R(v_j) dt (module docstring); 0 at μ = 0.
-    Needs the stages and ``dense_setup``'s extra stages in ``work``."""
-    if not system.mu > 0.0:
+def _stage_bottom(A, AX, v, v2, work, ns, j):
+    """Σ_l a_jl k_l at node 0 of stage j's height rates (A's row, or AX's for an extra
+    stage; index ``ns``: the new point)."""
+    coef = A[j] if j < ns else AX[j - ns - 1]
+    s = coef[0] * v[0]
+    for l in range(1, coef.size):
+        if coef[l] != 0.0:
+            s += coef[l] * (v2[0] if l == ns else work[2 * l, 0])
+    return s
+
+
+@step_kernel
+def dense_dissipated(scheme, system, floor, u, v, u2, v2, work, dt, theta):
+    """The energy dissipated from the step's start to t + θ dt, the continuous extension of
+    the step's quadrature Σ b_j D_j dt (module docstring); 0 at μ = α = 0.  Needs the
+    stages and ``dense_setup``'s extra stages in ``work``; ``floor``: the step's law."""
+    if not (system.mu > 0.0 or system.alpha > 0.0):
         return 0.0
     A, B, _, _, _, _ = tableau(scheme)
-    _, D = dense_tableau(scheme)
+    AX, D = dense_tableau(scheme)
     ns = A.shape[0]
     nt = D.shape[0]
-    r0 = dissipation_rate(system, v)
-    r1 = dissipation_rate(system, v2)
+    r0 = total_dissipation_rate(system, floor, v, u[0])
+    r1 = total_dissipation_rate(system, floor, v2, u2[0])
     total = 0.0          # Σ b_j r_j
     t5 = 0.0             # Σ d_mj r_j, m = 5 … 8 (DENSE_TERMS_MAX)
     t6 = 0.0
@@ -462,7 +473,8 @@ def dense_dissipated(scheme, system, v, v2, work, dt, theta):
             used = used or D[k, j] != 0.0
         if not used:
             continue
-        r = r0 if j == 0 else r1 if j == ns else dissipation_rate(system, work[2 * j])
+        r = r0 if j == 0 else r1 if j == ns else total_dissipation_rate(
+            system, floor, work[2 * j], u[0] + dt * _stage_bottom(A, AX, v, v2, work, ns, j))
         total += bj * r
         t5 += D[0, j] * r
         if nt > 1:

@@ -5,7 +5,10 @@ A step is the symmetric composition
     V(dt/2) ∘ K(dt/2) ∘ D(dt) ∘ K(dt/2) ∘ V(dt/2),
 
 K a kick with the explicit acceleration, D the drift of the linear part, V a viscous
-sub-step.  A row of ``STAGES`` chooses each operator:
+sub-step.  With the floor's damping (α > 0) the composition has the sub-step
+F(dt/2) = ``viscous.floor_damping_flow`` at each end (m₀v₀' = F_d at fixed heights, solved
+exactly; symmetric, so the step stays second order).  A row of ``STAGES`` chooses each
+operator:
 
 ============== ============================== ===================================== ==========
 scheme         K kicks with                   D                                     V
@@ -91,6 +94,7 @@ from ...kernels.banded import tridiag_solve
 from ...kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
 from ...kernels.mass import node_mass
 from ...kernels.rates import jerk
+from ...model.laws import value
 from ...kernels.reduce import nan_max
 from .. import workspace as W
 from ..beam import beam_midpoint
@@ -98,7 +102,7 @@ from ..control import (FAC_MIN, STABILITY_CFL, height_scale, per_unit_step,
                        unit_step_factor, velocity_scale)
 from ..stability import explicit_dt
 from ..step_result import StepResult
-from ..viscous import factored, viscous_cn, viscous_sdirk2
+from ..viscous import factored, floor_damping_flow, viscous_cn, viscous_sdirk2
 from ..._jit import kernel, overload, step_kernel
 
 __all__ = ["Verlet", "SemiImplicit", "Stages", "STAGES", "stages", "initial", "step"]
@@ -301,23 +305,30 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     diss = 0.0
     imex = st.viscous == IMEX_KICK and system.mu > 0.0
     beam = st.drift == BEAM_MIDPOINT and system.gamma > 0.0
+    vin = v
+    if system.alpha > 0.0:
+        # the floor's damping sub-step F(dt/2) around the rest, at the heights it finds
+        vin = work[W.VF]
+        for i in range(n + 1):
+            vin[i] = v[i]
+        diss += floor_damping_flow(system, value(u[0], floor), vin, hdt)
     if imex:
-        _imex_first(scheme, v, a, v2, hdt, system, work)
+        _imex_first(scheme, vin, a, v2, hdt, system, work)
         diss += hdt * system.mu * _stiffness(v2, h, n)
     elif system.mu > 0.0:
-        diss += _viscous(scheme, st, v, v2, hdt, system, work)
+        diss += _viscous(scheme, st, vin, v2, hdt, system, work)
         for i in range(n + 1):
             v2[i] += hdt * a[i]
     elif not beam:
         # no viscous sub-step and a plain drift: the kick and the drift in one pass
         # (each value as the two passes make it)
         for i in range(n + 1):
-            vi = v[i] + hdt * a[i]
+            vi = vin[i] + hdt * a[i]
             v2[i] = vi
             u2[i] = u[i] + dt * vi
     else:
         for i in range(n + 1):
-            v2[i] = v[i] + hdt * a[i]
+            v2[i] = vin[i] + hdt * a[i]
     if beam:
         _beam_drift(scheme, system, u, v2, u2, dt, work)
     elif imex or system.mu > 0.0:
@@ -335,10 +346,13 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         w = kick(v2, a2, hdt, h)
         if system.mu > 0.0:   # both viscous sub-steps conserve momentum: w is unchanged
             diss += _viscous(scheme, st, v2, v2, hdt, system, work)
+    if system.alpha > 0.0:
+        diss += floor_damping_flow(system, fl, v2, hdt)
+        w = momentum(v2, h)
     dts = _suggest(scheme, st, system, floor, om2, u2[0], v2[0])
     if scheme.tolerance:
         # per unit step (control.per_unit_step): the global error follows the tolerance
-        err = per_unit_step(_estimate(scheme, st, system, rod, floor, u, v, a, u2, v2, a2,
+        err = per_unit_step(_estimate(scheme, st, system, rod, floor, u, vin, a, u2, v2, a2,
                                       work, dt), dt)
         if not math.isfinite(err):
             return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, diss)

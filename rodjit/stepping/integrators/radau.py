@@ -2,7 +2,7 @@
 stiffly accurate, for stiff viscosity and stiff floors at tight tolerances.
 
 It integrates the first-order form of MODEL.md §2, y = (u, v), y' = f(y) = (v, a(u, v)),
-a = M⁻¹(−∇V(u) − μKv) (``kernels.rates.full_accel``).  A step of length dt from yⁿ solves for the
+a = M⁻¹(−∇V(u) − μKv + F_d e₀) (``kernels.rates.full_accel``; F_d the floor's damping).  A step of length dt from yⁿ solves for the
 stage increments Z_i = Y_i − yⁿ (i = 1, 2, 3, at c = (4 − √6)/10, (4 + √6)/10, 1)
 
     Z_i = dt Σ_j a_ij f(yⁿ + Z_j),      yⁿ⁺¹ = yⁿ + Z_3       (stiffly accurate)
@@ -13,14 +13,16 @@ Equations II*, IV.8; the constants are those of their RADAU5 and of SciPy's ``Ra
 Newton: simplified, with the Jacobian J = ∂f/∂y at yⁿ, in Hairer and Wanner's transformed
 variables W = T⁻¹Z, which turn the 3 × 2(N+1) system into one real system with
 (μ_r/dt I − J) and one complex with ((α − iβ)/dt I − J) (T diagonalises a⁻¹).  J has the
-block form [[0, I], [−M⁻¹H, −μM⁻¹K]] (H: the Hessian of V at uⁿ, tridiagonal for γ = 0,
-pentadiagonal for γ > 0, σ_b' one-sided at u_0 = 0 like the force; K = DᵀD/h), so
-(λI − J)(x, y) = (r₁, r₂) reduces by y = λx − r₁ to one banded symmetric system in x,
+block form [[0, I], [−M⁻¹H, −M⁻¹C]] (H: the Hessian of V at uⁿ, tridiagonal for γ = 0,
+pentadiagonal for γ > 0, σ_b' one-sided at u_0 = 0 like the force, times the floor's
+damping factor; C = μK + c₀e₀e₀ᵀ, K = DᵀD/h, c₀ = ασ_b the floor's damping,
+``radau_linear.hessian_diagonal``), so (λI − J)(x, y) = (r₁, r₂) reduces by y = λx − r₁ to
+one banded symmetric system in x,
 
-    (λM + μK + H/λ) x = M r₁ + (M r₂ + μK r₁)/λ,
+    (λM + C + H/λ) x = M r₁ + (M r₂ + C r₁)/λ,
 
 whose matrix has a positive definite real part for every Re λ > 0, Re 1/λ > 0 (M SPD,
-K, H positive semidefinite), so elimination without pivoting is safe for the complex λ too.
+C, H positive semidefinite), so elimination without pivoting is safe for the complex λ too.
 The real system is solved with the banded solvers of ``kernels.banded``; the complex one
 with the complex LDLᵀ below.  Newton starts from Z = 0, so its first update needs no
 evaluation (every stage is f(yⁿ), the state's own (v, a)): it is the collocation solution
@@ -43,7 +45,8 @@ the 2(N+1) components of |err| over atol + rtol·max(|yⁿ|, |yⁿ⁺¹|) (veloc
 fac = 0.9·(2 n_max + 1)/(2 n_max + n_newton) (fewer Newton iterations, bolder steps).
 The tolerances are used as given (like SciPy's ``Radau``; RADAU5 itself rescales them).
 
-Dissipation: the Radau quadrature dt Σ b_i 2R(V_i) over the stage velocities (b_i = a_3i),
+Dissipation: the Radau quadrature dt Σ b_i D(Y_i) over the stages (b_i = a_3i) of the
+rate D, 2R(v) and the floor's damping,
 exact for polynomials of degree 4, so E + dissipated = E₀ to the step's accuracy.
 Order: 5 where the motion is non-stiff; with stiff viscosity (μ dt/h² ≫ 1) the stiff
 components converge at the stage order 3 + 1 instead (tests/test_stepping_radau.py measures
@@ -57,7 +60,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ...kernels.forces import INACCURATE, NO_CONVERGENCE, NON_FINITE, OK, momentum
-from ...kernels.rates import dissipation_rate, full_accel
+from ...kernels.rates import dissipation_rate, floor_dissipation_rate, full_accel
+from ...model.laws import value
 from ..control import height_scale, taylor_start, velocity_scale
 from ..registry import counter_index
 from ..step_result import StepResult
@@ -291,7 +295,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
     Returns OK, INACCURATE (valid state, error estimate > 1: retry with ``dt_suggest``),
     NO_CONVERGENCE, or the failure code of a stage outside the admissible set."""
     n1 = u.size
-    qb = hessian_diagonal(system, rod, floor, u, work[FP])
+    qb = hessian_diagonal(system, rod, floor, u, v, work[FP])
     lr = MU_REAL / dt
     real_matrix(system, work, lr, qb)
     complex_matrix(system, work, ALPHA / dt, -BETA / dt, qb)
@@ -337,6 +341,10 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
             yv[i] = v[i] + work[ZU + 3, i]
         d1 = dissipation_rate(system, yv)
         diss = dt * (_B0 * d0 + _B1 * d1 + _B2 * dissipation_rate(system, v2))
+    if system.alpha > 0.0:
+        diss += dt * (_B0 * _floor_rate(system, floor, u, v, work, 0)
+                      + _B1 * _floor_rate(system, floor, u, v, work, 1)
+                      + _B2 * _floor_rate(system, floor, u, v, work, 2))
     w = momentum(v2, system.h)
     fac = _factor(err, nit)
     if err > 1.0:
@@ -373,17 +381,35 @@ def dense(scheme, u, v, a, u2, v2, a2, work, dt, theta, uo, vo):
 
 
 @step_kernel
-def dense_dissipated(scheme, system, v, v2, work, dt, theta):
-    """The viscous energy dissipated from the step's start to t + θ dt: the interpolatory
-    quadrature of the rate 2R over the nodes 0, c_1, c_2, 1 (``DENSE_W``), which at θ = 1 is
-    the step's own Radau quadrature; 0 at μ = 0.  Uses row YV as scratch."""
-    if not system.mu > 0.0:
+def _floor_rate(system, floor, u, v, work, j):
+    """The floor's damping dissipation rate (``rates.floor_dissipation_rate``) at stage j
+    (bottom height uⁿ₀ + Zu_j, velocity vⁿ₀ + Zv_j)."""
+    u0 = u[0] + work[ZU + 2 * j, 0]
+    return floor_dissipation_rate(system, value(u0, floor), v[0] + work[ZU + 2 * j + 1, 0])
+
+
+@step_kernel
+def dense_dissipated(scheme, system, floor, u, v, u2, v2, work, dt, theta):
+    """The energy dissipated from the step's start to t + θ dt: the interpolatory
+    quadrature of the dissipation rate (viscous 2R and the floor's damping) over the nodes
+    0, c_1, c_2, 1 (``DENSE_W``), which at θ = 1 is the step's own Radau quadrature; 0 at
+    μ = α = 0.  Uses row YV as scratch."""
+    if not (system.mu > 0.0 or system.alpha > 0.0):
         return 0.0
-    yv = work[YV]
-    total = _horner(DENSE_W[0], theta) * dissipation_rate(system, v)
-    for j in range(2):
-        for i in range(v.size):
-            yv[i] = v[i] + work[ZU + 2 * j + 1, i]
-        total += _horner(DENSE_W[j + 1], theta) * dissipation_rate(system, yv)
-    total += _horner(DENSE_W[3], theta) * dissipation_rate(system, v2)
+    total = 0.0
+    if system.mu > 0.0:
+        yv = work[YV]
+        total = _horner(DENSE_W[0], theta) * dissipation_rate(system, v)
+        for j in range(2):
+            for i in range(v.size):
+                yv[i] = v[i] + work[ZU + 2 * j + 1, i]
+            total += _horner(DENSE_W[j + 1], theta) * dissipation_rate(system, yv)
+        total += _horner(DENSE_W[3], theta) * dissipation_rate(system, v2)
+    if system.alpha > 0.0:
+        total += (_horner(DENSE_W[0], theta)
+                  * floor_dissipation_rate(system, value(u[0], floor), v[0]))
+        for j in range(2):
+            total += _horner(DENSE_W[j + 1], theta) * _floor_rate(system, floor, u, v, work, j)
+        total += (_horner(DENSE_W[3], theta)
+                  * floor_dissipation_rate(system, value(u2[0], floor), v2[0]))
     return dt * total

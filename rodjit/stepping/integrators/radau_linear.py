@@ -8,13 +8,14 @@ from __future__ import annotations
 from ...kernels.banded import (add_bending, penta_factor, penta_solve, sym_tridiag_apply,
                                sym_tridiag_solve)
 from ...kernels.mass import node_mass as _mass
-from ...model.laws import deriv
+from ...model.laws import deriv, value
 from ..._jit import exact_step_kernel, step_kernel
 
 # rows of the scratch array ``work`` (per-step scratch: nothing survives a step)
 S = 0          # segment stresses (full_accel)
 K = 1          # curvatures
-FP = 2         # f'(ε_i) of uⁿ, per segment (the Hessian)
+FP = 2         # f'(ε_i) of uⁿ, per segment (the Hessian); entry N: the floor's damping
+               # coefficient c₀ (``hessian_diagonal``)
 ZU = 3         # stage increments Z_i: u part rows ZU + 2i, v part ZU + 2i + 1 (i = 0, 1, 2)
 WU = 9         # transformed W = T⁻¹Z, same layout
 DU = 15        # Newton update ΔW, same layout (the right-hand sides are solved in place)
@@ -38,11 +39,21 @@ WORK_ROWS = 50
 
 
 @step_kernel
-def hessian_diagonal(system, rod, floor, u, fp):
-    """f'(ε_i) of the segments of u into ``fp``; returns −σ_b'(u_0) (≥ 0)."""
+def hessian_diagonal(system, rod, floor, u, v, fp):
+    """f'(ε_i) of the segments of u into ``fp``; returns −∂F/∂u₀ (≥ 0) of the floor force
+    F = σ_b(u₀)·φ, φ = max(0, 1 − α v₀) (−σ_b'(u₀) at α = 0), and leaves the damping
+    coefficient c₀ = −∂F/∂v₀ = α σ_b(u₀) (0 where φ is held at 0) in ``fp[N]``: the
+    Jacobian's velocity block is −M⁻¹(μK + c₀e₀e₀ᵀ)."""
+    n = system.n
     ih = 1.0 / system.h
-    for i in range(system.n):
+    for i in range(n):
         fp[i] = deriv((u[i + 1] - u[i]) * ih - 1.0, rod)
+    fp[n] = 0.0
+    if system.alpha > 0.0:
+        av = system.alpha * v[0]
+        if av < 1.0:
+            fp[n] = system.alpha * value(u[0], floor)
+        return -deriv(u[0], floor) * max(0.0, 1.0 - av)
     return -deriv(u[0], floor)
 
 
@@ -67,6 +78,8 @@ def real_matrix(system, work, lam, qb):
             prev = c
         j0[i] = d
     j0[0] += qb * il
+    if system.alpha > 0.0:
+        j0[0] += fp[n]      # the floor's damping c₀ (``hessian_diagonal``)
     j1[n] = 0.0
     if system.gamma > 0.0:
         j2 = work[RJ2]
@@ -113,6 +126,8 @@ def complex_matrix(system, work, lr, li, qb):
         a2i[i] = 0.0
     a0r[0] += qb * ir
     a0i[0] += qb * ii
+    if system.alpha > 0.0:
+        a0r[0] += fp[n]     # the floor's damping c₀ (real)
     a1r[n] = 0.0
     a1i[n] = 0.0
     if system.gamma > 0.0:
@@ -213,6 +228,8 @@ def solve_real(system, work, lam, ru, rv, fresh):
             kr += ru[i] - ru[i + 1]
         m = _mass(i, n, h)
         b[i] = m * ru[i] + (m * rv[i] + mu * kr * ih) * il
+    if system.alpha > 0.0:
+        b[0] += work[FP, n] * ru[0] * il     # + c₀ r₁ / λ at node 0
     if system.gamma > 0.0:
         penta_solve(work[RL1], work[RL2], work[RDI], b, b)
     elif fresh:
@@ -247,6 +264,8 @@ def solve_complex(system, work, lr, li, rur, rui, rvr, rvi):
         m = _mass(i, n, h)
         r1 = complex(rur[i], rui[i])
         z = m * r1 + (m * complex(rvr[i], rvi[i]) + mu * ih * complex(krr, kri)) * il
+        if i == 0 and system.alpha > 0.0:
+            z += work[FP, n] * r1 * il       # + c₀ r₁ / λ at node 0
         br[i] = z.real
         bi[i] = z.imag
     complex_solve(work, br, bi)
