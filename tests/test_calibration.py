@@ -34,11 +34,13 @@ def _exact(cfg) -> list[dict]:
                     scheduler="inline", columns=list(SIGMA))
 
 
-def _noisy(exact, rng) -> list[dict]:
+def _noisy(exact, rng, speeds=SPEEDS, sigma=SIGMA) -> list[dict]:
+    """The rows of a synthetic table: the exact values at ``speeds`` plus Gaussian errors
+    of the standard deviations ``sigma``, given in the table as its uncertainties."""
     rows = []
-    for v, r in zip(SPEEDS, exact):
+    for v, r in zip(speeds, exact):
         row = {"initial.impact_speed": v}
-        for name, s in SIGMA.items():
+        for name, s in sigma.items():
             row[name] = r[name] + s * rng.standard_normal()
             row[f"sigma_{name}"] = s
         rows.append(row)

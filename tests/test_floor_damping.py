@@ -1,8 +1,8 @@
 """The floor's Hunt–Crossley damping, ``floor.damping`` (MODEL.md §1 "The floor's damping",
-§2): the compiled right-hand side and its derivatives against the NumPy reference, the energy
+§2): the compiled right-hand side against the NumPy reference (its time derivative:
+tests/test_stepping_energy.py, its Jacobian: tests/test_stepping_radau.py), the energy
 balance and the dissipated energy on every integrator, the physics it was made for
 (restitution falling with the impact speed), and its refusals."""
-import math
 import warnings
 
 import numpy as np
@@ -60,21 +60,6 @@ def test_full_acceleration_matches_the_reference(u0, v0):
     rate = rates.floor_dissipation_rate(run.system, sb, v0)
     assert rate == pytest.approx(-sb * (factor - 1.0) * v0, rel=1e-12, abs=0)
     assert rate >= 0.0
-
-
-@pytest.mark.parametrize("v0", [-3.0, 1.5])
-def test_jerk_includes_the_damping(v0):
-    """ȧ against a central difference of the reference acceleration along the motion."""
-    n = 8
-    run = Run(damped(**{"rod.N": n}))
-    u, v = contact_state(n, -0.004, v0)
-    acc = lambda uu, vv: ref.acceleration(uu, vv, run.system, run.rod, run.floor)
-    a = acc(u, v)
-    out, k, strains = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
-    rates.jerk(run.system, run.rod, run.floor, u, v, a, out, k, strains)
-    dl = 1e-6
-    fd = (acc(u + dl * v, v + dl * a) - acc(u - dl * v, v - dl * a)) / (2 * dl)
-    np.testing.assert_allclose(out, fd, rtol=0, atol=1e-6 * np.abs(fd).max())
 
 
 def test_energy_step_solves_the_reference_equations_and_balances_exactly():
@@ -268,17 +253,11 @@ def _table(truth, rng):
     """A synthetic table (named so: made by rodjit) of drops at CAL_SPEEDS with Gaussian
     errors of a drop test."""
     from rodjit.analysis.evaluate import evaluate
+    from test_calibration import _noisy
 
     exact = evaluate([CAL_BASE.override({**truth, "initial.impact_speed": v})
                       for v in CAL_SPEEDS], scheduler="inline", columns=list(CAL_SIGMA))
-    rows = []
-    for v, r in zip(CAL_SPEEDS, exact):
-        row = {"initial.impact_speed": v}
-        for name, s in CAL_SIGMA.items():
-            row[name] = r[name] + s * rng.standard_normal()
-            row[f"sigma_{name}"] = s
-        rows.append(row)
-    return rows
+    return _noisy(exact, rng, CAL_SPEEDS, CAL_SIGMA)
 
 
 def test_the_law_comparison_names_the_law_that_made_the_table():

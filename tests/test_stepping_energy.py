@@ -171,14 +171,17 @@ def test_step_solves_the_discrete_gradient_equations_of_the_numpy_spec():
     assert abs(dissipated - d_exact) < 1e-14 * d_exact
 
 
-@pytest.mark.parametrize("gamma, mu, u_bottom", [(0.0, 0.0, -0.01), (0.0, 100.0, -0.004),
-                                                 (0.02, 0.5, -0.01), (0.0, 0.5, 0.2)])
-def test_jerk_is_the_time_derivative_of_the_acceleration(gamma, mu, u_bottom):
+@pytest.mark.parametrize("gamma, mu, u_bottom, damping", [
+    (0.0, 0.0, -0.01, 0.0), (0.0, 100.0, -0.004, 0.0), (0.02, 0.5, -0.01, 0.0),
+    (0.0, 0.5, 0.2, 0.0), (0.0, 100.0, -0.004, 0.3), (0.0, 0.0, -0.01, 0.05)])
+def test_jerk_is_the_time_derivative_of_the_acceleration(gamma, mu, u_bottom, damping):
     """ȧ (the predictor's and the error estimate's third derivative) against a central
     difference of the NumPy spec's acceleration along the motion, (a(u + δv, v + δa) −
-    a(u − δv, v − δa))/2δ, in contact and in flight; and the segment strains it leaves."""
+    a(u − δv, v − δa))/2δ, in contact and in flight, with the floor's damping too; and the
+    segment strains it leaves."""
     n = 8
-    cfg = energy_config(**{"rod.N": n, "rod.gamma": gamma, "rod.mu": mu})
+    cfg = energy_config(**{"rod.N": n, "rod.gamma": gamma, "rod.mu": mu,
+                           "floor.damping": damping})
     run = Run(cfg)
     rng = np.random.default_rng(3)
     x = np.arange(n + 1) / n
