@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import rodjit
-from conftest import rodjit_cli
+from conftest import assert_resume_is_bit_identical, rodjit_cli
 from rodjit.driver.run import Run
 from rodjit.kernels import rates
 from rodjit.kernels.forces import INACCURATE, OK
@@ -205,6 +205,16 @@ def test_damping_vanishes_continuously():
          for a in (1e-3, 2e-3)]
     assert d[0] > 0
     assert d[1] / d[0] == pytest.approx(2.0, rel=0.01)
+
+
+@pytest.mark.parametrize("integrator, steps", [("dop853", 1010), ("radau5", 60),
+                                               ("energy", 700), ("semi-implicit", 3000)])
+def test_a_resumed_run_is_the_uninterrupted_one(integrator, steps):
+    """Paused in the first contact and resumed from its checkpoint, a damped run ends bit
+    for bit where the uninterrupted one does (no state of the damping is carried between
+    steps)."""
+    cfg = damped(**{"time.integrator": integrator, "time.t_end": 0.7})
+    assert_resume_is_bit_identical(cfg, max_steps=steps)
 
 
 def test_a_negative_damping_is_refused(tmp_path):

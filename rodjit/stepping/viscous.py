@@ -109,7 +109,8 @@ def viscous_sdirk2(vin, vout, tau, system, work):
 def floor_damping_flow(system, fl, v, tau):
     """v₀ after τ of m₀ v₀' = −σ_b·min(1, α v₀) with the heights held (σ_b = ``fl``, the
     elastic floor stress at them), solved exactly: at c = σ_b/m₀ a constant deceleration
-    −c while α v₀ > 1 (the force held at 0), then v₀ ∝ exp(−cα t).  Unconditionally
+    −c while α v₀ > 1 (F_d = −σ_b: the whole floor force held at 0), then
+    v₀ ∝ exp(−cα t).  Unconditionally
     stable, however stiff c·α·τ.  Returns the kinetic energy it removes (≥ 0: |v₀|
     decreases, or v₀ > 1/α falls toward 1/α)."""
     if not (system.alpha > 0.0 and fl > 0.0):

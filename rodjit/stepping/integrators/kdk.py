@@ -94,8 +94,8 @@ from ...kernels.banded import tridiag_solve
 from ...kernels.forces import INACCURATE, NON_FINITE, OK, accel, kick, momentum
 from ...kernels.mass import node_mass
 from ...kernels.rates import jerk
-from ...model.laws import value
 from ...kernels.reduce import nan_max
+from ...model.laws import value
 from .. import workspace as W
 from ..beam import beam_midpoint
 from ..control import (FAC_MIN, STABILITY_CFL, height_scale, per_unit_step,
