@@ -41,8 +41,9 @@ def floor_damping(system, fl, v0):
 def add_floor_damping(system, fl, v, a):
     """a₀ += F_d/m₀ (``floor_damping``); nothing at α = 0."""
     if system.alpha > 0.0:
-        n = system.n
-        a[0] += floor_damping(system, fl, v[0]) * _inv_mass(0, n, 1.0 / system.h)
+        # 1/m₀ = 2/h (``mass.inv_node_mass`` of node 0, whose literal index would compile
+        # it a second time)
+        a[0] += floor_damping(system, fl, v[0]) * (2.0 * (1.0 / system.h))
 
 
 @step_kernel

@@ -115,10 +115,8 @@ def floor_damping_flow(system, fl, v, tau):
     decreases, or v₀ > 1/α falls toward 1/α)."""
     if not (system.alpha > 0.0 and fl > 0.0):
         return 0.0
-    n = system.n
-    h = system.h
     a = system.alpha
-    m = node_mass(0, n, h)
+    m = 0.5 * system.h     # m₀ (``kernels.mass``; a literal index would compile it twice)
     c = fl / m
     w0 = v[0]
     w = w0

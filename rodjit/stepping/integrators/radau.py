@@ -313,7 +313,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         return StepResult(status, val, emin, fl, 0.0, 0.0, 0.0)
     idt = 1.0 / dt
     _error_rhs(v, a, work, v, a, idt)
-    solve_real(system, work, lr, work[EU], work[EV], False)
+    solve_real(system, work, lr, work[EU], work[EV], bool(False))
     err = _error(scheme, u, v, u2, v2, work)
     if err > 1.0:
         # refined once from f(yⁿ + err) (stiff components of the first estimate removed)
@@ -326,7 +326,7 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
                                bool(False))[0]
         if st == OK:
             _error_rhs(v, a, work, yv, work[EA], idt)
-            solve_real(system, work, lr, work[EU], work[EV], False)
+            solve_real(system, work, lr, work[EU], work[EV], bool(False))
             err = _error(scheme, u, v, u2, v2, work)
     if not math.isfinite(err):
         return StepResult(NON_FINITE, err, emin, fl, 0.0, 0.0, 0.0)
@@ -342,9 +342,11 @@ def step(scheme, system, rod, floor, u, v, a, u2, v2, a2, work, sstats, dt):
         d1 = dissipation_rate(system, yv)
         diss = dt * (_B0 * d0 + _B1 * d1 + _B2 * dissipation_rate(system, v2))
     if system.alpha > 0.0:
-        diss += dt * (_B0 * _floor_rate(system, floor, u, v, work, 0)
-                      + _B1 * _floor_rate(system, floor, u, v, work, 1)
-                      + _B2 * _floor_rate(system, floor, u, v, work, 2))
+        fr = 0.0
+        for j in range(3):    # a loop, not literal stage indices (each a compile of its own)
+            fr += (_B0 if j == 0 else _B1 if j == 1 else _B2) * _floor_rate(
+                system, floor, u, v, work, j)
+        diss += dt * fr
     w = momentum(v2, system.h)
     fac = _factor(err, nit)
     if err > 1.0:
