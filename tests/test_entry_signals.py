@@ -100,6 +100,7 @@ def test_the_command_prints_the_table_then_exits_130(tmp_path, where, code):
     assert rodjit.load_sweep(tmp_path / "s.h5").status == "completed"
 
 
+@pytest.mark.slow     # three real sweeps signalled and resumed (about a minute)
 def test_sigint_at_any_moment_of_a_sweep_exits_130_or_0_with_a_usable_file(tmp_path):
     """A real sweep signalled at spread delays once its file exists (from mid-run to after
     its end, whatever the machine's load makes of them): each outcome is 0 (it had ended)

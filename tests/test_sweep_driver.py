@@ -344,6 +344,7 @@ def test_dask_local_cluster_of_two_workers(tmp_path, inline_table):
     assert t["steps"][2] > 0 and t["steps"][3] > 0
 
 
+@pytest.mark.slow     # a Dask cluster whose worker is killed, then each point alone (about a minute)
 def test_dask_runs_short_points_several_to_a_task_and_isolates_a_killer_among_them(
         monkeypatch):
     """Batching given the durations (here: every point counts as far shorter than a task,
