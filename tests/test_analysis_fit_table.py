@@ -67,5 +67,5 @@ def test_bad_tables_are_clear_errors(tmp_path):
     with pytest.raises(ValueError, match="does not exist"):
         read_measurements(tmp_path / "none.csv")
     p.write_text("initial.height,restitution_first\n1,0.8\n")
-    with pytest.raises(ValueError, match="1 measurements cannot determine 2 keys"):
+    with pytest.raises(ValueError, match=r"holds 1 measurement for 2 keys \(rod.mu, floor.kappa_b\): it needs at least 2"):
         fit_table(["rod.mu", "floor.kappa_b"], p, BASE)

@@ -179,7 +179,8 @@ def test_too_few_rows_for_the_keys_exit_2(tmp_path):
     res = CliRunner().invoke(main, ["fit", "rod.mu,floor.kappa_b", "paper-mu100",
                                     "--table", str(path), "--scheduler", "inline"])
     assert res.exit_code == 2
-    assert "1 measurements cannot determine 2 keys" in res.output
+    assert "holds 1 measurement for 2 keys (rod.mu, floor.kappa_b): it needs at least 2" in res.output
+    assert len(res.output.strip().splitlines()) == 1
 
 
 def test_the_command_ranks_candidates_and_prints_intervals(tmp_path):

@@ -281,7 +281,10 @@ def fit_table(keys: Sequence[str], table: str | os.PathLike[str] | Sequence[Mapp
             raise ValueError(f"{k} is not a real-valued key; fit needs continuous parameters")
     targets = [(i, o) for i, r in enumerate(rows) for o in OBSERVABLES if o in r]
     if len(targets) < len(keys):
-        raise ValueError(f"{len(targets)} measurements cannot determine {len(keys)} keys")
+        raise ValueError(f"the measurement table holds {len(targets)} measurement"
+                         f"{'' if len(targets) == 1 else 's'} for {len(keys)} keys "
+                         f"({', '.join(keys)}): it needs at least {len(keys)} (one per key "
+                         f"fitted)")
     for i, o in targets:
         for name in (o, f"sigma_{o}"):
             if name in rows[i] and not math.isfinite(float(rows[i][name])):
