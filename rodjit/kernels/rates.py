@@ -9,7 +9,7 @@ the same right-hand side bit for bit.
 from ..model.laws import deriv, value
 from .._jit import step_kernel
 from .forces import OK, accel, add_beam_term
-from .mass import inv_node_mass as _inv_mass
+from .mass import inv_end_mass, inv_node_mass as _inv_mass
 
 __all__ = ["full_accel", "add_viscous", "add_floor_damping", "floor_damping", "jerk",
            "dissipation_rate", "floor_dissipation_rate", "total_dissipation_rate"]
@@ -41,9 +41,7 @@ def floor_damping(system, fl, v0):
 def add_floor_damping(system, fl, v, a):
     """a₀ += F_d/m₀ (``floor_damping``); nothing at α = 0."""
     if system.alpha > 0.0:
-        # 1/m₀ = 2/h (``mass.inv_node_mass`` of node 0, whose literal index would compile
-        # it a second time)
-        a[0] += floor_damping(system, fl, v[0]) * (2.0 * (1.0 / system.h))
+        a[0] += floor_damping(system, fl, v[0]) * inv_end_mass(1.0 / system.h)
 
 
 @step_kernel

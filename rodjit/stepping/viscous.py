@@ -7,7 +7,7 @@ they remove, computed as −Σ m (v₁−v₀)(v₁+v₀)/2 (no cancellation whe
 import math
 
 from ..kernels.banded import tridiag_factor, tridiag_solve
-from ..kernels.mass import node_mass
+from ..kernels.mass import end_mass, node_mass
 from . import workspace as W
 from .._jit import kernel, step_kernel
 
@@ -116,7 +116,7 @@ def floor_damping_flow(system, fl, v, tau):
     if not (system.alpha > 0.0 and fl > 0.0):
         return 0.0
     a = system.alpha
-    m = 0.5 * system.h     # m₀ (``kernels.mass``; a literal index would compile it twice)
+    m = end_mass(system.h)
     c = fl / m
     w0 = v[0]
     w = w0
